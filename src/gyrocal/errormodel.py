@@ -1,0 +1,129 @@
+"""The attitude-error model and its Jacobian, per maneuver.
+
+For a linearisation point (channel parameters and this maneuver's biases) each channel
+set's gyro attitude is propagated and compared with the star tracker (eq. 4). The
+error is rotated into the inertial frame, ``z_j = R(t_j) e_j``, where a parameter
+change acts additively: a change ``d phi_k`` of the k-th body increment turns every
+later attitude by ``R_{k+1/2} d phi_k``. Hence, to first order,
+
+    z_j = chi0 + S_j (p_true - p0) + gyro random walk + R_j v_j,
+
+with ``chi0`` the initial attitude error and ``v_j`` the star-tracker noise.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from . import channels as ch
+from . import kinematics
+from .preprocess import ManeuverData
+
+
+@dataclass
+class Linearization:
+    """One maneuver's residuals and design, all sets stacked (M samples, S sets)."""
+
+    maneuver: str
+    sets: list
+    z: np.ndarray
+    """(M, S, 3) inertial-frame error of the star tracker relative to each set's attitude (rad)."""
+    design: np.ndarray
+    """(M, S, 3, P) derivative of z with respect to the global channel parameters."""
+    bias_design: np.ndarray
+    """(M, S, 3, n_channels) derivative of z with respect to this maneuver's channel biases."""
+    st_matrix: np.ndarray
+    """(M, 3, 3) body-to-inertial matrices at the star-tracker times (first set)."""
+    st_dt: np.ndarray
+    """(M,) time since the previous star-tracker sample (the first: since t0)."""
+    shared_walk: np.ndarray
+    """(M, S, S, 3, 3) per-interval random-walk covariance between sets per unit ARW^2."""
+    body_error: np.ndarray
+    """(M, S, 3) the same error in body axes (rad), for plots and diagnostics."""
+
+
+def _set_jacobian(data: ManeuverData, channel_set, params: ch.ChannelParams):
+    """Propagate one set and return attitudes, increments and d(phi)/d(set params)."""
+    sub = params.subset(channel_set)
+    dt = data.dt
+    u = data.set_increments(channel_set)
+    phi = ch.solve_body(u, sub, dt_s=dt)
+    attitudes = kinematics.propagate(Rotation.from_quat(data.attitude0_quat), phi)
+    positive = (u - np.outer(dt, sub.bias_rad_s)) > 0
+    scale = 1.0 + np.where(positive, sub.sf_pos, sub.sf_neg)
+    rows = ch.response_rows(sub)
+    m_inv = np.linalg.inv(scale[:, :, None] * rows[None])
+    sensed = phi @ rows.T
+    columns = []
+    for i, c in enumerate(sub.channels):
+        w = -m_inv[:, :, i]
+        columns.append(w * (sensed[:, i] * positive[:, i])[:, None])
+        columns.append(w * (sensed[:, i] * ~positive[:, i])[:, None])
+        for b in c.other_axes:
+            columns.append(w * (scale[:, i] * phi[:, ch.AXIS_INDEX[b]])[:, None])
+    for i in range(3):
+        columns.append(-m_inv[:, :, i] * dt[:, None])
+    return attitudes, phi, np.stack(columns, axis=2)
+
+
+def linearize(data: ManeuverData, params: ch.ChannelParams) -> Linearization:
+    """Residuals and Jacobian of one maneuver about ``params`` (all channels; biases are
+    this maneuver's)."""
+    sets = data.sets
+    names = [c.name for c in params.channels]
+    n_par = ch.N_PARAMS_PER_CHANNEL * len(names)
+    st_rot = Rotation.from_quat(data.st_quat)
+    k = np.clip(np.searchsorted(data.gyro_time, data.st_time, side="left") - 1, 0, len(data.dt) - 1)
+    frac = (data.st_time - data.gyro_time[k]) / data.dt[k]
+    m = len(data.st_time)
+    z = np.empty((m, len(sets), 3))
+    body = np.empty((m, len(sets), 3))
+    design = np.zeros((m, len(sets), 3, n_par))
+    bias_design = np.zeros((m, len(sets), 3, len(names)))
+    for s, channel_set in enumerate(sets):
+        attitudes, phi, dphi = _set_jacobian(data, channel_set, params)
+        mid = kinematics.compose(attitudes[:-1], Rotation.from_rotvec(0.5 * phi))
+        inertial = np.einsum("kij,kjp->kip", mid.as_matrix(), dphi)
+        cumulative = np.concatenate([np.zeros((1,) + inertial.shape[1:]), np.cumsum(inertial, axis=0)])
+        at_st_jac = cumulative[k] + frac[:, None, None] * inertial[k]
+        at_st = kinematics.attitude_at(data.gyro_time, attitudes, phi, data.st_time)
+        e = kinematics.error_angles_rad(at_st, st_rot)
+        body[:, s] = e
+        z[:, s] = at_st.apply(e)
+        for slot, name in enumerate(channel_set):
+            j = names.index(name)
+            design[:, s, :, 4 * j:4 * j + 4] = at_st_jac[:, :, 4 * slot:4 * slot + 4]
+            bias_design[:, s, :, j] = at_st_jac[:, :, 12 + slot]
+        if s == 0:
+            st_matrix = at_st.as_matrix()
+            gyro_matrix = mid.as_matrix()
+    st_dt = np.diff(np.concatenate([[data.gyro_time[0]], data.st_time]))
+    shared = _shared_walk(data, sets, gyro_matrix, k, frac, st_dt)
+    return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, shared, body)
+
+
+def _shared_walk(data, sets, gyro_matrix, k, frac, st_dt):
+    """Random-walk covariance per star-tracker interval, per unit ARW^2 (rad^2/s).
+
+    Within a set the walk is isotropic (``dt I``); two sets that share the channel of an
+    axis share that part of the walk, ``sum R_k e_a e_a^T R_k^T dt_k``.
+    """
+    n_sets = len(sets)
+    m = len(st_dt)
+    out = np.zeros((m, n_sets, n_sets, 3, 3))
+    for s in range(n_sets):
+        out[:, s, s] = st_dt[:, None, None] * np.eye(3)
+    for s in range(n_sets):
+        for t in range(s + 1, n_sets):
+            for a in range(3):
+                if sets[s][a] != sets[t][a]:
+                    continue
+                col = gyro_matrix[:, :, a]
+                per = np.einsum("ki,kj->kij", col, col) * data.dt[:, None, None]
+                cum = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(per, axis=0)])
+                at = cum[k] + frac[:, None, None] * per[k]
+                block = np.diff(np.concatenate([np.zeros((1, 3, 3)), at]), axis=0)
+                out[:, s, t] += block
+                out[:, t, s] += block
+    return out

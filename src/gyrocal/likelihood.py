@@ -1,0 +1,78 @@
+"""The campaign likelihood, linear in the channel parameters about a linearisation point.
+
+Per maneuver the differenced error series is ``D = X dtheta + G beta + noise`` with
+``beta`` the nuisance (initial attitude error and the channel biases), given a flat
+prior and integrated out exactly. What is left is quadratic in ``dtheta`` with
+sufficient statistics ``A, b, c`` and a log determinant that depend only on the
+noise variances; `Stats` holds them, summed over maneuvers.
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import cho_factor, cho_solve
+
+from .noise import ManeuverNoise
+
+LOG_2PI = np.log(2 * np.pi)
+
+
+@dataclass
+class Stats:
+    """``loglik(dtheta) = -(dtheta' A dtheta - 2 b' dtheta + c)/2 - logdet/2 - n log(2 pi)/2``."""
+
+    A: np.ndarray
+    b: np.ndarray
+    c: float
+    logdet: float
+    n: int
+
+    def loglik(self, dtheta: np.ndarray) -> np.ndarray:
+        """Vectorised over the leading axis of ``dtheta``."""
+        dtheta = np.atleast_2d(dtheta)
+        quad = np.einsum("wi,ij,wj->w", dtheta, self.A, dtheta) - 2 * dtheta @ self.b + self.c
+        return -0.5 * (quad + self.logdet + self.n * LOG_2PI)
+
+
+def _logdet_chol(factor) -> float:
+    return 2.0 * np.sum(np.log(np.diag(factor[0])))
+
+
+def maneuver_stats(noise: ManeuverNoise, variances: dict) -> Stats:
+    """One maneuver's `Stats` with the nuisance integrated out under a flat prior."""
+    gram, logdet_c = noise.gram(variances)
+    p, g = noise.n_params, noise.n_nuisance
+    xs, gs = slice(0, p), slice(p, p + g)
+    factor = cho_factor(gram[gs, gs])
+    proj_x = cho_solve(factor, gram[gs, xs])
+    proj_d = cho_solve(factor, gram[gs, -1])
+    A = gram[xs, xs] - gram[xs, gs] @ proj_x
+    b = gram[xs, -1] - gram[xs, gs] @ proj_d
+    c = gram[-1, -1] - gram[-1, gs] @ proj_d
+    return Stats(A, b, c, logdet_c + _logdet_chol(factor), noise.n - g)
+
+
+def campaign_stats(noises, variances: dict) -> Stats:
+    """Sum of `maneuver_stats` over the maneuvers (their noises are independent)."""
+    parts = [maneuver_stats(n, variances) for n in noises]
+    return Stats(sum(s.A for s in parts), sum(s.b for s in parts), sum(s.c for s in parts),
+                 sum(s.logdet for s in parts), sum(s.n for s in parts))
+
+
+def log_evidence(stats: Stats, prior_mean: np.ndarray, prior_sd: np.ndarray) -> float:
+    """``log p(D | noise)`` with ``dtheta ~ N(prior_mean, diag(prior_sd^2))`` integrated out."""
+    prec = 1.0 / prior_sd**2
+    P = stats.A + np.diag(prec)
+    h = stats.b + prec * prior_mean
+    factor = cho_factor(P)
+    return float(-0.5 * (stats.c + stats.logdet + stats.n * LOG_2PI)
+                 + 0.5 * h @ cho_solve(factor, h) - 0.5 * np.sum(prec * prior_mean**2)
+                 - 0.5 * _logdet_chol(factor) - 0.5 * np.sum(np.log(prior_sd**2)))
+
+
+def conditional_posterior(stats: Stats, prior_mean, prior_sd):
+    """Mean and covariance of ``dtheta`` given the noise: the exact Gaussian of the linear model."""
+    prec = 1.0 / prior_sd**2
+    P = stats.A + np.diag(prec)
+    cov = np.linalg.inv(P)
+    return cov @ (stats.b + prec * prior_mean), cov

@@ -1,0 +1,243 @@
+"""The posterior of the channel parameters and the noise scales, sampled with emcee.
+
+The error model is linearised about the WLS point estimate (see `errormodel`), the
+nuisance is integrated out exactly (see `likelihood`), and what emcee samples is the
+24 channel parameters (as offsets ``dtheta`` from the point estimate) and the three
+noise scales ``log [sigma_cross, sigma_about, arw]``. The noise covariance is
+``sigma_cross^2`` times a matrix fixed by two ratios; the scale enters in closed form
+and the likelihood's sufficient statistics are tabulated on a grid over the ratios,
+spanning many posterior standard deviations, and interpolated (cubic Lagrange).
+"""
+
+import logging
+from dataclasses import dataclass
+
+import emcee
+import numpy as np
+
+from . import channels as ch
+from .estimate import _profile_reml, variances
+from .likelihood import LOG_2PI, Stats, campaign_stats
+from .units import PPM, arcsec_to_rad, arw_to_rad_sqrt_s
+
+NOISE_NAMES = ("sigma_cross", "sigma_about", "arw")
+
+
+@dataclass
+class Priors:
+    """Weakly informative priors, with bounds that say what is physical (SI inside)."""
+
+    mean: np.ndarray
+    sd: np.ndarray
+    bound: np.ndarray
+    log_sigma_center: np.ndarray
+    log_sigma_sd: np.ndarray
+
+    @classmethod
+    def from_config(cls, channels, cfg: dict, noise_center: dict):
+        """``cfg`` is the config's ``priors`` section; ``noise_center`` the prior noise guess."""
+        is_sf = np.array([p.startswith("sf") for c in channels for p in c.parameter_names])
+        sd = np.where(is_sf, cfg["sf_sd_ppm"] * PPM, arcsec_to_rad(cfg["mis_sd_arcsec"]))
+        bound = np.where(is_sf, cfg["sf_bound_ppm"] * PPM, arcsec_to_rad(cfg["mis_bound_arcsec"]))
+        mean = np.zeros(len(sd))
+        for label, value in (cfg.get("mean") or {}).items():
+            labels = ch.parameter_labels(channels)
+            if label not in labels:
+                raise ValueError(f"priors.mean: unknown parameter {label!r}")
+            i = labels.index(label)
+            mean[i] = value * (PPM if is_sf[i] else arcsec_to_rad(1.0))
+        for label, value in (cfg.get("sd") or {}).items():
+            i = ch.parameter_labels(channels).index(label)
+            sd[i] = value * (PPM if is_sf[i] else arcsec_to_rad(1.0))
+        center = np.log([arcsec_to_rad(noise_center["sigma_cross_arcsec"]),
+                         arcsec_to_rad(noise_center["sigma_about_arcsec"]),
+                         arw_to_rad_sqrt_s(noise_center["arw_deg_sqrt_h"])])
+        return cls(mean, sd, bound, center, np.full(3, cfg["noise_log_sd"]))
+
+
+class RatioGrid:
+    """Unit-scale sufficient statistics on a grid over the two noise ratios.
+
+    Ratios are ``log(sigma_about/sigma_cross)`` and ``log(arw/sigma_cross)``; at each
+    node the statistics are computed with ``sigma_cross = 1``.
+    """
+
+    def __init__(self, noises, center, sd, nodes: int, half_width_sd: float):
+        self.nodes = nodes
+        self.start = center - half_width_sd * sd
+        self.step = 2 * half_width_sd * sd / (nodes - 1)
+        n_par = noises[0].n_params
+        self.n_params = n_par
+        values = []
+        for i in range(nodes):
+            for j in range(nodes):
+                r = self.start + self.step * np.array([i, j])
+                s = campaign_stats(noises, variances([0.0, r[0], r[1]]))
+                values.append(np.concatenate([s.A.ravel(), s.b, [s.c, s.logdet]]))
+                self.n = s.n
+        self.values = np.array(values)
+
+    def weights(self, ratios: np.ndarray):
+        """(W, nodes^2) cubic Lagrange weights, and a mask of points inside the grid."""
+        t = (ratios - self.start) / self.step
+        inside = np.all((t >= 1) & (t <= self.nodes - 2), axis=1)
+        i = np.clip(np.floor(t), 1, self.nodes - 3).astype(int)
+        f = t - i
+        w1 = np.stack([-f * (f - 1) * (f - 2) / 6, (f + 1) * (f - 1) * (f - 2) / 2,
+                       -(f + 1) * f * (f - 2) / 2, (f + 1) * f * (f - 1) / 6], axis=-1)
+        weights = np.zeros((len(ratios), self.nodes**2))
+        rows = np.arange(len(ratios))
+        for a in range(4):
+            for b in range(4):
+                idx = (i[:, 0] + a - 1) * self.nodes + (i[:, 1] + b - 1)
+                weights[rows, idx] += w1[:, 0, a] * w1[:, 1, b]
+        return weights, inside
+
+    def stats(self, ratios: np.ndarray):
+        """Interpolated unit-scale ``A, b, c, logdet`` per row of ``ratios``."""
+        weights, inside = self.weights(np.atleast_2d(ratios))
+        v = weights @ self.values
+        p = self.n_params
+        return v[:, :p * p].reshape(-1, p, p), v[:, p * p:p * p + p], v[:, -2], v[:, -1], inside
+
+
+class LogPosterior:
+    """Vectorised log posterior of ``x = [dtheta (P), log sigma_cross, log sigma_about, log arw]``."""
+
+    def __init__(self, grid: RatioGrid, theta_hat: np.ndarray, priors: Priors):
+        self.grid = grid
+        self.theta_hat = theta_hat
+        self.priors = priors
+        self.n_params = len(theta_hat)
+
+    def __call__(self, x):
+        x = np.atleast_2d(x)
+        p = self.n_params
+        d, log_sigma = x[:, :p], x[:, p:]
+        A, b, c, logdet, inside = self.grid.stats(log_sigma[:, 1:] - log_sigma[:, :1])
+        scale = np.exp(2 * log_sigma[:, 0])
+        quad = np.einsum("wi,wij,wj->w", d, A, d) - 2 * np.einsum("wi,wi->w", b, d) + c
+        loglik = -0.5 * (quad / scale + logdet + self.grid.n * (np.log(scale) + LOG_2PI))
+        theta = self.theta_hat + d
+        pr = self.priors
+        logprior = -0.5 * np.sum(((theta - pr.mean) / pr.sd) ** 2, axis=1)
+        logprior += -0.5 * np.sum(((log_sigma - pr.log_sigma_center) / pr.log_sigma_sd) ** 2, axis=1)
+        ok = inside & np.all(np.abs(theta) <= pr.bound, axis=1)
+        return np.where(ok, loglik + logprior, -np.inf)
+
+
+def ratio_curvature(noises, ratios, step=0.02):
+    """Standard deviations of the two ratios from the REML profile's Hessian."""
+    f = lambda r: _profile_reml(noises, r)[0]
+    h = np.zeros((2, 2))
+    f0 = f(ratios)
+    e = np.eye(2) * step
+    for i in range(2):
+        h[i, i] = (f(ratios + e[i]) - 2 * f0 + f(ratios - e[i])) / step**2
+    h[0, 1] = h[1, 0] = (f(ratios + e[0] + e[1]) - f(ratios + e[0] - e[1])
+                         - f(ratios - e[0] + e[1]) + f(ratios - e[0] - e[1])) / (4 * step**2)
+    cov = np.linalg.inv(h)
+    return np.sqrt(np.clip(np.diag(cov), 1e-10, None))
+
+
+class StudentProposal:
+    """Independence proposal from a multivariate Student-t around the Laplace approximation.
+
+    Used as an emcee ``MHMove``: the posterior of this linear-Gaussian model is close to
+    Gaussian, so independence proposals from its Laplace approximation (heavier-tailed
+    and wider) are accepted most of the time and decorrelate in a few steps, where the
+    differential-evolution moves need ~100 steps in 27 dimensions.
+    """
+
+    def __init__(self, mean, cov, dof=5.0, inflate=1.2):
+        self.mean = np.asarray(mean, dtype=float)
+        self.chol = np.linalg.cholesky(cov) * inflate
+        self.dof = dof
+
+    def log_density(self, x):
+        z = np.linalg.solve(self.chol, (x - self.mean).T).T
+        return -0.5 * (self.dof + len(self.mean)) * np.log1p(np.sum(z**2, axis=1) / self.dof)
+
+    def draw(self, rng_normal, rng_chisq):
+        return self.mean + (rng_normal @ self.chol.T) * np.sqrt(self.dof / rng_chisq)[:, None]
+
+    def __call__(self, x, random):
+        """emcee ``MHMove`` proposal: new positions and the log proposal ratio."""
+        n, dim = x.shape
+        new = self.draw(random.standard_normal((n, dim)), random.chisquare(self.dof, n))
+        return new, self.log_density(x) - self.log_density(new)
+
+
+@dataclass
+class SamplerResult:
+    chains: np.ndarray
+    """(ensembles, steps, walkers, dim) production samples."""
+    tau: np.ndarray
+    """(ensembles, dim) integrated autocorrelation times, in steps."""
+    steps: int
+    burn: int
+    acceptance: np.ndarray
+    converged_length: bool
+    walkers: int
+
+
+def _autocorr_times(chain) -> np.ndarray:
+    """emcee's integrated autocorrelation time per parameter, without its length warning
+    (the caller compares the length with the times itself)."""
+    logger = logging.getLogger("emcee")
+    level = logger.level
+    logger.setLevel(logging.ERROR)
+    try:
+        return emcee.autocorr.integrated_time(chain, quiet=True)
+    finally:
+        logger.setLevel(level)
+
+
+def _sampler(logpost, walkers, dim, proposal):
+    moves = [(emcee.moves.MHMove(proposal), 0.7), (emcee.moves.DEMove(), 0.3)]
+    return emcee.EnsembleSampler(walkers, dim, logpost, vectorize=True, moves=moves)
+
+
+def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict, seed: int) -> SamplerResult:
+    """Independent emcee ensembles, run until every chain is at least k autocorrelation times.
+
+    Moves: independence proposals (`StudentProposal`) mixed with differential
+    evolution. Each ensemble burns in with a proposal from the Laplace approximation,
+    then fits its own proposal to its burn-in and keeps it fixed for production, so
+    adaptation never touches the production chain and the ensembles stay independent.
+    emcee draws from numpy's legacy global RandomState, so each ensemble seeds it.
+    """
+    dim = len(proposal_mean)
+    walkers = max(int(cfg["walkers"]), 2 * dim + 2)
+    walkers += walkers % 2
+    n_ens, burn = int(cfg["ensembles"]), int(cfg["burn_steps"])
+    chunk, multiple, max_steps = int(cfg["chunk_steps"]), float(cfg["min_tau_multiple"]), int(cfg["max_steps"])
+    laplace = StudentProposal(proposal_mean, proposal_cov)
+    start = StudentProposal(proposal_mean, proposal_cov, dof=5.0, inflate=2.0)
+    samplers = []
+    for e in range(n_ens):
+        np.random.seed((seed * 7919 + e) % 2**32)
+        rng = np.random.default_rng([seed, e])
+        p0 = start.draw(rng.standard_normal((walkers, dim)), rng.chisquare(start.dof, walkers))
+        bad = ~np.isfinite(logpost(p0))
+        while bad.any():
+            p0[bad] = laplace.draw(rng.standard_normal((bad.sum(), dim)), rng.chisquare(laplace.dof, bad.sum()))
+            bad = ~np.isfinite(logpost(p0))
+        warm = _sampler(logpost, walkers, dim, laplace)
+        state = warm.run_mcmc(p0, burn)
+        fitted = warm.get_chain(discard=burn // 2, flat=True)
+        sampler = _sampler(logpost, walkers, dim,
+                           StudentProposal(fitted.mean(axis=0), np.cov(fitted.T), dof=30.0, inflate=1.05))
+        samplers.append([sampler, state])
+    steps = 0
+    while True:
+        n_new = int(cfg["initial_steps"]) if steps == 0 else chunk
+        for pair in samplers:
+            pair[1] = pair[0].run_mcmc(pair[1], n_new)
+        steps += n_new
+        tau = np.array([_autocorr_times(s.get_chain()) for s, _ in samplers])
+        if steps >= multiple * tau.max() or steps + chunk > max_steps:
+            break
+    chains = np.stack([s.get_chain() for s, _ in samplers])
+    acceptance = np.array([s.acceptance_fraction.mean() for s, _ in samplers])
+    return SamplerResult(chains, tau, steps, burn, acceptance, bool(steps >= multiple * tau.max()), walkers)
