@@ -241,3 +241,57 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
     chains = np.stack([s.get_chain() for s, _ in samplers])
     acceptance = np.array([s.acceptance_fraction.mean() for s, _ in samplers])
     return SamplerResult(chains, tau, steps, burn, acceptance, bool(steps >= multiple * tau.max()), walkers)
+
+
+def start_covariance(cond_cov, n_obs, ratio_sd):
+    """Laplace covariance of ``[dtheta, log sigma_cross, log sigma_about, log arw]``.
+
+    ``log sigma_cross`` is known to about ``1/sqrt(2n)``; the other two are it plus
+    the ratios, whose spread comes from the REML Hessian.
+    """
+    p = len(cond_cov)
+    lift = np.array([[1.0, 0, 0], [1, 1, 0], [1, 0, 1]])
+    hyper = lift @ np.diag([1.0 / (2 * n_obs), ratio_sd[0] ** 2, ratio_sd[1] ** 2]) @ lift.T
+    cov = np.zeros((p + 3, p + 3))
+    cov[:p, :p] = cond_cov
+    cov[p:, p:] = hyper
+    return cov
+
+
+@dataclass
+class Posterior:
+    """Everything the sampling step produces, before it is written out."""
+
+    estimate: object
+    lins: list
+    noises: list
+    grid: RatioGrid
+    result: SamplerResult
+    labels: list
+
+    @property
+    def n_params(self):
+        return len(self.labels)
+
+    def ensemble_draws(self) -> np.ndarray:
+        """(ensembles, walkers * steps, dim): each ensemble's walkers one after another,
+        so the draw axis runs along time and arviz sees the autocorrelation."""
+        c = self.result.chains
+        return np.transpose(c, (0, 2, 1, 3)).reshape(c.shape[0], -1, c.shape[-1])
+
+
+def sample(maneuvers, estimate, boresight, priors: Priors, cfg: dict, seed: int) -> Posterior:
+    """Linearise about the point estimate, tabulate the noise ratios and run the ensembles."""
+    from .estimate import linearize_all
+    from .likelihood import conditional_posterior
+    lins, noises = linearize_all(maneuvers, estimate, boresight)
+    ratios = estimate.log_sigma[1:] - estimate.log_sigma[0]
+    ratio_sd = ratio_curvature(noises, ratios)
+    grid = RatioGrid(noises, ratios, ratio_sd, cfg["grid"]["nodes"], cfg["grid"]["half_width_sd"])
+    logpost = LogPosterior(grid, estimate.theta, priors)
+    stats = campaign_stats(noises, variances(estimate.log_sigma))
+    mean, cov = conditional_posterior(stats, priors.mean - estimate.theta, priors.sd)
+    start_mean = np.concatenate([mean, estimate.log_sigma])
+    result = run_ensembles(logpost, start_mean, start_covariance(cov, stats.n, ratio_sd),
+                           cfg["sampler"], seed)
+    return Posterior(estimate, lins, noises, grid, result, ch.parameter_labels(estimate.channels))

@@ -51,7 +51,8 @@ class ManeuverData:
             channel_axis=[c.axis for c in self.channels], in_loop=list(self.in_loop),
             gyro_time=self.gyro_time, increments=self.increments, st_time=self.st_time,
             st_quat=self.st_quat, attitude0_quat=self.attitude0_quat,
-            extra_names=list(self.extras), extra_values=np.array(list(self.extras.values())).reshape(len(self.extras), -1),
+            extra_names=list(self.extras),
+            extra_values=np.array(list(self.extras.values())).reshape(len(self.extras), len(self.increments)),
             count_names=list(self.counts), count_values=np.array(list(self.counts.values()), dtype=int))
 
     @classmethod

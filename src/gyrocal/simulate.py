@@ -256,6 +256,12 @@ def star_tracker_noise(n, dt_s, st_cfg, correlation_time_s, rng):
     return cross * (white[:, :1] * e1 + white[:, 1:2] * e2) + about * white[:, 2:] * boresight
 
 
+def peek(scenario_path) -> dict:
+    """The campaign name and maneuver ids a scenario will produce (for the workflow's DAG)."""
+    scenario = load_scenario(scenario_path)
+    return {"name": scenario["name"], "maneuvers": [m["id"] for m in scenario["maneuvers"]]}
+
+
 def run(scenario_path, outdir, seed=None):
     """``gyrocal simulate``: write ``OUTDIR/campaign/`` and ``OUTDIR/truth.json``."""
     scenario = load_scenario(scenario_path)

@@ -195,8 +195,8 @@ def _check_time(path, time):
                     f"(previous row has {time[row - 1]})")
 
 
-def read_campaign(directory) -> Campaign:
-    """Read and validate a campaign directory (interface.md section 3)."""
+def read_meta(directory) -> dict:
+    """Parse and check ``campaign.yaml`` alone (name, channels, maneuvers, noise knowledge)."""
     directory = Path(directory)
     if not directory.is_dir():
         raise TelemetryError(f"{directory}: campaign directory not found")
@@ -217,13 +217,27 @@ def read_campaign(directory) -> Campaign:
             _fail(cpath, f"missing key '{key}'")
     channels = _parse_channels(cpath, meta["channels"])
     names = [c.name for c in channels]
-    maneuvers = _parse_maneuvers(cpath, meta["maneuvers"], names)
-    star_tracker = _parse_star_tracker(cpath, meta.get("star_tracker") or {})
     gyro = meta.get("gyro") or {}
     if set(gyro) - {"arw_deg_sqrt_h"}:
         _fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - {'arw_deg_sqrt_h'})}")
     if "arw_deg_sqrt_h" in gyro and not _positive_number(gyro["arw_deg_sqrt_h"]):
         _fail(cpath, "gyro.arw_deg_sqrt_h: must be a positive number")
+    name = str(meta.get("name") or directory.resolve().name)
+    if not NAME_PATTERN.match(name):
+        _fail(cpath, f"name: only letters, digits and '_' are allowed, got {name!r}")
+    return {"name": name, "channels": channels,
+            "maneuvers": _parse_maneuvers(cpath, meta["maneuvers"], names),
+            "star_tracker": _parse_star_tracker(cpath, meta.get("star_tracker") or {}),
+            "gyro": dict(gyro)}
+
+
+def read_campaign(directory) -> Campaign:
+    """Read and validate a campaign directory (interface.md section 3)."""
+    directory = Path(directory)
+    meta = read_meta(directory)
+    cpath = directory / "campaign.yaml"
+    channels, maneuvers = meta["channels"], meta["maneuvers"]
+    names = [c.name for c in channels]
 
     spath = directory / "star_tracker.csv"
     st = _read_csv(spath, ["time"] + QUAT_COLUMNS)
@@ -269,8 +283,8 @@ def read_campaign(directory) -> Campaign:
 
     columns = {c: gy[c].to_numpy(dtype=float) for c in gy.columns if c != "time"}
     return Campaign(
-        name=str(meta.get("name") or directory.resolve().name), channels=channels,
-        star_tracker=star_tracker, gyro=dict(gyro), maneuvers=maneuvers,
+        name=meta["name"], channels=channels,
+        star_tracker=meta["star_tracker"], gyro=meta["gyro"], maneuvers=maneuvers,
         st_time=st_time, st_quat=quat, st_valid=valid,
         gyro_time=gyro_time, gyro_columns=columns, source=directory)
 

@@ -1,0 +1,24 @@
+"""gyrocal: in-flight gyro calibration from single-axis maneuvers (see README.md)."""
+
+from snakemake.utils import min_version, validate
+
+min_version("8.0")
+
+
+configfile: "config/config.yaml"
+
+
+validate(config, "workflow/schemas/config.schema.yaml")
+
+
+include: "workflow/rules/common.smk"
+include: "workflow/rules/simulate.smk"
+include: "workflow/rules/preprocess.smk"
+include: "workflow/rules/estimate.smk"
+include: "workflow/rules/posterior.smk"
+
+
+rule all:
+    input:
+        all_outputs(),
+    default_target: True

@@ -1,0 +1,47 @@
+"""Figures in the style of the paper's Figures 1-3: the rate profile, then the error
+along yaw, roll and pitch."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+PAPER_ORDER = ("yaw", "roll", "pitch")
+
+
+def maneuver_figure(table, title, fit=None):
+    """Rate profile and error per axis (arcsec) of one maneuver.
+
+    ``table`` is `preprocess.error_table`; ``fit`` optionally adds, per axis, the
+    model's predicted mean and 95 % band and the residual (columns of the fit table).
+    """
+    fig, axes = plt.subplots(4, 1, figsize=(8, 9), sharex=True)
+    t = table["time"] - table["time"].iloc[0]
+    for axis in ("roll", "pitch", "yaw"):
+        axes[0].plot(t, table[f"rate_{axis}_deg_s"], label=axis, lw=1)
+    axes[0].set_ylabel("rate (deg/s)")
+    axes[0].legend(loc="upper right", fontsize=8, ncol=3)
+    sets = sorted({c.split("_")[0] for c in table.columns if c.startswith("set")})
+    for ax, axis in zip(axes[1:], PAPER_ORDER):
+        for s in sets:
+            ax.plot(t, table[f"{s}_error_{axis}_arcsec"], lw=0.6,
+                    label=f"{s} {'(in loop)' if s == 'set0' else ''}".strip())
+        if fit is not None:
+            tf = fit["time"] - table["time"].iloc[0]
+            ax.fill_between(tf, fit[f"lo_{axis}"], fit[f"hi_{axis}"], color="C3", alpha=0.25, lw=0,
+                            label="model 95 % band")
+            ax.plot(tf, fit[f"mean_{axis}"], color="C3", lw=1, label="model")
+            out = fit[f"outside_{axis}"].to_numpy(dtype=bool)
+            ax.plot(tf[out], fit[f"observed_{axis}"][out], "kx", ms=3, label="unexplained")
+        ax.set_ylabel(f"error {axis} (arcsec)")
+        ax.legend(loc="upper left", fontsize=7)
+    axes[-1].set_xlabel("time since t_start (s)")
+    fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def save(fig, path):
+    fig.savefig(path, dpi=90, format="png")
+    plt.close(fig)

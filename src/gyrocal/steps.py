@@ -1,0 +1,325 @@
+"""The workflow's steps as functions of paths: what the thin Snakemake scripts call.
+
+Each step reads its inputs, calls the physics and statistics modules and writes its
+outputs whole or not at all (a temporary file is renamed into place).
+"""
+
+import json
+import logging
+import os
+from contextlib import contextmanager
+from pathlib import Path
+
+import warnings
+
+# arviz 0.x announces its 1.x refactor on import; gyrocal pins arviz<1 (pyproject.toml).
+warnings.filterwarnings("ignore", message="\\s*ArviZ is undergoing a major refactor", category=FutureWarning)
+import arviz as az  # noqa: E402
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from . import __version__
+from . import channels as ch
+from . import correction, estimate, plots, posterior, predictive, preprocess, telemetry
+from .units import AXES, PPM, arcsec_to_rad, rad_to_arcsec
+
+log = logging.getLogger("gyrocal")
+
+
+def log_to(path):
+    """Send gyrocal's log and Python warnings of a workflow step to its log file."""
+    logging.basicConfig(filename=path, level=logging.INFO, force=True,
+                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    logging.captureWarnings(True)
+
+
+@contextmanager
+def atomic(path):
+    """Yield a temporary path beside ``path``; rename it into place on success only."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def write_json(obj, path):
+    with atomic(path) as tmp:
+        tmp.write_text(json.dumps(obj, indent=2, sort_keys=False, default=float))
+
+
+def write_csv(frame: pd.DataFrame, path):
+    with atomic(path) as tmp:
+        frame.to_csv(tmp, index=False)
+
+
+def noise_settings(meta: dict, cfg: dict) -> dict:
+    """The star-tracker and gyro noise knowledge: campaign.yaml first, then the config."""
+    st, gy, defaults = meta["star_tracker"], meta["gyro"], cfg["noise"]
+    return {
+        "sigma_cross_arcsec": st.get("sigma_cross_arcsec", defaults["sigma_cross_arcsec"]),
+        "sigma_about_arcsec": st.get("sigma_about_arcsec", defaults["sigma_about_arcsec"]),
+        "boresight_body": st.get("boresight_body", defaults["boresight_body"]),
+        "arw_deg_sqrt_h": gy.get("arw_deg_sqrt_h", defaults["arw_deg_sqrt_h"]),
+    }
+
+
+def validate(campaign_dir, out_json):
+    """Read and check the campaign; record what was read and the files' checksums."""
+    campaign = telemetry.read_campaign(campaign_dir)
+    log.info("%s", telemetry.summary(campaign))
+    write_json({
+        "campaign": campaign.name,
+        "gyrocal_version": __version__,
+        "channels": campaign.channel_names,
+        "extras": list(campaign.extras()),
+        "maneuvers": [m.id for m in campaign.maneuvers],
+        "rows": {"gyro": len(campaign.gyro_time), "star_tracker": len(campaign.st_time),
+                 "star_tracker_invalid": int((campaign.st_valid == 0).sum())},
+        "checksums_sha256": telemetry.checksums(campaign_dir),
+    }, out_json)
+
+
+def run_preprocess(campaign_dir, maneuver_id, out_npz, out_csv, out_png):
+    """Slice one maneuver, propagate every channel set nominally, save table and figure."""
+    campaign = telemetry.read_campaign(campaign_dir)
+    data = preprocess.slice_maneuver(campaign, maneuver_id)
+    table = preprocess.error_table(data)
+    with atomic(out_npz) as tmp:
+        with open(tmp, "wb") as handle:
+            data.save(handle)
+    write_csv(table, out_csv)
+    m = campaign.maneuver(maneuver_id)
+    fig = plots.maneuver_figure(table, f"{campaign.name}: {m.id} ({m.direction}{m.axis}), nominal parameters")
+    with atomic(out_png) as tmp:
+        plots.save(fig, tmp)
+
+
+def load_maneuvers(npz_paths) -> list:
+    return [preprocess.ManeuverData.load(p) for p in npz_paths]
+
+
+def run_point_estimate(npz_paths, campaign_dir, cfg, out_npz, out_classic):
+    """The paper's classic estimate and the full-trajectory WLS, both written out."""
+    maneuvers = load_maneuvers(npz_paths)
+    meta = telemetry.read_meta(campaign_dir)
+    channels = maneuvers[0].channels
+    settings = noise_settings(meta, cfg)
+    classic = estimate.classic_campaign(maneuvers)
+    classic["unit"] = [ch.PARAMETER_UNITS[p] for p in classic["parameter"]]
+    classic["value"] = np.where(classic["unit"] == "ppm", classic["value"] / PPM,
+                                rad_to_arcsec(classic["value"]))
+    log_sigma0 = np.log([arcsec_to_rad(settings["sigma_cross_arcsec"]),
+                         arcsec_to_rad(settings["sigma_about_arcsec"]),
+                         np.deg2rad(settings["arw_deg_sqrt_h"]) / 60.0])
+    est = estimate.point_estimate(maneuvers, channels, settings["boresight_body"], log_sigma0,
+                                  cfg["noise"]["estimate_scales"])
+    log.info("WLS: %s (%d evaluations); noise %s", est.message, est.nfev, _noise_contract(est.log_sigma))
+    with atomic(out_npz) as tmp:
+        with open(tmp, "wb") as handle:
+            np.savez(handle, theta=est.theta, cov=est.cov, biases=est.biases, chi0=est.chi0,
+                     log_sigma=est.log_sigma, cost=est.cost, nfev=est.nfev, message=est.message,
+                     labels=ch.parameter_labels(channels), maneuvers=[d.id for d in maneuvers],
+                     settings=json.dumps(settings))
+    write_csv(classic[["channel", "parameter", "unit", "value", "n"]], out_classic)
+
+
+def load_point_estimate(path, channels) -> tuple:
+    z = np.load(path, allow_pickle=False)
+    est = estimate.PointEstimate(tuple(channels), z["theta"], z["cov"], z["biases"], z["chi0"],
+                                 z["log_sigma"], float(z["cost"]), int(z["nfev"]), str(z["message"]))
+    return est, json.loads(str(z["settings"]))
+
+
+def contract_scale(channels) -> np.ndarray:
+    """Multipliers from SI to the contract's units (ppm, arcsec), per parameter."""
+    return np.array([1 / PPM if p.startswith("sf") else 1 / arcsec_to_rad(1.0)
+                     for c in channels for p in c.parameter_names])
+
+
+def priors_for(channels, cfg, settings) -> posterior.Priors:
+    """Config priors, overridden by an earlier campaign's posterior (``prior_from``)."""
+    pcfg = dict(cfg["priors"])
+    if cfg.get("prior_from"):
+        earlier = pd.read_csv(cfg["prior_from"])
+        labels = set(ch.parameter_labels(channels))
+        chosen = earlier[(earlier["channel"] + "." + earlier["parameter"]).isin(labels)]
+        pcfg["mean"] = {f"{r.channel}.{r.parameter}": r.mean for r in chosen.itertuples()}
+        pcfg["sd"] = {f"{r.channel}.{r.parameter}": r.sd for r in chosen.itertuples()}
+    return posterior.Priors.from_config(channels, pcfg, settings)
+
+
+def run_posterior(npz_paths, point_npz, cfg, out_nc, out_summary, out_fit, out_sampler):
+    """Sample the posterior, check convergence, save InferenceData, summary and model fit."""
+    maneuvers = load_maneuvers(npz_paths)
+    channels = maneuvers[0].channels
+    est, settings = load_point_estimate(point_npz, channels)
+    priors = priors_for(channels, cfg, settings)
+    post = posterior.sample(maneuvers, est, settings["boresight_body"], priors, cfg, cfg["seed"])
+    labels, p = post.labels, post.n_params
+    scale = contract_scale(channels)
+    draws = post.ensemble_draws()
+    full = _posterior_dataset(draws, est.theta, scale, labels)
+    summary = _summary(full, labels, cfg["convergence"])
+    res = post.result
+    converged = bool(summary["converged"].all() and res.converged_length)
+    sampler_info = {
+        "converged": converged,
+        "chain_length_ok": res.converged_length,
+        "steps": res.steps, "burn_steps": res.burn, "walkers": res.walkers,
+        "ensembles": int(draws.shape[0]), "seed": cfg["seed"],
+        "tau_max_steps": float(res.tau.max()), "steps_over_tau": float(res.steps / res.tau.max()),
+        "acceptance": res.acceptance.tolist(),
+        "grid": {"nodes": post.grid.nodes, "start": post.grid.start.tolist(), "step": post.grid.step.tolist()},
+        "settings": {k: cfg["sampler"][k] for k in cfg["sampler"]},
+        "point_estimate": {"cost": est.cost, "nfev": est.nfev, "message": est.message,
+                           "noise": _noise_contract(est.log_sigma)},
+        "failed_parameters": summary.loc[~summary["converged"], "label"].tolist(),
+    }
+    if not converged:
+        log.warning("THE SAMPLER DID NOT CONVERGE: %s; numbers are not reliable",
+                    sampler_info["failed_parameters"] or "chains shorter than the autocorrelation limit")
+    thin = np.linspace(0, draws.shape[1] - 1, cfg["sampler"]["loglik_draws"]).astype(int)
+    kept = draws[:, thin]
+    idata, fit = _inference_data(post, maneuvers, kept, scale, cfg)
+    with atomic(out_nc) as tmp:
+        idata.to_netcdf(str(tmp))
+    write_csv(summary, out_summary)
+    write_csv(fit, out_fit)
+    write_json(sampler_info, out_sampler)
+
+
+def _noise_contract(log_sigma) -> dict:
+    s = np.exp(np.asarray(log_sigma))
+    return {"sigma_cross_arcsec": float(rad_to_arcsec(s[0])), "sigma_about_arcsec": float(rad_to_arcsec(s[1])),
+            "arw_deg_sqrt_h": float(np.rad2deg(s[2]) * 60.0)}
+
+
+def _posterior_dataset(draws, theta_hat, scale, labels) -> az.InferenceData:
+    p = len(labels)
+    values = (theta_hat + draws[..., :p]) * scale
+    s = np.exp(draws[..., p:])
+    return az.from_dict(
+        posterior={"channel_param": values, "sigma_cross_arcsec": rad_to_arcsec(s[..., 0]),
+                   "sigma_about_arcsec": rad_to_arcsec(s[..., 1]),
+                   "arw_deg_sqrt_h": np.rad2deg(s[..., 2]) * 60.0},
+        coords={"parameter": labels}, dims={"channel_param": ["parameter"]})
+
+
+def _summary(idata, labels, conv) -> pd.DataFrame:
+    """Mean, sd, central 95 % interval, r_hat and bulk ESS across the ensembles (arviz)."""
+    stats = az.summary(idata, kind="stats", stat_focus="mean", round_to="none")
+    eti = az.summary(idata, kind="stats", stat_focus="median", hdi_prob=0.95, round_to="none")
+    rhat = az.rhat(idata)
+    ess = az.ess(idata, method="bulk")
+    rows = []
+    names = [f"channel_param[{label}]" for label in labels] + \
+            ["sigma_cross_arcsec", "sigma_about_arcsec", "arw_deg_sqrt_h"]
+    for label, name in zip(labels + ["noise.sigma_cross_arcsec", "noise.sigma_about_arcsec",
+                                     "noise.arw_deg_sqrt_h"], names):
+        if name.startswith("channel_param"):
+            sel = {"parameter": label}
+            r, e = float(rhat["channel_param"].sel(sel)), float(ess["channel_param"].sel(sel))
+        else:
+            r, e = float(rhat[name]), float(ess[name])
+        rows.append({"label": label, "mean": stats.loc[name, "mean"], "sd": stats.loc[name, "sd"],
+                     "ci95_low": eti.loc[name, "eti_2.5%"], "ci95_high": eti.loc[name, "eti_97.5%"],
+                     "r_hat": r, "ess_bulk": e})
+    frame = pd.DataFrame(rows)
+    frame["converged"] = (frame["r_hat"] < conv["r_hat_max"]) & (frame["ess_bulk"] >= conv["ess_bulk_min"])
+    return frame
+
+
+def _inference_data(post, maneuvers, kept, scale, cfg):
+    """InferenceData with log_likelihood per time block and a posterior predictive of the
+    attitude errors; also the per-sample fit table behind the report's figures."""
+    p = post.n_params
+    n_chain, n_draw = kept.shape[:2]
+    flat = kept.reshape(-1, kept.shape[-1])
+    dtheta, log_sigma = flat[:, :p], flat[:, p:]
+    ratios = np.mean(log_sigma[:, 1:] - log_sigma[:, :1], axis=0)
+    scale2 = np.exp(2 * log_sigma[:, 0])
+    n_pred = min(cfg["sampler"]["predictive_draws"], n_draw)
+    pred_rows = (np.arange(n_chain)[:, None] * n_draw + np.arange(n_pred)[None]).ravel()
+    rng = np.random.default_rng([cfg["seed"], 99])
+    loglik, block_names, fit_tables = [], [], []
+    pp_values, obs_values, sample_maneuver, sample_time = [], [], [], []
+    zeros = ch.ChannelParams.zeros(maneuvers[0].channels)
+    for data, lin, nz in zip(maneuvers, post.lins, post.noises):
+        wm = predictive.WhitenedManeuver(nz, ratios)
+        beta = wm.nuisance(dtheta)
+        blocks = predictive.block_index(lin, data.st_time, cfg["sampler"]["block_s"])
+        loglik.append(wm.pointwise_loglik(dtheta, beta, scale2, blocks))
+        block_names += [f"{data.id}:{b}" for b in range(blocks.max() + 1)]
+        resid = predictive.residuals_body(lin, dtheta[pred_rows], beta[pred_rows])
+        noise_rep = predictive.undifference_body(lin, wm.noise_draws(scale2[pred_rows], rng))
+        for s, channel_set in enumerate(lin.sets):
+            observed = preprocess.error_angles(data, channel_set, zeros)
+            mean_pred = observed[None] - resid[:, :, s]
+            replicate = mean_pred + noise_rep[:, :, s]
+            lo, hi = np.quantile(replicate, [0.025, 0.975], axis=0)
+            table = {"maneuver": data.id, "set": s, "channels": "+".join(channel_set), "time": data.st_time}
+            mean = mean_pred.mean(axis=0)
+            for i, axis in enumerate(AXES):
+                table[f"observed_{axis}"] = rad_to_arcsec(observed[:, i])
+                table[f"mean_{axis}"] = rad_to_arcsec(mean[:, i])
+                table[f"lo_{axis}"] = rad_to_arcsec(lo[:, i])
+                table[f"hi_{axis}"] = rad_to_arcsec(hi[:, i])
+                table[f"residual_{axis}"] = rad_to_arcsec(observed[:, i] - mean[:, i])
+                table[f"outside_{axis}"] = (observed[:, i] < lo[:, i]) | (observed[:, i] > hi[:, i])
+            fit_tables.append(pd.DataFrame(table))
+            if s == 0:
+                keep = np.arange(0, len(data.st_time), max(1, len(data.st_time) // 300))
+                pp_values.append(rad_to_arcsec(replicate[:, keep]))
+                obs_values.append(rad_to_arcsec(observed[keep]))
+                sample_maneuver += [data.id] * len(keep)
+                sample_time.append(data.st_time[keep])
+    loglik = np.concatenate(loglik, axis=1).reshape(n_chain, n_draw, -1)
+    pp = np.concatenate(pp_values, axis=1).reshape(n_chain, n_pred, -1, 3)
+    idata = _posterior_dataset(kept, post.estimate.theta, scale, post.labels)
+    chain_draw = {"chain": np.arange(n_chain), "draw": np.arange(n_draw)}
+    sample_coords = {"axis": list(AXES), "maneuver": ("sample", sample_maneuver),
+                     "time": ("sample", np.concatenate(sample_time))}
+    idata.add_groups(
+        log_likelihood=xr.Dataset({"attitude_error": (("chain", "draw", "block"), loglik)},
+                                  coords={**chain_draw, "block": block_names}),
+        posterior_predictive=xr.Dataset(
+            {"attitude_error": (("chain", "draw", "sample", "axis"), pp)},
+            coords={"chain": np.arange(n_chain), "draw": np.arange(n_pred), **sample_coords}),
+        observed_data=xr.Dataset({"attitude_error": (("sample", "axis"), np.concatenate(obs_values))},
+                                 coords=sample_coords),
+    )
+    idata.posterior.attrs.update({"gyrocal_version": __version__, "seed": cfg["seed"],
+                                  "units": "ppm for sf_*, arcsec for mis_*"})
+    return idata, pd.concat(fit_tables, ignore_index=True)
+
+
+def run_calibrate(point_npz, summary_csv, npz_paths, out_csv, out_correction):
+    """``calibration.csv`` per the contract and the correction file for every channel set."""
+    maneuvers = load_maneuvers(npz_paths)
+    channels = maneuvers[0].channels
+    est, _ = load_point_estimate(point_npz, channels)
+    summary = pd.read_csv(summary_csv).set_index("label")
+    scale = contract_scale(channels)
+    point = est.theta * scale
+    rows = []
+    for i, label in enumerate(ch.parameter_labels(channels)):
+        channel, parameter = label.split(".")
+        s = summary.loc[label]
+        rows.append({"channel": channel, "parameter": parameter, "unit": ch.PARAMETER_UNITS[parameter],
+                     "point": point[i], "mean": s["mean"], "sd": s["sd"], "ci95_low": s["ci95_low"],
+                     "ci95_high": s["ci95_high"], "r_hat": s["r_hat"], "ess_bulk": s["ess_bulk"]})
+    table = pd.DataFrame(rows)
+    write_csv(table, out_csv)
+    mean_theta = table["mean"].to_numpy() / scale
+    params = ch.ChannelParams.from_vector(channels, mean_theta)
+    in_loop = {tuple(d.sets[0]) for d in maneuvers}
+    sets = list(dict.fromkeys(tuple(s) for d in maneuvers for s in d.sets))
+    doc = correction.correction_file(params, sets, in_loop, "posterior mean")
+    doc["gyrocal_version"] = __version__
+    write_json(doc, out_correction)

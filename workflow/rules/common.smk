@@ -1,0 +1,46 @@
+"""Which campaign this run is about, and the paths every rule shares."""
+
+from pathlib import Path
+
+from gyrocal import simulate as _simulate
+from gyrocal import telemetry as _telemetry
+
+if config["telemetry"]:
+    CAMPAIGN_DIR = config["telemetry"]
+    _meta = _telemetry.read_meta(CAMPAIGN_DIR)
+    CAMPAIGN = _meta["name"]
+    MANEUVERS = [m.id for m in _meta["maneuvers"]]
+    SIMULATED = False
+else:
+    _meta = _simulate.peek(config["scenario"])
+    CAMPAIGN = _meta["name"]
+    MANEUVERS = _meta["maneuvers"]
+    CAMPAIGN_DIR = f"{config['results']}/{CAMPAIGN}/simulated/campaign"
+    SIMULATED = True
+
+RESULTS = f"{config['results']}/{CAMPAIGN}"
+LOGS = f"logs/{CAMPAIGN}"
+MODELS = list(config["models"])
+
+wildcard_constraints:
+    maneuver="|".join(MANEUVERS),
+    model="|".join(MODELS),
+
+
+def campaign_input():
+    """The campaign files a step reads: the simulator's output or the user's directory."""
+    if SIMULATED:
+        return {"campaign": CAMPAIGN_DIR}
+    return {f: f"{CAMPAIGN_DIR}/{f}" for f in ("campaign.yaml", "star_tracker.csv", "gyro.csv")}
+
+
+def maneuver_files(ext):
+    return expand(f"{RESULTS}/preprocess/{{maneuver}}.{ext}", maneuver=MANEUVERS)
+
+
+def all_outputs():
+    out = [f"{RESULTS}/input.json"] + maneuver_files("png")
+    for model in MODELS:
+        out += [f"{RESULTS}/{model}/calibration.csv", f"{RESULTS}/{model}/correction.json",
+                f"{RESULTS}/{model}/classic.csv", f"{RESULTS}/{model}/posterior.nc"]
+    return out

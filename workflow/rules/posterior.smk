@@ -1,0 +1,36 @@
+rule posterior:
+    """emcee over the channel parameters and noise scales; convergence across ensembles."""
+    input:
+        maneuvers=maneuver_files("npz"),
+        point=f"{RESULTS}/{{model}}/point_estimate.npz",
+    output:
+        posterior=f"{RESULTS}/{{model}}/posterior.nc",
+        summary=f"{RESULTS}/{{model}}/posterior_summary.csv",
+        fit=f"{RESULTS}/{{model}}/fit.csv",
+        sampler=f"{RESULTS}/{{model}}/sampler.json",
+    params:
+        config=config,
+    log:
+        f"{LOGS}/{{model}}/posterior.log",
+    script:
+        "../scripts/posterior.py"
+
+
+rule calibrate:
+    """calibration.csv per the contract, and the gyro correction for every channel set."""
+    input:
+        maneuvers=maneuver_files("npz"),
+        point=f"{RESULTS}/{{model}}/point_estimate.npz",
+        summary=f"{RESULTS}/{{model}}/posterior_summary.csv",
+    output:
+        calibration=report(
+            f"{RESULTS}/{{model}}/calibration.csv",
+            caption="../report/calibration.rst",
+            category="Calibration",
+            subcategory="{model}",
+        ),
+        correction=f"{RESULTS}/{{model}}/correction.json",
+    log:
+        f"{LOGS}/{{model}}/calibrate.log",
+    script:
+        "../scripts/calibrate.py"

@@ -1,0 +1,34 @@
+rule validate:
+    """Read and check the campaign; record rows, checksums and what was skipped."""
+    input:
+        unpack(lambda wc: campaign_input()),
+    output:
+        f"{RESULTS}/input.json",
+    params:
+        campaign_dir=CAMPAIGN_DIR,
+    log:
+        f"{LOGS}/validate.log",
+    script:
+        "../scripts/validate.py"
+
+
+rule preprocess:
+    """One maneuver: slice, propagate every channel set nominally, error angles of eq. 4."""
+    input:
+        unpack(lambda wc: campaign_input()),
+        checked=f"{RESULTS}/input.json",
+    output:
+        data=f"{RESULTS}/preprocess/{{maneuver}}.npz",
+        table=f"{RESULTS}/preprocess/{{maneuver}}.csv",
+        figure=report(
+            f"{RESULTS}/preprocess/{{maneuver}}.png",
+            caption="../report/preprocess.rst",
+            category="Maneuvers",
+            subcategory="{maneuver}",
+        ),
+    params:
+        campaign_dir=CAMPAIGN_DIR,
+    log:
+        f"{LOGS}/preprocess/{{maneuver}}.log",
+    script:
+        "../scripts/preprocess.py"

@@ -1,0 +1,13 @@
+rule simulate:
+    """The default campaign: a Mars-Orbiter-like simulation whose truth is the paper's tables."""
+    input:
+        scenario=config["scenario"],
+    output:
+        campaign=directory(f"{config['results']}/{CAMPAIGN}/simulated/campaign"),
+        truth=f"{config['results']}/{CAMPAIGN}/simulated/truth.json",
+    params:
+        seed=config["simulation_seed"],
+    log:
+        f"{LOGS}/simulate.log",
+    script:
+        "../scripts/simulate.py"

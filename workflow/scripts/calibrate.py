@@ -1,0 +1,5 @@
+from gyrocal import steps
+
+steps.log_to(snakemake.log[0])
+steps.run_calibrate(snakemake.input.point, snakemake.input.summary, snakemake.input.maneuvers,
+                    snakemake.output.calibration, snakemake.output.correction)
