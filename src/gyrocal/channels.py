@@ -129,7 +129,7 @@ class ChannelParams:
             for b in c.other_axes:
                 entry[f"mis_{b}"] = float(rad_to_arcsec(self.mis_rad[i, AXIS_INDEX[b]]))
             entry["bias_deg_h"] = float(np.rad2deg(self.bias_rad_s[i]) * 3600.0)
-            out[c.name] = {k: float(v) for k, v in entry.items()}
+            out[c.name] = {k: round(float(v), 9) for k, v in entry.items()}
         return out
 
     @classmethod

@@ -41,19 +41,21 @@ def classic(data: ManeuverData) -> pd.DataFrame:
     the other axes see the rotation through their misalignment toward a; their error
     turns with the body during the rotation, so instead of dividing by the angle we
     divide by the kinematic matrix of the actual trajectory, which is the angle for
-    the scale factor and reduces to it for small rotations.
+    the scale factor and reduces to it for small rotations. The hold averages are
+    differenced in the inertial frame, where the initial attitude offset stays put.
     """
     before, after = hold_windows(data)
     a = AXIS_INDEX[data.axis]
     others = [b for b in range(3) if b != a]
     zeros = ch.ChannelParams.zeros(data.channels)
     st_rot = Rotation.from_quat(data.st_quat)
+    end = np.flatnonzero(after)[-1]
     rows = []
     for s, channel_set in enumerate(data.sets):
         inc = body_increments(data, channel_set, zeros)
         attitudes = kinematics.propagate(Rotation.from_quat(data.attitude0_quat), inc)
         at_st = kinematics.attitude_at(data.gyro_time, attitudes, inc, data.st_time)
-        err = kinematics.error_angles_rad(at_st, st_rot)
+        inertial_err = at_st.apply(kinematics.error_angles_rad(at_st, st_rot))
         mid = kinematics.compose(attitudes[:-1], Rotation.from_rotvec(0.5 * inc))
         unit = np.zeros((len(inc), 3, 3))
         unit[:, [a] + others, [0, 1, 2]] = inc[:, a:a + 1]
@@ -61,9 +63,10 @@ def classic(data: ManeuverData) -> pd.DataFrame:
         cum = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(inertial, axis=0)])
         k = np.clip(np.searchsorted(data.gyro_time, data.st_time, side="left") - 1, 0, len(inc) - 1)
         frac = (data.st_time - data.gyro_time[k]) / data.dt[k]
-        body = np.einsum("jia,jip->jap", at_st.as_matrix(), cum[k] + frac[:, None, None] * inertial[k])
-        kin = -(body[after].mean(axis=0) - body[before].mean(axis=0))
-        delta = err[after].mean(axis=0) - err[before].mean(axis=0)
+        design = cum[k] + frac[:, None, None] * inertial[k]
+        to_body = at_st[end].inv().as_matrix()
+        kin = -to_body @ (design[after].mean(axis=0) - design[before].mean(axis=0))
+        delta = to_body @ (inertial_err[after].mean(axis=0) - inertial_err[before].mean(axis=0))
         solution = np.linalg.solve(kin, delta)
         angle = inc[:, a].sum()
         branch = "sf_pos" if angle > 0 else "sf_neg"

@@ -117,6 +117,17 @@ def error_angles(data: ManeuverData, channel_set, params: ch.ChannelParams) -> n
     return kinematics.error_angles_rad(at_st, Rotation.from_quat(data.st_quat))
 
 
+def end_of_rotation_error(data: ManeuverData, channel_set, params: ch.ChannelParams, before, after):
+    """Error left by the rotation, in body axes at the end (rad): the hold-averaged error
+    after it minus the one before, compared in the inertial frame so that the initial
+    attitude offset (the star-tracker noise at t_start) does not turn into other axes."""
+    _, _, at_st = propagate_set(data, channel_set, params)
+    err = kinematics.error_angles_rad(at_st, Rotation.from_quat(data.st_quat))
+    inertial = at_st.apply(err)
+    shift = inertial[after].mean(axis=0) - inertial[before].mean(axis=0)
+    return at_st[np.flatnonzero(after)[-1]].inv().apply(shift)
+
+
 def error_table(data: ManeuverData, params: ch.ChannelParams = None) -> pd.DataFrame:
     """Star-tracker times, body rates (deg/s) and the error along each axis (arcsec) per set."""
     params = params or ch.ChannelParams.zeros(data.channels)

@@ -25,6 +25,10 @@ NAME_PATTERN = re.compile(r"^[A-Za-z0-9_]+$")
 CHANNEL_PATTERN = re.compile(r"^dtg(\d+)_(roll|pitch|yaw)$")
 
 
+READ_CSV_EXACT = {} if int(pd.__version__.split(".")[0]) >= 3 else {"float_precision": "round_trip"}
+"""pandas 3 parses floats exactly by default; pandas 2 needs asking (and 3 deprecates asking)."""
+
+
 class TelemetryError(ValueError):
     """Bad campaign input; the message names the file, the row or column and the fault."""
 
@@ -161,7 +165,7 @@ def _read_csv(path, required) -> pd.DataFrame:
     if not path.exists():
         _fail(path, "file not found")
     try:
-        frame = pd.read_csv(path, float_precision="round_trip")
+        frame = pd.read_csv(path, **READ_CSV_EXACT)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         _fail(path, f"cannot be read as CSV: {exc}")
     missing = [c for c in required if c not in frame.columns]
@@ -305,7 +309,9 @@ def _parse_star_tracker(path, raw) -> dict:
         b = np.asarray(raw["boresight_body"], dtype=float)
         if b.shape != (3,) or not np.isfinite(b).all() or np.linalg.norm(b) == 0:
             _fail(path, "star_tracker.boresight_body: must be a non-zero 3-vector")
-        out["boresight_body"] = (b / np.linalg.norm(b)).tolist()
+        if abs(np.linalg.norm(b) - 1.0) > 1e-12:
+            b = b / np.linalg.norm(b)
+        out["boresight_body"] = b.tolist()
     return out
 
 

@@ -12,6 +12,8 @@ if config["telemetry"]:
     MANEUVERS = [m.id for m in _meta["maneuvers"]]
     SIMULATED = False
 else:
+    if not Path(config["scenario"]).exists() and Path(workflow.basedir, config["scenario"]).exists():
+        config["scenario"] = str(Path(workflow.basedir, config["scenario"]))
     _meta = _simulate.peek(config["scenario"])
     CAMPAIGN = _meta["name"]
     MANEUVERS = _meta["maneuvers"]

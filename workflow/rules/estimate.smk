@@ -9,6 +9,8 @@ rule point_estimate:
     params:
         campaign_dir=CAMPAIGN_DIR,
         config=config,
+    conda:
+        "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/{{model}}/point_estimate.log",
     script:

@@ -10,6 +10,8 @@ rule posterior:
         sampler=f"{RESULTS}/{{model}}/sampler.json",
     params:
         config=config,
+    conda:
+        "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/{{model}}/posterior.log",
     script:
@@ -30,6 +32,8 @@ rule calibrate:
             subcategory="{model}",
         ),
         correction=f"{RESULTS}/{{model}}/correction.json",
+    conda:
+        "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/{{model}}/calibrate.log",
     script:

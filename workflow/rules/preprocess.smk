@@ -6,6 +6,8 @@ rule validate:
         f"{RESULTS}/input.json",
     params:
         campaign_dir=CAMPAIGN_DIR,
+    conda:
+        "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/validate.log",
     script:
@@ -28,6 +30,8 @@ rule preprocess:
         ),
     params:
         campaign_dir=CAMPAIGN_DIR,
+    conda:
+        "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/preprocess/{{maneuver}}.log",
     script:

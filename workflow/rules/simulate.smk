@@ -7,6 +7,8 @@ rule simulate:
         truth=f"{config['results']}/{CAMPAIGN}/simulated/truth.json",
     params:
         seed=config["simulation_seed"],
+    conda:
+        "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/simulate.log",
     script:

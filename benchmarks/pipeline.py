@@ -1,0 +1,79 @@
+"""Speed of the default pipeline: prints figures, asserts nothing.
+
+    python benchmarks/pipeline.py
+
+1. wall time of the default ``snakemake --cores 2`` from an empty results directory;
+2. log-probability evaluations per second (vectorised over the walkers);
+3. effective samples per second of the slowest parameter (the sampling step alone).
+"""
+
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+
+def snakemake_wall_s() -> float:
+    with tempfile.TemporaryDirectory() as tmp:
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--cores", "2",
+                        "-d", tmp, "-q"], check=True, capture_output=True)
+        return time.perf_counter() - start
+
+
+def sampler_figures():
+    from snakemake.utils import validate
+
+    from gyrocal import estimate, posterior, preprocess, simulate, steps, telemetry
+    from gyrocal.likelihood import campaign_stats, conditional_posterior
+
+    cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
+    validate(cfg, str(ROOT / "workflow/schemas/config.schema.yaml"))
+    with tempfile.TemporaryDirectory() as tmp:
+        simulate.run(ROOT / "config/scenarios/mom.yaml", tmp)
+        campaign = telemetry.read_campaign(Path(tmp) / "campaign")
+    maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
+    settings = steps.noise_settings({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg)
+    log_sigma0 = np.log([settings["sigma_cross_arcsec"] / 206264.806, settings["sigma_about_arcsec"] / 206264.806,
+                         np.deg2rad(settings["arw_deg_sqrt_h"]) / 60])
+    est = estimate.point_estimate(maneuvers, campaign.channels, settings["boresight_body"], log_sigma0)
+    priors = steps.priors_for(campaign.channels, cfg, settings)
+    start = time.perf_counter()
+    post = posterior.sample(maneuvers, est, settings["boresight_body"], priors, cfg, cfg["seed"])
+    sampling_s = time.perf_counter() - start
+    ess = steps._summary(steps._posterior_dataset(post.ensemble_draws(), est.theta,
+                                                  steps.contract_scale(campaign.channels), post.labels),
+                         post.labels, cfg["convergence"])["ess_bulk"].min()
+    lins, noises = post.lins, post.noises
+    logpost = posterior.LogPosterior(post.grid, est.theta, priors)
+    stats = campaign_stats(noises, estimate.variances(est.log_sigma))
+    mean, cov = conditional_posterior(stats, priors.mean - est.theta, priors.sd)
+    x = np.concatenate([mean, est.log_sigma]) + np.random.default_rng(0).normal(0, 1e-6, (64, len(mean) + 3))
+    calls = 2000
+    t0 = time.perf_counter()
+    for _ in range(calls):
+        logpost(x)
+    evals_per_s = calls * len(x) / (time.perf_counter() - t0)
+    return evals_per_s, ess, sampling_s, post.result
+
+
+def main():
+    wall = snakemake_wall_s()
+    evals, ess, sampling_s, result = sampler_figures()
+    print(f"default snakemake --cores 2, empty results: {wall:8.1f} s wall")
+    print(f"log-probability evaluations per second:     {evals:8.0f} (batches of 64 walkers)")
+    print(f"sampling step:                              {sampling_s:8.1f} s "
+          f"({result.steps} steps x {result.walkers} walkers x {result.chains.shape[0]} ensembles)")
+    print(f"slowest parameter's bulk ESS:               {ess:8.0f}")
+    print(f"effective samples per second (slowest):     {ess / sampling_s:8.0f}")
+
+
+if __name__ == "__main__":
+    main()

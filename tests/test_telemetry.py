@@ -1,0 +1,129 @@
+import shutil
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from gyrocal import cli, telemetry
+from gyrocal.telemetry import TelemetryError
+
+
+@pytest.fixture
+def campaign_copy(tiny, tmp_path):
+    directory = tmp_path / "campaign"
+    shutil.copytree(tiny[0], directory)
+    return directory
+
+
+def edit_csv(path, change):
+    frame = pd.read_csv(path, **telemetry.READ_CSV_EXACT)
+    frame = change(frame)
+    frame.to_csv(path, index=False, float_format="%.17g")
+
+
+def edit_yaml(path, change):
+    meta = yaml.safe_load(path.read_text())
+    change(meta)
+    path.write_text(yaml.safe_dump(meta, sort_keys=False))
+
+
+def test_write_read_round_trip_is_exact(tiny, tmp_path):
+    original = telemetry.read_campaign(tiny[0])
+    telemetry.write_campaign(original, tmp_path / "again")
+    again = telemetry.read_campaign(tmp_path / "again")
+    assert again.name == original.name == "tiny"
+    assert again.maneuvers == original.maneuvers
+    assert np.array_equal(again.st_quat, original.st_quat)
+    assert np.array_equal(again.increments(), original.increments())
+    assert np.array_equal(again.st_valid, original.st_valid)
+    assert again.star_tracker == original.star_tracker
+
+
+def test_validate_cli_prints_a_summary(tiny, capsys):
+    assert cli.main(["validate", str(tiny[0])]) == 0
+    out = capsys.readouterr().out
+    assert "campaign tiny: OK" in out and "6 maneuvers" not in out
+    assert "maneuvers  6" in out and "5 Hz" in out and "1 Hz" in out
+
+
+def test_invalid_star_tracker_rows_are_counted_not_refused(tiny):
+    campaign = telemetry.read_campaign(tiny[0])
+    assert (campaign.st_valid == 0).sum() == round(0.005 * len(campaign.st_time))
+
+
+def expect(directory, pattern):
+    with pytest.raises(TelemetryError, match=pattern):
+        telemetry.read_campaign(directory)
+
+
+def test_missing_column_is_named(campaign_copy):
+    edit_csv(campaign_copy / "gyro.csv", lambda f: f.drop(columns=["dtg3_yaw"]))
+    expect(campaign_copy, r"gyro\.csv: missing column\(s\) \['dtg3_yaw'\]")
+
+
+def test_nan_names_line_and_column(campaign_copy):
+    def poke(f):
+        f.loc[41, "dtg1_pitch"] = np.nan
+        return f
+    edit_csv(campaign_copy / "gyro.csv", poke)
+    expect(campaign_copy, r"gyro\.csv: line 43, column 'dtg1_pitch': value is NaN")
+
+
+def test_time_going_backwards_names_the_line(campaign_copy):
+    def poke(f):
+        f.loc[100, "time"] = f.loc[98, "time"]
+        return f
+    edit_csv(campaign_copy / "star_tracker.csv", poke)
+    expect(campaign_copy, r"star_tracker\.csv: line 102, column 'time': time .* does not increase")
+
+
+def test_non_unit_quaternion_names_the_line(campaign_copy):
+    def poke(f):
+        row = int(np.flatnonzero(f["valid"].to_numpy() == 1)[10])
+        f.loc[row, "q1"] += 0.01
+        poke.line = row + 2
+        return f
+    edit_csv(campaign_copy / "star_tracker.csv", poke)
+    expect(campaign_copy, rf"line {poke.line}, columns q1..q4: quaternion norm is")
+
+
+def test_maneuver_outside_the_data_is_refused(campaign_copy):
+    edit_yaml(campaign_copy / "campaign.yaml", lambda m: m["maneuvers"][-1].update(t_end=1e7))
+    expect(campaign_copy, r"campaign\.yaml: maneuver pitch_neg: .* lies outside the data")
+
+
+def test_unknown_channel_in_gyro_csv_is_refused(campaign_copy):
+    edit_csv(campaign_copy / "gyro.csv", lambda f: f.assign(dtg4_yaw=0.0))
+    expect(campaign_copy, r"\['dtg4_yaw'\] look like gyro channels but campaign\.yaml does not declare")
+
+
+def test_unknown_in_loop_channel_is_refused(campaign_copy):
+    edit_yaml(campaign_copy / "campaign.yaml", lambda m: m["maneuvers"][0].update(in_loop=["dtg9_yaw"]))
+    expect(campaign_copy, r"maneuvers\[0\] \(yaw_pos\)\.in_loop: unknown channel 'dtg9_yaw'")
+
+
+def test_bad_valid_flag_and_bad_direction_are_named(campaign_copy):
+    edit_yaml(campaign_copy / "campaign.yaml", lambda m: m["maneuvers"][1].update(direction="up"))
+    expect(campaign_copy, r"maneuvers\[1\] \(yaw_neg\)\.direction")
+
+
+def test_non_numeric_cell_is_named(campaign_copy):
+    def poke(f):
+        f["q2"] = f["q2"].astype(object)
+        f.loc[5, "q2"] = "oops"
+        return f
+    edit_csv(campaign_copy / "star_tracker.csv", poke)
+    expect(campaign_copy, r"line 7, column 'q2': not a number: 'oops'")
+
+
+def test_write_is_whole_or_nothing(tiny, tmp_path, monkeypatch):
+    campaign = telemetry.read_campaign(tiny[0])
+
+    def broken(*args, **kwargs):
+        raise OSError("disk full")
+    monkeypatch.setattr(pd.DataFrame, "to_csv", broken)
+    with pytest.raises(OSError):
+        telemetry.write_campaign(campaign, tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+    assert list(tmp_path.iterdir()) == []
