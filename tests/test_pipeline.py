@@ -16,7 +16,7 @@ from gyrocal.units import ARCSEC_RAD, PPM
 from conftest import truth_vector
 
 
-def run_all(campaign_dir, out, cfg):
+def run_all(campaign_dir, out, cfg, model="baseline"):
     """validate -> preprocess -> point estimate -> posterior -> calibrate, as the rules do."""
     meta = telemetry.read_meta(campaign_dir)
     ids = [m.id for m in meta["maneuvers"]]
@@ -24,10 +24,10 @@ def run_all(campaign_dir, out, cfg):
     for m in ids:
         steps.run_preprocess(campaign_dir, m, out / f"pre/{m}.npz", out / f"pre/{m}.csv", out / f"pre/{m}.png")
     npz = [out / f"pre/{m}.npz" for m in ids]
-    steps.run_point_estimate(npz, campaign_dir, cfg, out / "point.npz", out / "classic.csv")
-    steps.run_posterior(npz, out / "point.npz", cfg, out / "posterior.nc", out / "summary.csv",
+    steps.run_point_estimate(npz, campaign_dir, cfg, model, out / "point.npz", out / "classic.csv")
+    steps.run_posterior(npz, out / "point.npz", cfg, model, out / "posterior.nc", out / "summary.csv",
                         out / "fit.csv", out / "sampler.json")
-    steps.run_calibrate(out / "point.npz", out / "summary.csv", npz, out / "calibration.csv",
+    steps.run_calibrate(out / "point.npz", out / "summary.csv", npz, cfg, model, out / "calibration.csv",
                         out / "correction.json")
     return npz
 
@@ -94,7 +94,7 @@ def test_tiny_posterior_converges_and_covers_a_truth_that_is_not_the_papers(tiny
 
 def test_same_seed_same_numbers(tiny_run, config, tmp_path):
     out, npz = tiny_run
-    steps.run_posterior(npz, out / "point.npz", config, tmp_path / "p.nc", tmp_path / "s.csv",
+    steps.run_posterior(npz, out / "point.npz", config, "baseline", tmp_path / "p.nc", tmp_path / "s.csv",
                         tmp_path / "f.csv", tmp_path / "j.json")
     assert (tmp_path / "s.csv").read_text() == (out / "summary.csv").read_text()
 
@@ -103,7 +103,7 @@ def test_a_run_that_cannot_converge_says_so(tiny_run, config, tmp_path, caplog):
     out, npz = tiny_run
     cfg = copy.deepcopy(config)
     cfg["sampler"].update(initial_steps=50, chunk_steps=10, max_steps=60, min_tau_multiple=1000)
-    steps.run_posterior(npz, out / "point.npz", cfg, tmp_path / "p.nc", tmp_path / "s.csv",
+    steps.run_posterior(npz, out / "point.npz", cfg, "baseline", tmp_path / "p.nc", tmp_path / "s.csv",
                         tmp_path / "f.csv", tmp_path / "j.json")
     info = json.loads((tmp_path / "j.json").read_text())
     assert info["converged"] is False and info["chain_length_ok"] is False

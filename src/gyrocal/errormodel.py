@@ -18,6 +18,7 @@ from scipy.spatial.transform import Rotation
 
 from . import channels as ch
 from . import kinematics
+from .effects import ManeuverView
 from .preprocess import ManeuverData
 
 
@@ -43,11 +44,48 @@ class Linearization:
     """(M, S, 3) the same error in body axes (rad), for plots and diagnostics."""
 
 
-def _set_jacobian(data: ManeuverData, channel_set, params: ch.ChannelParams):
-    """Propagate one set and return attitudes, increments and d(phi)/d(set params)."""
+def effect_regressors(data: ManeuverData, extras):
+    """What the extra effects change, per unit parameter (SI), at nominal parameters.
+
+    Returns (K, n_channels, E) changes of the raw channel increments and (M, 3, E)
+    changes of the body-frame star-tracker error.
+    """
+    n_ch = len(data.channels)
+    gyro = np.zeros((len(data.dt), n_ch, len(extras)))
+    star = np.zeros((len(data.st_time), 3, len(extras)))
+    if not extras:
+        return gyro, star
+    zeros = ch.ChannelParams.zeros(data.channels)
+    first = data.sets[0]
+    view = ManeuverView(data, ch.solve_body(data.set_increments(first), zeros.subset(first), dt_s=data.dt)
+                        / data.dt[:, None])
+    cache = {}
+    for j, extra in enumerate(extras):
+        effect = extra.effect
+        if effect.name not in cache:
+            cache[effect.name] = (effect.gyro(view), effect.star_tracker(view))
+        g, s = cache[effect.name]
+        name = extra.parameter.name
+        if name in g:
+            column = np.asarray(g[name], dtype=float).reshape(len(data.dt), n_ch)
+            if extra.channel is None:
+                gyro[:, :, j] = column
+            else:
+                gyro[:, extra.channel, j] = column[:, extra.channel]
+        if name in s:
+            star[:, :, j] = np.asarray(s[name], dtype=float).reshape(len(data.st_time), 3)
+    return gyro, star
+
+
+def _set_jacobian(data: ManeuverData, channel_set, params: ch.ChannelParams, regressors, extra_values):
+    """Propagate one set and return attitudes, increments and d(phi)/d(set params).
+
+    ``regressors`` (K, 3, E) are the extra effects' changes of this set's channel
+    increments per unit parameter; the model removes ``regressors @ extra_values``.
+    """
     sub = params.subset(channel_set)
     dt = data.dt
-    u = data.set_increments(channel_set)
+    u = data.set_increments(channel_set) - regressors @ extra_values
     phi = ch.solve_body(u, sub, dt_s=dt)
     attitudes = kinematics.propagate(Rotation.from_quat(data.attitude0_quat), phi)
     positive = (u - np.outer(dt, sub.bias_rad_s)) > 0
@@ -64,15 +102,20 @@ def _set_jacobian(data: ManeuverData, channel_set, params: ch.ChannelParams):
             columns.append(w * (scale[:, i] * phi[:, ch.AXIS_INDEX[b]])[:, None])
     for i in range(3):
         columns.append(-m_inv[:, :, i] * dt[:, None])
+    for j in range(regressors.shape[2]):
+        columns.append(-np.einsum("kai,ki->ka", m_inv, regressors[:, :, j]))
     return attitudes, phi, np.stack(columns, axis=2)
 
 
-def linearize(data: ManeuverData, params: ch.ChannelParams) -> Linearization:
+def linearize(data: ManeuverData, params: ch.ChannelParams, extras=(), extra_values=None) -> Linearization:
     """Residuals and Jacobian of one maneuver about ``params`` (all channels; biases are
-    this maneuver's)."""
+    this maneuver's) and, for the extra effects, about ``extra_values`` (SI)."""
     sets = data.sets
     names = [c.name for c in params.channels]
-    n_par = ch.N_PARAMS_PER_CHANNEL * len(names)
+    n_base = ch.N_PARAMS_PER_CHANNEL * len(names)
+    n_par = n_base + len(extras)
+    extra_values = np.zeros(len(extras)) if extra_values is None else np.asarray(extra_values, dtype=float)
+    gyro_reg, star_reg = effect_regressors(data, extras)
     st_rot = Rotation.from_quat(data.st_quat)
     k = np.clip(np.searchsorted(data.gyro_time, data.st_time, side="left") - 1, 0, len(data.dt) - 1)
     frac = (data.st_time - data.gyro_time[k]) / data.dt[k]
@@ -82,19 +125,22 @@ def linearize(data: ManeuverData, params: ch.ChannelParams) -> Linearization:
     design = np.zeros((m, len(sets), 3, n_par))
     bias_design = np.zeros((m, len(sets), 3, len(names)))
     for s, channel_set in enumerate(sets):
-        attitudes, phi, dphi = _set_jacobian(data, channel_set, params)
+        slots = [names.index(n) for n in channel_set]
+        attitudes, phi, dphi = _set_jacobian(data, channel_set, params, gyro_reg[:, slots, :], extra_values)
         mid = kinematics.compose(attitudes[:-1], Rotation.from_rotvec(0.5 * phi))
         inertial = np.einsum("kij,kjp->kip", mid.as_matrix(), dphi)
         cumulative = np.concatenate([np.zeros((1,) + inertial.shape[1:]), np.cumsum(inertial, axis=0)])
         at_st_jac = cumulative[k] + frac[:, None, None] * inertial[k]
         at_st = kinematics.attitude_at(data.gyro_time, attitudes, phi, data.st_time)
         e = kinematics.error_angles_rad(at_st, st_rot)
-        body[:, s] = e
-        z[:, s] = at_st.apply(e)
+        st_columns = np.einsum("mab,mbe->mae", at_st.as_matrix(), star_reg)
+        body[:, s] = e - star_reg @ extra_values
+        z[:, s] = at_st.apply(e) - st_columns @ extra_values
         for slot, name in enumerate(channel_set):
             j = names.index(name)
             design[:, s, :, 4 * j:4 * j + 4] = at_st_jac[:, :, 4 * slot:4 * slot + 4]
             bias_design[:, s, :, j] = at_st_jac[:, :, 12 + slot]
+        design[:, s, :, n_base:] = at_st_jac[:, :, 15:] + st_columns
         if s == 0:
             st_matrix = at_st.as_matrix()
             gyro_matrix = mid.as_matrix()

@@ -100,10 +100,18 @@ class PointEstimate:
     cost: float
     nfev: int
     message: str
-    history: list = field(default_factory=list)
+    extras: list = field(default_factory=list)
+    """`effects.ExtraParameter` of the columns after the baseline's 24."""
+
+    @property
+    def n_base(self) -> int:
+        return ch.N_PARAMS_PER_CHANNEL * len(self.channels)
 
     def params(self, m: int) -> ch.ChannelParams:
-        return ch.ChannelParams.from_vector(self.channels, self.theta, self.biases[m])
+        return ch.ChannelParams.from_vector(self.channels, self.theta[:self.n_base], self.biases[m])
+
+    def linearize(self, maneuvers, m: int):
+        return errormodel.linearize(maneuvers[m], self.params(m), self.extras, self.theta[self.n_base:])
 
 
 def _unpack(x, n_par, n_man, n_ch):
@@ -112,7 +120,7 @@ def _unpack(x, n_par, n_man, n_ch):
     return theta, nuis[:, :3], nuis[:, 3:]
 
 
-def wls(maneuvers, channels, boresight, log_sigma, theta0=None, biases0=None, chi00=None):
+def wls(maneuvers, channels, boresight, log_sigma, theta0=None, biases0=None, chi00=None, extras=()):
     """Weighted least squares over every maneuver with `scipy.optimize.least_squares`.
 
     Unknowns: the channel parameters of all channels, and per maneuver the initial
@@ -121,14 +129,18 @@ def wls(maneuvers, channels, boresight, log_sigma, theta0=None, biases0=None, ch
     (star tracker across and about its boresight, gyro random walk).
     """
     n_ch, n_man = len(channels), len(maneuvers)
-    n_par = ch.N_PARAMS_PER_CHANNEL * n_ch
+    n_base = ch.N_PARAMS_PER_CHANNEL * n_ch
+    n_par = n_base + len(extras)
     theta0 = np.zeros(n_par) if theta0 is None else theta0
     biases0 = np.zeros((n_man, n_ch)) if biases0 is None else biases0
     chi00 = np.zeros((n_man, 3)) if chi00 is None else chi00
     x0 = np.concatenate([theta0, np.column_stack([chi00, biases0]).ravel()])
     var = variances(log_sigma)
-    first = [errormodel.linearize(d, ch.ChannelParams.from_vector(channels, theta0, biases0[m]))
-             for m, d in enumerate(maneuvers)]
+    def lin_at(m, theta, biases):
+        return errormodel.linearize(maneuvers[m], ch.ChannelParams.from_vector(channels, theta[:n_base], biases),
+                                    extras, theta[n_base:])
+
+    first = [lin_at(m, theta0, biases0[m]) for m in range(n_man)]
     noises = [noise.build(lin, boresight) for lin in first]
     chols = [nz.factor(var) for nz in noises]
     cache = {}
@@ -140,7 +152,7 @@ def wls(maneuvers, channels, boresight, log_sigma, theta0=None, biases0=None, ch
         theta, chi0, biases = _unpack(x, n_par, n_man, n_ch)
         res, jac_rows = [], []
         for m, d in enumerate(maneuvers):
-            lin = errormodel.linearize(d, ch.ChannelParams.from_vector(channels, theta, biases[m]))
+            lin = lin_at(m, theta, biases[m])
             nz = noises[m]
             r = noise.difference(lin.z - chi0[m]).reshape(-1)
             nuis = noise.difference(noise.nuisance_design(lin)).reshape(nz.n, -1)
@@ -162,12 +174,12 @@ def wls(maneuvers, channels, boresight, log_sigma, theta0=None, biases0=None, ch
     theta, chi0, biases = _unpack(result.x, n_par, n_man, n_ch)
     return PointEstimate(tuple(channels), theta, cov_full[:n_par, :n_par], biases, chi0,
                          np.asarray(log_sigma, dtype=float), float(2 * result.cost), int(result.nfev),
-                         str(result.message))
+                         str(result.message), list(extras))
 
 
 def linearize_all(maneuvers, estimate: PointEstimate, boresight):
     """Linearisations and noise structures of every maneuver about a point estimate."""
-    lins = [errormodel.linearize(d, estimate.params(m)) for m, d in enumerate(maneuvers)]
+    lins = [estimate.linearize(maneuvers, m) for m in range(len(maneuvers))]
     return lins, [noise.build(lin, boresight) for lin in lins]
 
 
@@ -209,17 +221,17 @@ def classic_vector(table: pd.DataFrame, channels) -> np.ndarray:
     return theta
 
 
-def point_estimate(maneuvers, channels, boresight, log_sigma0, estimate_scales=True) -> PointEstimate:
+def point_estimate(maneuvers, channels, boresight, log_sigma0, estimate_scales=True, extras=()) -> PointEstimate:
     """Classic estimate, REML noise scales about it, then WLS from it at those scales.
 
     The classic estimate is within a few tens of ppm of the optimum, so the model is
     linear enough about it for the noise scales; the WLS then needs a few steps.
     """
-    theta0 = classic_vector(classic_campaign(maneuvers), channels)
+    theta0 = np.concatenate([classic_vector(classic_campaign(maneuvers), channels), np.zeros(len(extras))])
     log_sigma = np.asarray(log_sigma0, dtype=float)
     if estimate_scales:
         start = PointEstimate(tuple(channels), theta0, None, np.zeros((len(maneuvers), len(channels))),
-                              None, log_sigma, np.nan, 0, "classic")
+                              None, log_sigma, np.nan, 0, "classic", list(extras))
         _, noises = linearize_all(maneuvers, start, boresight)
         log_sigma = estimate_noise(noises, log_sigma)
-    return wls(maneuvers, channels, boresight, log_sigma, theta0)
+    return wls(maneuvers, channels, boresight, log_sigma, theta0, extras=extras)

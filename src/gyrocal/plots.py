@@ -45,3 +45,21 @@ def maneuver_figure(table, title, fit=None):
 def save(fig, path):
     fig.savefig(path, dpi=90, format="png")
     plt.close(fig)
+
+
+def comparison_figure(table):
+    """The residual RMS falling across the model variants, against what the noise predicts."""
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    x = np.arange(len(table))
+    colors = ["C3" if m else "C2" for m in table["misfit"]]
+    ax.bar(x, table["residual_rms_arcsec"], color=colors)
+    ax.axhline(table["noise_rms_arcsec"].iloc[0], color="k", ls="--", lw=1, label="noise model predicts")
+    ax.set_xticks(x, table["model"])
+    ax.set_ylabel("residual RMS (arcsec)")
+    for xi, (rms, elpd) in enumerate(zip(table["residual_rms_arcsec"], table["elpd_loo"])):
+        ax.text(xi, rms, f"{rms:.2f}\nelpd {elpd:.0f}", ha="center", va="bottom", fontsize=8)
+    ax.set_ylim(0, 1.25 * table["residual_rms_arcsec"].max())
+    ax.legend(loc="lower right", fontsize=8)
+    ax.set_title("residual RMS per model (red: misfit, green: consistent with the noise)")
+    fig.tight_layout()
+    return fig

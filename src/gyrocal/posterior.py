@@ -34,21 +34,23 @@ class Priors:
     log_sigma_sd: np.ndarray
 
     @classmethod
-    def from_config(cls, channels, cfg: dict, noise_center: dict):
-        """``cfg`` is the config's ``priors`` section; ``noise_center`` the prior noise guess."""
+    def from_config(cls, channels, cfg: dict, noise_center: dict, extras=()):
+        """``cfg`` is the config's ``priors`` section; ``noise_center`` the prior noise guess;
+        ``extras`` the extra effects' parameters, whose priors their effects declare."""
         is_sf = np.array([p.startswith("sf") for c in channels for p in c.parameter_names])
         sd = np.where(is_sf, cfg["sf_sd_ppm"] * PPM, arcsec_to_rad(cfg["mis_sd_arcsec"]))
         bound = np.where(is_sf, cfg["sf_bound_ppm"] * PPM, arcsec_to_rad(cfg["mis_bound_arcsec"]))
         mean = np.zeros(len(sd))
+        labels = ch.parameter_labels(channels)
         for label, value in (cfg.get("mean") or {}).items():
-            labels = ch.parameter_labels(channels)
-            if label not in labels:
-                raise ValueError(f"priors.mean: unknown parameter {label!r}")
             i = labels.index(label)
             mean[i] = value * (PPM if is_sf[i] else arcsec_to_rad(1.0))
         for label, value in (cfg.get("sd") or {}).items():
-            i = ch.parameter_labels(channels).index(label)
+            i = labels.index(label)
             sd[i] = value * (PPM if is_sf[i] else arcsec_to_rad(1.0))
+        sd = np.concatenate([sd, [e.parameter.prior_sd * e.parameter.si_per_unit for e in extras]])
+        bound = np.concatenate([bound, [e.parameter.bound * e.parameter.si_per_unit for e in extras]])
+        mean = np.concatenate([mean, np.zeros(len(extras))])
         center = np.log([arcsec_to_rad(noise_center["sigma_cross_arcsec"]),
                          arcsec_to_rad(noise_center["sigma_about_arcsec"]),
                          arw_to_rad_sqrt_s(noise_center["arw_deg_sqrt_h"])])
@@ -294,4 +296,5 @@ def sample(maneuvers, estimate, boresight, priors: Priors, cfg: dict, seed: int)
     start_mean = np.concatenate([mean, estimate.log_sigma])
     result = run_ensembles(logpost, start_mean, start_covariance(cov, stats.n, ratio_sd),
                            cfg["sampler"], seed)
-    return Posterior(estimate, lins, noises, grid, result, ch.parameter_labels(estimate.channels))
+    labels = ch.parameter_labels(estimate.channels) + [e.label for e in estimate.extras]
+    return Posterior(estimate, lins, noises, grid, result, labels)

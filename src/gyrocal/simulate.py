@@ -58,7 +58,7 @@ def _merge(defaults: dict, given: dict, where: str) -> dict:
         raise ValueError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(defaults)}")
     out = copy.deepcopy(defaults)
     for key, value in given.items():
-        if isinstance(defaults[key], dict) and key not in ("channels", "truth"):
+        if isinstance(defaults[key], dict) and key not in ("channels", "truth", "effects"):
             out[key] = _merge(defaults[key], value or {}, f"{where}.{key}")
         else:
             out[key] = value

@@ -21,7 +21,7 @@ import xarray as xr
 
 from . import __version__
 from . import channels as ch
-from . import correction, estimate, plots, posterior, predictive, preprocess, telemetry
+from . import correction, diagnostics, effects, estimate, plots, posterior, predictive, preprocess, telemetry
 from .units import AXES, PPM, arcsec_to_rad, rad_to_arcsec
 
 log = logging.getLogger("gyrocal")
@@ -104,11 +104,23 @@ def load_maneuvers(npz_paths) -> list:
     return [preprocess.ManeuverData.load(p) for p in npz_paths]
 
 
-def run_point_estimate(npz_paths, campaign_dir, cfg, out_npz, out_classic):
+def model_effects(cfg, model: str) -> list:
+    """The effect objects of a model variant declared in the config (plugins included)."""
+    if model not in cfg["models"]:
+        raise ValueError(f"model {model!r} is not declared under models: in the config ({list(cfg['models'])})")
+    return effects.resolve(model, cfg["models"][model], effects.load_plugins(cfg.get("plugins") or []))
+
+
+def model_extras(cfg, model, channels) -> list:
+    return effects.extra_parameters(model_effects(cfg, model), channels)
+
+
+def run_point_estimate(npz_paths, campaign_dir, cfg, model, out_npz, out_classic):
     """The paper's classic estimate and the full-trajectory WLS, both written out."""
     maneuvers = load_maneuvers(npz_paths)
     meta = telemetry.read_meta(campaign_dir)
     channels = maneuvers[0].channels
+    extras = model_extras(cfg, model, channels)
     settings = noise_settings(meta, cfg)
     classic = estimate.classic_campaign(maneuvers)
     classic["unit"] = [ch.PARAMETER_UNITS[p] for p in classic["parameter"]]
@@ -118,31 +130,40 @@ def run_point_estimate(npz_paths, campaign_dir, cfg, out_npz, out_classic):
                          arcsec_to_rad(settings["sigma_about_arcsec"]),
                          np.deg2rad(settings["arw_deg_sqrt_h"]) / 60.0])
     est = estimate.point_estimate(maneuvers, channels, settings["boresight_body"], log_sigma0,
-                                  cfg["noise"]["estimate_scales"])
+                                  cfg["noise"]["estimate_scales"], extras)
     log.info("WLS: %s (%d evaluations); noise %s", est.message, est.nfev, _noise_contract(est.log_sigma))
     with atomic(out_npz) as tmp:
         with open(tmp, "wb") as handle:
             np.savez(handle, theta=est.theta, cov=est.cov, biases=est.biases, chi0=est.chi0,
                      log_sigma=est.log_sigma, cost=est.cost, nfev=est.nfev, message=est.message,
-                     labels=ch.parameter_labels(channels), maneuvers=[d.id for d in maneuvers],
+                     labels=ch.parameter_labels(channels) + [e.label for e in extras],
+                     maneuvers=[d.id for d in maneuvers],
                      settings=json.dumps(settings))
     write_csv(classic[["channel", "parameter", "unit", "value", "n"]], out_classic)
 
 
-def load_point_estimate(path, channels) -> tuple:
+def load_point_estimate(path, channels, extras=()) -> tuple:
     z = np.load(path, allow_pickle=False)
+    labels = ch.parameter_labels(channels) + [e.label for e in extras]
+    if list(z["labels"]) != labels:
+        raise ValueError(f"{path}: its parameters {list(z['labels'])} are not the model's {labels}")
     est = estimate.PointEstimate(tuple(channels), z["theta"], z["cov"], z["biases"], z["chi0"],
-                                 z["log_sigma"], float(z["cost"]), int(z["nfev"]), str(z["message"]))
+                                 z["log_sigma"], float(z["cost"]), int(z["nfev"]), str(z["message"]),
+                                 list(extras))
     return est, json.loads(str(z["settings"]))
 
 
-def contract_scale(channels) -> np.ndarray:
-    """Multipliers from SI to the contract's units (ppm, arcsec), per parameter."""
-    return np.array([1 / PPM if p.startswith("sf") else 1 / arcsec_to_rad(1.0)
-                     for c in channels for p in c.parameter_names])
+def contract_scale(channels, extras=()) -> np.ndarray:
+    """Multipliers from SI to the contract's units (ppm, arcsec; effects' own units), per parameter."""
+    base = [1 / PPM if p.startswith("sf") else 1 / arcsec_to_rad(1.0) for c in channels for p in c.parameter_names]
+    return np.array(base + [1 / e.parameter.si_per_unit for e in extras])
 
 
-def priors_for(channels, cfg, settings) -> posterior.Priors:
+def parameter_units(channels, extras=()) -> list:
+    return [ch.PARAMETER_UNITS[p] for c in channels for p in c.parameter_names] + [e.parameter.unit for e in extras]
+
+
+def priors_for(channels, cfg, settings, extras=()) -> posterior.Priors:
     """Config priors, overridden by an earlier campaign's posterior (``prior_from``)."""
     pcfg = dict(cfg["priors"])
     if cfg.get("prior_from"):
@@ -151,18 +172,19 @@ def priors_for(channels, cfg, settings) -> posterior.Priors:
         chosen = earlier[(earlier["channel"] + "." + earlier["parameter"]).isin(labels)]
         pcfg["mean"] = {f"{r.channel}.{r.parameter}": r.mean for r in chosen.itertuples()}
         pcfg["sd"] = {f"{r.channel}.{r.parameter}": r.sd for r in chosen.itertuples()}
-    return posterior.Priors.from_config(channels, pcfg, settings)
+    return posterior.Priors.from_config(channels, pcfg, settings, extras)
 
 
-def run_posterior(npz_paths, point_npz, cfg, out_nc, out_summary, out_fit, out_sampler):
+def run_posterior(npz_paths, point_npz, cfg, model, out_nc, out_summary, out_fit, out_sampler):
     """Sample the posterior, check convergence, save InferenceData, summary and model fit."""
     maneuvers = load_maneuvers(npz_paths)
     channels = maneuvers[0].channels
-    est, settings = load_point_estimate(point_npz, channels)
-    priors = priors_for(channels, cfg, settings)
+    extras = model_extras(cfg, model, channels)
+    est, settings = load_point_estimate(point_npz, channels, extras)
+    priors = priors_for(channels, cfg, settings, extras)
     post = posterior.sample(maneuvers, est, settings["boresight_body"], priors, cfg, cfg["seed"])
     labels, p = post.labels, post.n_params
-    scale = contract_scale(channels)
+    scale = contract_scale(channels, extras)
     draws = post.ensemble_draws()
     full = _posterior_dataset(draws, est.theta, scale, labels)
     summary = _summary(full, labels, cfg["convergence"])
@@ -299,27 +321,113 @@ def _inference_data(post, maneuvers, kept, scale, cfg):
     return idata, pd.concat(fit_tables, ignore_index=True)
 
 
-def run_calibrate(point_npz, summary_csv, npz_paths, out_csv, out_correction):
-    """``calibration.csv`` per the contract and the correction file for every channel set."""
+def run_calibrate(point_npz, summary_csv, npz_paths, cfg, model, out_csv, out_correction):
+    """``calibration.csv`` per the contract and the correction file for every channel set.
+
+    Rows of the baseline's parameters come first; an extended model adds rows for its
+    effects' parameters, in their own units."""
     maneuvers = load_maneuvers(npz_paths)
     channels = maneuvers[0].channels
-    est, _ = load_point_estimate(point_npz, channels)
+    extras = model_extras(cfg, model, channels)
+    est, _ = load_point_estimate(point_npz, channels, extras)
     summary = pd.read_csv(summary_csv).set_index("label")
-    scale = contract_scale(channels)
+    scale = contract_scale(channels, extras)
+    units = parameter_units(channels, extras)
     point = est.theta * scale
     rows = []
-    for i, label in enumerate(ch.parameter_labels(channels)):
+    for i, label in enumerate(ch.parameter_labels(channels) + [e.label for e in extras]):
         channel, parameter = label.split(".")
         s = summary.loc[label]
-        rows.append({"channel": channel, "parameter": parameter, "unit": ch.PARAMETER_UNITS[parameter],
+        rows.append({"channel": channel, "parameter": parameter, "unit": units[i],
                      "point": point[i], "mean": s["mean"], "sd": s["sd"], "ci95_low": s["ci95_low"],
                      "ci95_high": s["ci95_high"], "r_hat": s["r_hat"], "ess_bulk": s["ess_bulk"]})
     table = pd.DataFrame(rows)
     write_csv(table, out_csv)
     mean_theta = table["mean"].to_numpy() / scale
-    params = ch.ChannelParams.from_vector(channels, mean_theta)
+    params = ch.ChannelParams.from_vector(channels, mean_theta[:est.n_base])
     in_loop = {tuple(d.sets[0]) for d in maneuvers}
     sets = list(dict.fromkeys(tuple(s) for d in maneuvers for s in d.sets))
     doc = correction.correction_file(params, sets, in_loop, "posterior mean")
     doc["gyrocal_version"] = __version__
     write_json(doc, out_correction)
+
+
+def run_diagnostics(npz_paths, point_npz, summary_csv, fit_csv, cfg, model, out_json):
+    """``diagnostics.json`` per interface.md section 5: misfit verdict and ranking."""
+    maneuvers = load_maneuvers(npz_paths)
+    channels = maneuvers[0].channels
+    model_fx = model_effects(cfg, model)
+    extras = effects.extra_parameters(model_fx, channels)
+    est, settings = load_point_estimate(point_npz, channels, extras)
+    boresight = settings["boresight_body"]
+    lins, noises = estimate.linearize_all(maneuvers, est, boresight)
+    fit = pd.read_csv(fit_csv)
+    residual_rms = float(np.sqrt(np.mean(fit[[f"residual_{a}" for a in AXES]].to_numpy() ** 2)))
+    noise_rms = diagnostics.noise_rms_arcsec(maneuvers, settings)
+    white = diagnostics.whiteness(maneuvers, lins, noises, est)
+    plugins = effects.load_plugins(cfg.get("plugins") or [])
+    ranking, detail = diagnostics.rank(maneuvers, est, boresight, model_fx, list(maneuvers[0].extras),
+                                       plugins.values())
+    summary = pd.read_csv(summary_csv).set_index("label")
+    noise_post = {k: float(summary.loc[f"noise.{k}", "mean"])
+                  for k in ("sigma_cross_arcsec", "sigma_about_arcsec", "arw_deg_sqrt_h")}
+    checks = diagnostics.misfit_checks(residual_rms, noise_rms, white, ranking, noise_post, settings,
+                                       cfg["diagnostics"])
+    per_maneuver = {}
+    for (m, s), group in fit.groupby(["maneuver", "set"], sort=False):
+        per_maneuver.setdefault(m, {})[f"set{s}"] = {
+            a: round(float(np.sqrt(np.mean(group[f"residual_{a}"] ** 2))), 3) for a in AXES}
+    write_json({
+        "model": model,
+        "effects": [e.name for e in model_fx],
+        "residual_rms_arcsec": round(residual_rms, 4),
+        "noise_rms_arcsec": round(noise_rms, 4),
+        "misfit": not all(c["passed"] for c in checks),
+        "ranking": ranking,
+        "checks": checks,
+        "whiteness": white,
+        "noise_posterior": noise_post,
+        "noise_stated": {k: settings[k] for k in ("sigma_cross_arcsec", "sigma_about_arcsec", "arw_deg_sqrt_h")},
+        "residual_rms_per_maneuver_arcsec": per_maneuver,
+        "signature_detail_chi2": detail,
+        "unexplained_fraction": round(float(fit[[f"outside_{a}" for a in AXES]].to_numpy().mean()), 4),
+    }, out_json)
+
+
+def run_compare(models, posterior_paths, diagnostics_paths, summary_paths, out_csv, out_png):
+    """``model_comparison.csv``: residual RMS and PSIS-LOO per variant, and what moved."""
+    diags = [json.loads(Path(p).read_text()) for p in diagnostics_paths]
+    idatas = {m: az.from_netcdf(p) for m, p in zip(models, posterior_paths)}
+    loo = {m: az.loo(idata, pointwise=False) for m, idata in idatas.items()}
+    summaries = {m: pd.read_csv(p).set_index("label") for m, p in zip(models, summary_paths)}
+    reference = models[0]
+    rows = []
+    for m, d in zip(models, diags):
+        moved = []
+        ref, cur = summaries[reference], summaries[m]
+        for label in ref.index.intersection(cur.index):
+            if label.startswith("noise."):
+                continue
+            sd = max(ref.loc[label, "sd"], cur.loc[label, "sd"])
+            if abs(cur.loc[label, "mean"] - ref.loc[label, "mean"]) > 2 * sd:
+                moved.append(label)
+        rows.append({"model": m, "effects": "+".join(d["effects"]),
+                     "residual_rms_arcsec": d["residual_rms_arcsec"], "noise_rms_arcsec": d["noise_rms_arcsec"],
+                     "misfit": d["misfit"], "elpd_loo": float(loo[m].elpd_loo), "elpd_loo_se": float(loo[m].se),
+                     "p_loo": float(loo[m].p_loo),
+                     "elpd_diff_vs_first": float(loo[m].elpd_loo - loo[reference].elpd_loo),
+                     "elpd_diff_se": _diff_se(idatas[m], idatas[reference]) if m != reference else 0.0,
+                     "pareto_k_max": float(np.max(az.loo(idatas[m], pointwise=True).pareto_k)),
+                     f"moved_over_2sd_vs_{reference}": " ".join(moved)})
+    table = pd.DataFrame(rows)
+    write_csv(table, out_csv)
+    fig = plots.comparison_figure(table)
+    with atomic(out_png) as tmp:
+        plots.save(fig, tmp)
+
+
+def _diff_se(a, b) -> float:
+    """Standard error of the elpd difference from the pointwise LOO values (paired)."""
+    la = az.loo(a, pointwise=True).loo_i.values
+    lb = az.loo(b, pointwise=True).loo_i.values
+    return float(np.sqrt(len(la) * np.var(la - lb)))

@@ -32,6 +32,8 @@ rule calibrate:
             subcategory="{model}",
         ),
         correction=f"{RESULTS}/{{model}}/correction.json",
+    params:
+        config=config,
     conda:
         "../envs/gyrocal.yaml"
     log:

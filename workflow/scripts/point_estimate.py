@@ -2,4 +2,4 @@ from gyrocal import steps
 
 steps.log_to(snakemake.log[0])
 steps.run_point_estimate(snakemake.input.maneuvers, snakemake.params.campaign_dir, snakemake.params.config,
-                         snakemake.output.point, snakemake.output.classic)
+                         snakemake.wildcards.model, snakemake.output.point, snakemake.output.classic)

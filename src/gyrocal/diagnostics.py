@@ -1,0 +1,188 @@
+"""Model criticism: is the fit consistent with the noise model, and if not, what is missing?
+
+Three checks of the residuals against the noise model (their level, their whiteness,
+their structure) and a ranking of what could explain a misfit: each library effect the
+model lacks and each residual signature (interface.md section 5), scored by a
+Lagrange-multiplier (score) test at the fitted model, which needs no refit: the drop in
+the weighted residual sum of squares that adding its columns would buy, with the
+model's own parameters and the nuisance re-fitted.
+"""
+
+import numpy as np
+from scipy import stats as sps
+
+from . import effects, errormodel, noise
+from .estimate import PointEstimate, variances
+from .likelihood import campaign_stats
+from .predictive import WhitenedManeuver
+from .units import arcsec_to_rad, arw_to_rad_sqrt_s, rad_to_arcsec
+
+SIGNATURES = ("time", "rate", "rate_squared", "rate_sign", "cross_rate", "acceleration")
+
+
+class Signature(effects.Effect):
+    """A residual signature as a per-channel regressor of the channel increments."""
+
+    def __init__(self, name, regressor, description, columns=("k",)):
+        self.name = name
+        self.description = description
+        self.parameters = tuple(effects.Parameter(c, "-", 1.0, 1.0) for c in columns)
+        self._regressor = regressor
+
+    def gyro(self, m):
+        return self._regressor(m)
+
+
+def _own(m, values):
+    """(K, n_channels) of a body-axis quantity on each channel's own axis."""
+    return values[:, [c.axis_index for c in m.channels]]
+
+
+def signature_effects(extra_columns) -> list:
+    """The signatures of section 5, plus one per extra ``gyro.csv`` column."""
+    def cross(m):
+        rate = m.body_rate
+        own = _own(m, rate)
+        return {"k": own * (rate.sum(axis=1, keepdims=True) - own) * m.dt[:, None]}
+
+    out = [
+        Signature("time", lambda m: {"k": np.repeat(((m.t_mid - m.t_center) * m.dt)[:, None], len(m.channels), 1)},
+                  "a bias that ramps in time"),
+        Signature("rate", lambda m: {"k": m.increments}, "an error proportional to the rate"),
+        Signature("rate_squared", lambda m: {"k": m.rate**2 * m.increments}, "a scale factor growing with rate^2"),
+        Signature("rate_sign", lambda m: {"k": np.sign(m.rate) * m.moving * m.dt[:, None]},
+                  "a bias that flips with the direction of rotation"),
+        Signature("cross_rate", cross, "own rate times the other axes' rates (anisoinertia)"),
+        Signature("acceleration", lambda m: {"k": _own(m, m.acceleration) * m.dt[:, None]},
+                  "the angular acceleration: a timing offset between gyros and star tracker"),
+    ]
+    for column in extra_columns:
+        def regress(m, column=column):
+            x = m.extras[column] - np.mean(m.extras[column])
+            return {"scale": x[:, None] * m.increments, "bias": np.repeat((x * m.dt)[:, None], len(m.channels), 1)}
+        out.append(Signature(column, regress, f"a scale factor or bias that follows {column}", ("scale", "bias")))
+    return out
+
+
+def _augmented(maneuvers, estimate: PointEstimate, boresight, candidates, var):
+    """Sufficient statistics of the fitted model's parameters followed by the candidates'
+    columns, all global, with each maneuver's nuisance integrated out."""
+    extras = list(estimate.extras) + candidates
+    values = np.concatenate([estimate.theta[estimate.n_base:], np.zeros(len(candidates))])
+    out = []
+    for m, data in enumerate(maneuvers):
+        lin = errormodel.linearize(data, estimate.params(m), extras, values)
+        out.append(noise.build(lin, boresight))
+    return campaign_stats(out, var)
+
+
+def _chi2_drop(stats, n_model, idx) -> float:
+    """Score statistic of candidate columns ``idx`` given the model's own parameters:
+    the drop in the weighted residual sum of squares if they were added (Schur
+    complement; directions the model already spans are dropped, not inverted)."""
+    model = np.arange(n_model)
+    cand = n_model + np.asarray(idx)
+    A_mm = stats.A[np.ix_(model, model)]
+    A_cm = stats.A[np.ix_(cand, model)]
+    solve = np.linalg.solve(A_mm, np.column_stack([A_cm.T, stats.b[model]]))
+    S = stats.A[np.ix_(cand, cand)] - A_cm @ solve[:, :-1]
+    r = stats.b[cand] - A_cm @ solve[:, -1]
+    scale = np.sqrt(np.clip(np.diag(S), 1e-300, None))
+    S_n = S / np.outer(scale, scale)
+    return float((r / scale) @ np.linalg.pinv(S_n, rcond=1e-8, hermitian=True) @ (r / scale))
+
+
+def rank(maneuvers, estimate: PointEstimate, boresight, model_effects, extra_columns, plugin_effects=()):
+    """Score every library effect the model lacks and every residual signature.
+
+    Returns a list of dicts (best first) and, per signature, the per-channel breakdown.
+    """
+    var = variances(estimate.log_sigma)
+    present = {e.name for e in model_effects}
+    library = [e for e in list(effects.LIBRARY.values()) + list(plugin_effects)
+               if e.name not in present and not e.core and not e.noise]
+    signatures = signature_effects(extra_columns)
+    channels = maneuvers[0].channels
+    groups, candidates = [], []
+    for kind, items in (("effect", library), ("signature", signatures)):
+        for effect in items:
+            params = effects.extra_parameters([effect], channels)
+            groups.append((kind, effect, list(range(len(candidates), len(candidates) + len(params))), params))
+            candidates += params
+    stats = _augmented(maneuvers, estimate, boresight, candidates, var)
+    n_model = len(estimate.theta)
+    total = max(_chi2_drop(stats, n_model, list(range(len(candidates)))), 1e-12)
+    ranking, detail = [], {}
+    for kind, effect, idx, params in groups:
+        drop = _chi2_drop(stats, n_model, idx)
+        df = len(idx)
+        log_p = float(sps.chi2.logsf(drop, df))
+        ranking.append({"name": effect.name, "kind": kind, "score": round(drop / total, 4),
+                        "chi2_drop": round(drop, 2), "df": df, "log10_p": round(log_p / np.log(10), 2),
+                        "description": effect.description})
+        if kind == "signature":
+            detail[effect.name] = {p.label: round(_chi2_drop(stats, n_model, [i]), 2) for i, p in zip(idx, params)}
+    ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
+    return ranking, detail
+
+
+def whiteness(maneuvers, lins, noises, estimate: PointEstimate):
+    """Lag-1 autocorrelation of the standardised innovations at the fitted model, per
+    maneuver and overall, with its z-score (``rho sqrt(n)``, N(0, 1) under the model)."""
+    ratios = estimate.log_sigma[1:] - estimate.log_sigma[0]
+    scale = np.exp(2 * estimate.log_sigma[0])
+    per, pooled_num, pooled_den = {}, 0.0, 0.0
+    for data, lin, nz in zip(maneuvers, lins, noises):
+        wm = WhitenedManeuver(nz, ratios)
+        zero = np.zeros((1, nz.n_params))
+        beta = wm.nuisance(zero)
+        w = (wm.wd - wm.wg @ beta[0]) / np.sqrt(scale)
+        lag = lin.z.shape[1] * 3
+        num, den = float(w[lag:] @ w[:-lag]), float(w @ w)
+        per[data.id] = {"lag1": round(num / den, 4), "z": round(num / den * np.sqrt(len(w) / lag), 2),
+                        "variance": round(den / len(w), 4)}
+        pooled_num += num
+        pooled_den += den
+    n = sum(len(d.st_time) for d in maneuvers)
+    rho = pooled_num / pooled_den
+    return {"lag1": round(rho, 4), "z": round(rho * np.sqrt(n), 2), "per_maneuver": per}
+
+
+def noise_rms_arcsec(maneuvers, settings) -> float:
+    """What the stated noise alone predicts for the residual RMS per axis: the star
+    tracker's variance averaged over the axes, plus the walk left after the initial
+    attitude and bias are fitted (detrended Brownian motion: q T / 15)."""
+    b = np.asarray(settings["boresight_body"], dtype=float)
+    b = b / np.linalg.norm(b)
+    cross, about = arcsec_to_rad(settings["sigma_cross_arcsec"]), arcsec_to_rad(settings["sigma_about_arcsec"])
+    st_var = (2 * cross**2 + about**2) / 3
+    q = arw_to_rad_sqrt_s(settings["arw_deg_sqrt_h"]) ** 2
+    durations = np.array([d.st_time[-1] - d.gyro_time[0] for d in maneuvers])
+    return float(rad_to_arcsec(np.sqrt(st_var + q * np.mean(durations) / 15)))
+
+
+def misfit_checks(residual_rms, noise_rms, white, ranking, noise_posterior, settings, cfg) -> list:
+    """Each check: name, passed, and a sentence a reviewer can act on."""
+    checks = []
+    ratio = residual_rms / noise_rms
+    checks.append({"check": "level", "passed": bool(ratio <= cfg["rms_ratio_max"]),
+                   "why": f"residual RMS {residual_rms:.2f} arcsec is {ratio:.2f} times what the stated noise "
+                          f"predicts ({noise_rms:.2f}); limit {cfg['rms_ratio_max']}"})
+    for name, stated in (("sigma_cross_arcsec", settings["sigma_cross_arcsec"]),
+                         ("sigma_about_arcsec", settings["sigma_about_arcsec"]),
+                         ("arw_deg_sqrt_h", settings["arw_deg_sqrt_h"])):
+        fitted = noise_posterior[name]
+        r = fitted / stated
+        ok = 1 / cfg["noise_ratio_max"] <= r <= cfg["noise_ratio_max"]
+        checks.append({"check": f"noise:{name}", "passed": bool(ok),
+                       "why": f"the data ask for {name} = {fitted:.4g}, {r:.2f} times the stated {stated:.4g}; "
+                              f"allowed {1 / cfg['noise_ratio_max']:.2f} to {cfg['noise_ratio_max']:.2f}"})
+    checks.append({"check": "whiteness", "passed": bool(abs(white["z"]) <= cfg["whiteness_z_max"]),
+                   "why": f"lag-1 autocorrelation of the standardised innovations {white['lag1']:+.3f} "
+                          f"(z = {white['z']:+.1f}; limit |z| <= {cfg['whiteness_z_max']})"})
+    worst = ranking[0]
+    checks.append({"check": "structure", "passed": bool(worst["log10_p"] >= cfg["structure_log10_p_min"]),
+                   "why": f"{worst['kind']} {worst['name']} would explain chi2 {worst['chi2_drop']:.1f} on "
+                          f"{worst['df']} degrees of freedom (log10 p = {worst['log10_p']:.1f}; "
+                          f"limit {cfg['structure_log10_p_min']})"})
+    return checks

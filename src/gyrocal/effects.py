@@ -1,0 +1,244 @@
+"""The effect library: the physical terms a model is built from.
+
+A model is a named list of effects (interface.md section 6). Each effect says which
+parameters it adds and how it changes what the gyro channels put out or what the
+star tracker measures; gyrocal turns that into columns of the linear error model, so
+an effect costs no code anywhere else. The baseline's own terms (`scale_factor`,
+`misalignment`, `bias`) are effects too; their columns come from the exact channel
+model (`errormodel`). A user's effect lives in a plugin file (see `load_plugins`).
+
+Writing an effect (the whole API)::
+
+    from gyrocal.effects import Effect, Parameter
+
+    class MyEffect(Effect):
+        name = "my_effect"                     # what models list in the config
+        description = "one line on the physics"
+        parameters = (Parameter("k", unit="ppm/K", si_per_unit=1e-6, prior_sd=100.0),)
+
+        def gyro(self, m):                     # m: a ManeuverView
+            # d(raw channel increment, rad) / d(parameter, SI): (K, n_channels) per parameter.
+            # For a per-channel parameter, column i belongs to channel i's own copy.
+            return {"k": (m.extras["temp_dtg1"] - 20.0)[:, None] * m.increments}
+
+        def star_tracker(self, m):             # optional
+            # d(star-tracker error in body axes, rad) / d(parameter, SI): (M, 3).
+            return {}
+
+    EFFECTS = [MyEffect()]                     # what a plugin file exports
+"""
+
+import importlib.util
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .units import AXES, PPM, arcsec_to_rad
+
+DEG_H = np.deg2rad(1.0) / 3600.0
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One parameter an effect adds; values in ``unit`` at the edges, SI inside."""
+
+    name: str
+    unit: str
+    si_per_unit: float
+    prior_sd: float
+    """Prior standard deviation in ``unit`` (a zero-mean normal prior)."""
+    bound: float = np.inf
+    """Physical bound on ``|value|`` in ``unit``."""
+    per_channel: bool = True
+    """One copy per gyro channel (named ``<channel>.<name>``) or one for the campaign
+    (named ``<effect>.<name>``)."""
+
+
+class Effect:
+    """Base class: override `gyro` and/or `star_tracker`; see the module docstring."""
+
+    name = ""
+    description = ""
+    parameters: tuple = ()
+    core = False
+    """Baseline terms whose columns come from the exact channel model."""
+    noise = False
+    """A noise-model effect: it changes the covariance, not the mean."""
+
+    def gyro(self, m) -> dict:
+        return {}
+
+    def star_tracker(self, m) -> dict:
+        return {}
+
+
+class ManeuverView:
+    """What an effect may look at in one maneuver (all SI, nominal gyro parameters).
+
+    K gyro intervals, M star-tracker samples, channels in campaign order.
+    """
+
+    def __init__(self, data, body_rate_rad_s):
+        self.id = data.id
+        self.axis = data.axis
+        self.channels = data.channels
+        self.gyro_time = data.gyro_time
+        self.dt = data.dt
+        self.t_mid = 0.5 * (data.gyro_time[1:] + data.gyro_time[:-1])
+        self.increments = data.increments
+        self.rate = data.increments / data.dt[:, None]
+        """(K, n_channels) each channel's rate (rad/s)."""
+        self.moving = np.abs(self.rate) > 0.05 * np.abs(self.rate).max()
+        """(K, n_channels) where a channel turns at over 5 % of the maneuver's peak rate:
+        there the sign of its rate is the rotation's, not the gyro noise's."""
+        self.body_rate = body_rate_rad_s
+        """(K, 3) body rate from the in-loop set (rad/s)."""
+        self.acceleration = np.gradient(body_rate_rad_s, self.t_mid, axis=0)
+        self.st_time = data.st_time
+        k = np.clip(np.searchsorted(data.gyro_time, data.st_time, side="left") - 1, 0, len(self.dt) - 1)
+        self.st_body_rate = body_rate_rad_s[k]
+        """(M, 3) body rate at the star-tracker samples (rad/s)."""
+        self.extras = data.extras
+        self.t_center = 0.5 * (data.gyro_time[0] + data.gyro_time[-1])
+
+
+class ScaleFactor(Effect):
+    name = "scale_factor"
+    description = "residual scale factor of each channel, separately for positive and negative rate (eq. 3)"
+    parameters = (Parameter("sf_pos", "ppm", PPM, 5000.0, 30000.0), Parameter("sf_neg", "ppm", PPM, 5000.0, 30000.0))
+    core = True
+
+
+class Misalignment(Effect):
+    name = "misalignment"
+    description = "misalignment of each channel toward the two other body axes (eq. 3)"
+    parameters = tuple(Parameter(f"mis_{a}", "arcsec", arcsec_to_rad(1.0), 1000.0, 3600.0) for a in AXES)
+    core = True
+
+
+class Bias(Effect):
+    name = "bias"
+    description = "residual bias of each channel, one per maneuver (a nuisance, integrated out)"
+    core = True
+
+
+class BiasDrift(Effect):
+    name = "bias_drift"
+    description = "the residual bias ramps linearly in time within a maneuver"
+    parameters = (Parameter("bias_drift", "deg/h/h", DEG_H / 3600.0, 0.5, 100.0),)
+
+    def gyro(self, m):
+        return {"bias_drift": np.repeat(((m.t_mid - m.t_center) * m.dt)[:, None], len(m.channels), axis=1)}
+
+
+class SfNonlinearity(Effect):
+    name = "sf_nonlinearity"
+    description = "the scale factor grows with the square of the channel's rate"
+    parameters = (Parameter("sf_quadratic", "ppm/(deg/s)^2", PPM / np.deg2rad(1.0) ** 2, 5000.0, 1e6),)
+
+    def gyro(self, m):
+        return {"sf_quadratic": m.rate**2 * m.increments}
+
+
+class StLatency(Effect):
+    name = "st_latency"
+    description = "time-tag offset of the star tracker behind the gyros (positive: its attitude is late)"
+    parameters = (Parameter("latency", "s", 1.0, 1.0, 10.0, per_channel=False),)
+
+    def star_tracker(self, m):
+        return {"latency": -m.st_body_rate}
+
+
+class StCorrelatedNoise(Effect):
+    name = "st_correlated_noise"
+    description = ("star-tracker noise correlated in time (a filtered attitude): first-order "
+                   "Gauss-Markov with a correlation time estimated from the residuals")
+    noise = True
+
+
+LIBRARY = {e.name: e for e in (ScaleFactor(), Misalignment(), Bias(), BiasDrift(), SfNonlinearity(),
+                                StLatency(), StCorrelatedNoise())}
+BASELINE = ("scale_factor", "misalignment", "bias")
+
+
+class PluginError(ValueError):
+    """A plugin file that does not follow the effect API; the message says what is missing."""
+
+
+def load_plugins(paths) -> dict:
+    """Effects exported by plugin files (their module-level ``EFFECTS`` list), by name."""
+    found = {}
+    for path in paths:
+        path = Path(path)
+        if not path.exists():
+            raise PluginError(f"plugin {path}: file not found")
+        spec = importlib.util.spec_from_file_location(f"gyrocal_plugin_{path.stem}", path)
+        module = importlib.util.module_from_spec(spec)
+        try:
+            spec.loader.exec_module(module)
+        except Exception as exc:
+            raise PluginError(f"plugin {path}: failed to import: {type(exc).__name__}: {exc}") from exc
+        effects = getattr(module, "EFFECTS", None)
+        if not isinstance(effects, (list, tuple)) or not effects:
+            raise PluginError(f"plugin {path}: must define EFFECTS = [YourEffect(), ...] at module level")
+        for effect in effects:
+            check_effect(effect, path)
+            found[effect.name] = effect
+    return found
+
+
+def check_effect(effect, where):
+    """Refuse an effect that lacks what the API needs, saying what."""
+    if not isinstance(effect, Effect):
+        raise PluginError(f"plugin {where}: {effect!r} is not an instance of gyrocal.effects.Effect")
+    if not isinstance(effect.name, str) or not effect.name.isidentifier():
+        raise PluginError(f"plugin {where}: {type(effect).__name__}.name must be an identifier, got {effect.name!r}")
+    if effect.name in LIBRARY:
+        raise PluginError(f"plugin {where}: effect name {effect.name!r} is taken by the library")
+    if not effect.parameters:
+        raise PluginError(f"plugin {where}: {effect.name}.parameters is empty; declare at least one Parameter")
+    for p in effect.parameters:
+        if not isinstance(p, Parameter):
+            raise PluginError(f"plugin {where}: {effect.name}.parameters must hold Parameter objects, got {p!r}")
+        if not (p.prior_sd > 0 and p.si_per_unit > 0):
+            raise PluginError(f"plugin {where}: {effect.name}.{p.name}: prior_sd and si_per_unit must be positive")
+    if type(effect).gyro is Effect.gyro and type(effect).star_tracker is Effect.star_tracker:
+        raise PluginError(f"plugin {where}: {effect.name} overrides neither gyro(m) nor star_tracker(m)")
+
+
+def resolve(model_name: str, names, plugins: dict) -> list:
+    """The effect objects of a model; the baseline's three must be there."""
+    known = {**LIBRARY, **plugins}
+    unknown = [n for n in names if n not in known]
+    if unknown:
+        raise ValueError(f"model {model_name}: unknown effect(s) {unknown}; known: {sorted(known)}")
+    missing = [n for n in BASELINE if n not in names]
+    if missing:
+        raise ValueError(f"model {model_name}: every model builds on the paper's baseline; add {missing}")
+    return [known[n] for n in names]
+
+
+@dataclass(frozen=True)
+class ExtraParameter:
+    """One column of the model beyond the baseline's 24."""
+
+    label: str
+    effect: Effect
+    parameter: Parameter
+    channel: int = None
+    """Index of the channel a per-channel copy belongs to."""
+
+
+def extra_parameters(effects, channels) -> list:
+    """The parameters the non-core effects add, in column order."""
+    out = []
+    for effect in effects:
+        if effect.core or effect.noise:
+            continue
+        for p in effect.parameters:
+            if p.per_channel:
+                out += [ExtraParameter(f"{c.name}.{p.name}", effect, p, i) for i, c in enumerate(channels)]
+            else:
+                out.append(ExtraParameter(f"{effect.name}.{p.name}", effect, p))
+    return out
