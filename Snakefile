@@ -16,6 +16,7 @@ include: "workflow/rules/simulate.smk"
 include: "workflow/rules/preprocess.smk"
 include: "workflow/rules/estimate.smk"
 include: "workflow/rules/posterior.smk"
+include: "workflow/rules/diagnostics.smk"
 
 
 rule all:

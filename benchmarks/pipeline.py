@@ -48,8 +48,9 @@ def sampler_figures():
     start = time.perf_counter()
     post = posterior.sample(maneuvers, est, settings["boresight_body"], priors, cfg, cfg["seed"])
     sampling_s = time.perf_counter() - start
-    ess = steps._summary(steps._posterior_dataset(post.ensemble_draws(), est.theta,
-                                                  steps.contract_scale(campaign.channels), post.labels),
+    scale = steps.contract_scale(campaign.channels)
+    ess = steps._summary(steps._posterior_dataset(post.ensemble_draws(), est.theta, scale, post.labels),
+                         steps._posterior_dataset(post.walker_draws(), est.theta, scale, post.labels),
                          post.labels, cfg["convergence"])["ess_bulk"].min()
     lins, noises = post.lins, post.noises
     logpost = posterior.LogPosterior(post.grid, est.theta, priors)

@@ -5,7 +5,8 @@ their structure) and a ranking of what could explain a misfit: each library effe
 model lacks and each residual signature (interface.md section 5), scored by a
 Lagrange-multiplier (score) test at the fitted model, which needs no refit: the drop in
 the weighted residual sum of squares that adding its columns would buy, with the
-model's own parameters and the nuisance re-fitted.
+model's own parameters and the nuisance re-fitted. Its ``score`` is one minus the
+test's p-value: near 1 for structure the noise cannot explain.
 """
 
 import numpy as np
@@ -111,13 +112,12 @@ def rank(maneuvers, estimate: PointEstimate, boresight, model_effects, extra_col
             candidates += params
     stats = _augmented(maneuvers, estimate, boresight, candidates, var)
     n_model = len(estimate.theta)
-    total = max(_chi2_drop(stats, n_model, list(range(len(candidates)))), 1e-12)
     ranking, detail = [], {}
     for kind, effect, idx, params in groups:
         drop = _chi2_drop(stats, n_model, idx)
         df = len(idx)
         log_p = float(sps.chi2.logsf(drop, df))
-        ranking.append({"name": effect.name, "kind": kind, "score": round(drop / total, 4),
+        ranking.append({"name": effect.name, "kind": kind, "score": round(-float(np.expm1(log_p)), 4),
                         "chi2_drop": round(drop, 2), "df": df, "log10_p": round(log_p / np.log(10), 2),
                         "description": effect.description})
         if kind == "signature":

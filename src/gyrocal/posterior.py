@@ -205,8 +205,9 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
 
     Moves: independence proposals (`StudentProposal`) mixed with differential
     evolution. Each ensemble burns in with a proposal from the Laplace approximation,
-    then fits its own proposal to its burn-in and keeps it fixed for production, so
-    adaptation never touches the production chain and the ensembles stay independent.
+    fits its own proposal to that, burns in again, refits, and keeps that proposal
+    fixed for production, so adaptation never touches the production chain and the
+    ensembles stay independent.
     emcee draws from numpy's legacy global RandomState, so each ensemble seeds it.
     """
     dim = len(proposal_mean)
@@ -225,12 +226,13 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
         while bad.any():
             p0[bad] = laplace.draw(rng.standard_normal((bad.sum(), dim)), rng.chisquare(laplace.dof, bad.sum()))
             bad = ~np.isfinite(logpost(p0))
-        warm = _sampler(logpost, walkers, dim, laplace)
-        state = warm.run_mcmc(p0, burn)
-        fitted = warm.get_chain(discard=burn // 2, flat=True)
-        sampler = _sampler(logpost, walkers, dim,
-                           StudentProposal(fitted.mean(axis=0), np.cov(fitted.T), dof=30.0, inflate=1.05))
-        samplers.append([sampler, state])
+        proposal, state = laplace, p0
+        for stage in range(2):
+            warm = _sampler(logpost, walkers, dim, proposal)
+            state = warm.run_mcmc(state, burn // 2)
+            fitted = warm.get_chain(discard=burn // 4, flat=True)
+            proposal = StudentProposal(fitted.mean(axis=0), np.cov(fitted.T), dof=30.0, inflate=1.05)
+        samplers.append([_sampler(logpost, walkers, dim, proposal), state])
     steps = 0
     while True:
         n_new = int(cfg["initial_steps"]) if steps == 0 else chunk
@@ -276,10 +278,16 @@ class Posterior:
         return len(self.labels)
 
     def ensemble_draws(self) -> np.ndarray:
-        """(ensembles, walkers * steps, dim): each ensemble's walkers one after another,
-        so the draw axis runs along time and arviz sees the autocorrelation."""
+        """(ensembles, steps * walkers, dim), step-major: split-R-hat across ensembles then
+        compares early with late steps, so a drift after burn-in shows."""
         c = self.result.chains
-        return np.transpose(c, (0, 2, 1, 3)).reshape(c.shape[0], -1, c.shape[-1])
+        return c.reshape(c.shape[0], -1, c.shape[-1])
+
+    def walker_draws(self) -> np.ndarray:
+        """(ensembles * walkers, steps, dim): every walker a chain, so the ESS follows
+        each walker's autocorrelation in time."""
+        c = self.result.chains
+        return np.transpose(c, (0, 2, 1, 3)).reshape(-1, c.shape[1], c.shape[-1])
 
 
 def sample(maneuvers, estimate, boresight, priors: Priors, cfg: dict, seed: int) -> Posterior:

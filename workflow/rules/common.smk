@@ -44,5 +44,5 @@ def all_outputs():
     out = [f"{RESULTS}/input.json"] + maneuver_files("png")
     for model in MODELS:
         out += [f"{RESULTS}/{model}/calibration.csv", f"{RESULTS}/{model}/correction.json",
-                f"{RESULTS}/{model}/classic.csv", f"{RESULTS}/{model}/posterior.nc"]
-    return out
+                f"{RESULTS}/{model}/classic.csv", f"{RESULTS}/{model}/diagnostics.json"]
+    return out + [f"{RESULTS}/model_comparison.csv"]

@@ -1,0 +1,38 @@
+rule diagnostics:
+    """Misfit checks of the residuals against the noise model, and what could explain them."""
+    input:
+        maneuvers=maneuver_files("npz"),
+        point=f"{RESULTS}/{{model}}/point_estimate.npz",
+        summary=f"{RESULTS}/{{model}}/posterior_summary.csv",
+        fit=f"{RESULTS}/{{model}}/fit.csv",
+    output:
+        f"{RESULTS}/{{model}}/diagnostics.json",
+    params:
+        config=config,
+    conda:
+        "../envs/gyrocal.yaml"
+    log:
+        f"{LOGS}/{{model}}/diagnostics.log",
+    script:
+        "../scripts/diagnostics.py"
+
+
+rule compare:
+    """Residual RMS and PSIS-LOO of every model variant, and the parameters that moved."""
+    input:
+        posterior=expand(f"{RESULTS}/{{model}}/posterior.nc", model=MODELS),
+        diagnostics=expand(f"{RESULTS}/{{model}}/diagnostics.json", model=MODELS),
+        summary=expand(f"{RESULTS}/{{model}}/posterior_summary.csv", model=MODELS),
+    output:
+        table=report(f"{RESULTS}/model_comparison.csv", caption="../report/comparison.rst",
+                     category="Model comparison"),
+        figure=report(f"{RESULTS}/model_comparison.png", caption="../report/comparison.rst",
+                      category="Model comparison"),
+    params:
+        models=MODELS,
+    conda:
+        "../envs/gyrocal.yaml"
+    log:
+        f"{LOGS}/compare.log",
+    script:
+        "../scripts/compare.py"
