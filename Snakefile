@@ -17,6 +17,7 @@ include: "workflow/rules/preprocess.smk"
 include: "workflow/rules/estimate.smk"
 include: "workflow/rules/posterior.smk"
 include: "workflow/rules/diagnostics.smk"
+include: "workflow/rules/report.smk"
 
 
 rule all:

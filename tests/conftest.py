@@ -39,3 +39,55 @@ def mom(tmp_path_factory):
 def truth_vector(channels, truth):
     from gyrocal.channels import ChannelParams
     return ChannelParams.from_contract(channels, truth["parameters"])
+
+
+def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
+    """Every workflow step in the order the rules run them, without Snakemake."""
+    from gyrocal import steps, telemetry
+    ids = [m.id for m in telemetry.read_meta(campaign_dir)["maneuvers"]]
+    steps.validate(campaign_dir, out / "input.json")
+    for m in ids:
+        steps.run_preprocess(campaign_dir, m, out / f"preprocess/{m}.npz", out / f"preprocess/{m}.csv",
+                             out / f"preprocess/{m}.png")
+    npz = [out / f"preprocess/{m}.npz" for m in ids]
+    for model in models:
+        d = out / model
+        steps.run_point_estimate(npz, campaign_dir, cfg, model, d / "point_estimate.npz", d / "classic.csv")
+        steps.run_posterior(npz, d / "point_estimate.npz", cfg, model, d / "posterior.nc",
+                            d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json")
+        steps.run_calibrate(d / "point_estimate.npz", d / "posterior_summary.csv", npz, cfg, model,
+                            d / "calibration.csv", d / "correction.json")
+        steps.run_diagnostics(npz, d / "point_estimate.npz", d / "posterior_summary.csv", d / "fit.csv", cfg,
+                              model, d / "diagnostics.json")
+    steps.run_compare(list(models), [out / m / "posterior.nc" for m in models],
+                      [out / m / "diagnostics.json" for m in models],
+                      [out / m / "posterior_summary.csv" for m in models],
+                      out / "model_comparison.csv", out / "model_comparison.png")
+    steps.run_report(out, list(models), npz, truth_path, cfg, out / "report.html")
+    return npz
+
+
+def config_with(cfg, models=None, plugins=None):
+    import copy
+    out = copy.deepcopy(cfg)
+    if models is not None:
+        out["models"] = models
+    if plugins is not None:
+        out["plugins"] = plugins
+    return out
+
+
+@pytest.fixture(scope="session")
+def tiny_run(tiny, tmp_path_factory, config):
+    out = tmp_path_factory.mktemp("tiny_run")
+    npz = run_campaign(tiny[0], out, config_with(config, {"baseline": ["scale_factor", "misalignment", "bias"]}),
+                       truth_path=tiny[0].parent / "truth.json")
+    return out, npz
+
+
+@pytest.fixture(scope="session")
+def mom_run(mom, tmp_path_factory, config):
+    out = tmp_path_factory.mktemp("mom_run")
+    npz = run_campaign(mom[0], out, config_with(config, {"baseline": ["scale_factor", "misalignment", "bias"]}),
+                       truth_path=mom[0].parent / "truth.json")
+    return out, npz

@@ -1,6 +1,13 @@
 #!/usr/bin/env bash
-# Install gyrocal with its test dependencies and run the default test suite.
+# Install gyrocal with its test dependencies (and Chromium for the browser test), run the tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+if ! command -v chromium >/dev/null 2>&1; then
+    if [ "$(id -u)" = 0 ]; then
+        apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null
+    else
+        echo "tests/run.sh: Chromium is missing and this user cannot apt-get it; the browser test will skip" >&2
+    fi
+fi
 python -m pip install --quiet -e ".[test]"
 python -m pytest "$@"

@@ -16,38 +16,8 @@ from gyrocal.units import ARCSEC_RAD, PPM
 from conftest import truth_vector
 
 
-def run_all(campaign_dir, out, cfg, model="baseline"):
-    """validate -> preprocess -> point estimate -> posterior -> calibrate, as the rules do."""
-    meta = telemetry.read_meta(campaign_dir)
-    ids = [m.id for m in meta["maneuvers"]]
-    steps.validate(campaign_dir, out / "input.json")
-    for m in ids:
-        steps.run_preprocess(campaign_dir, m, out / f"pre/{m}.npz", out / f"pre/{m}.csv", out / f"pre/{m}.png")
-    npz = [out / f"pre/{m}.npz" for m in ids]
-    steps.run_point_estimate(npz, campaign_dir, cfg, model, out / "point.npz", out / "classic.csv")
-    steps.run_posterior(npz, out / "point.npz", cfg, model, out / "posterior.nc", out / "summary.csv",
-                        out / "fit.csv", out / "sampler.json")
-    steps.run_calibrate(out / "point.npz", out / "summary.csv", npz, cfg, model, out / "calibration.csv",
-                        out / "correction.json")
-    return npz
-
-
-@pytest.fixture(scope="module")
-def tiny_run(tiny, tmp_path_factory, config):
-    out = tmp_path_factory.mktemp("tiny_run")
-    npz = run_all(tiny[0], out, config)
-    return out, npz
-
-
-@pytest.fixture(scope="module")
-def mom_run(mom, tmp_path_factory, config):
-    out = tmp_path_factory.mktemp("mom_run")
-    npz = run_all(mom[0], out, config)
-    return out, npz
-
-
 def calibration_with_truth(out, truth, channels):
-    table = pd.read_csv(out / "calibration.csv")
+    table = pd.read_csv(out / "baseline/calibration.csv")
     t = truth_vector(channels, truth).to_contract()
     table["truth"] = [t[r.channel][r.parameter] for r in table.itertuples()]
     return table
@@ -62,11 +32,11 @@ def test_validate_step_records_rows_and_checksums(tiny_run):
 
 def test_preprocess_step_writes_table_figure_and_counts(tiny_run):
     out = tiny_run[0]
-    table = pd.read_csv(out / "pre/yaw_pos.csv")
+    table = pd.read_csv(out / "preprocess/yaw_pos.csv")
     assert {"time", "rate_yaw_deg_s", "set0_error_yaw_arcsec", "set1_error_roll_arcsec"} <= set(table.columns)
     assert table["rate_yaw_deg_s"].max() == pytest.approx(0.5, rel=0.02)
-    assert (out / "pre/yaw_pos.png").read_bytes()[:4] == b"\x89PNG"
-    z = np.load(out / "pre/yaw_pos.npz")
+    assert (out / "preprocess/yaw_pos.png").read_bytes()[:4] == b"\x89PNG"
+    z = np.load(out / "preprocess/yaw_pos.npz")
     counts = dict(zip(z["count_names"], z["count_values"]))
     # read = used + flagged invalid + the sample at t_start itself, which seeds the attitude
     assert counts["st_read"] - counts["st_used"] - counts["st_invalid"] in (0, 1)
@@ -74,7 +44,7 @@ def test_preprocess_step_writes_table_figure_and_counts(tiny_run):
 
 
 def test_calibration_csv_follows_the_contract(tiny_run):
-    table = pd.read_csv(tiny_run[0] / "calibration.csv")
+    table = pd.read_csv(tiny_run[0] / "baseline/calibration.csv")
     assert list(table.columns) == ["channel", "parameter", "unit", "point", "mean", "sd", "ci95_low",
                                    "ci95_high", "r_hat", "ess_bulk"]
     assert len(table) == 24 and table["channel"].nunique() == 6
@@ -83,7 +53,7 @@ def test_calibration_csv_follows_the_contract(tiny_run):
 
 
 def test_tiny_posterior_converges_and_covers_a_truth_that_is_not_the_papers(tiny, tiny_run):
-    sampler = json.loads((tiny_run[0] / "sampler.json").read_text())
+    sampler = json.loads((tiny_run[0] / "baseline/sampler.json").read_text())
     assert sampler["converged"], sampler["failed_parameters"]
     assert sampler["steps"] >= 50 * sampler["tau_max_steps"]
     table = calibration_with_truth(tiny_run[0], tiny[1], telemetry.read_meta(tiny[0])["channels"])
@@ -94,16 +64,16 @@ def test_tiny_posterior_converges_and_covers_a_truth_that_is_not_the_papers(tiny
 
 def test_same_seed_same_numbers(tiny_run, config, tmp_path):
     out, npz = tiny_run
-    steps.run_posterior(npz, out / "point.npz", config, "baseline", tmp_path / "p.nc", tmp_path / "s.csv",
+    steps.run_posterior(npz, out / "baseline/point_estimate.npz", config, "baseline", tmp_path / "p.nc", tmp_path / "s.csv",
                         tmp_path / "f.csv", tmp_path / "j.json")
-    assert (tmp_path / "s.csv").read_text() == (out / "summary.csv").read_text()
+    assert (tmp_path / "s.csv").read_text() == (out / "baseline/posterior_summary.csv").read_text()
 
 
 def test_a_run_that_cannot_converge_says_so(tiny_run, config, tmp_path, caplog):
     out, npz = tiny_run
     cfg = copy.deepcopy(config)
     cfg["sampler"].update(initial_steps=50, chunk_steps=10, max_steps=60, min_tau_multiple=1000)
-    steps.run_posterior(npz, out / "point.npz", cfg, "baseline", tmp_path / "p.nc", tmp_path / "s.csv",
+    steps.run_posterior(npz, out / "baseline/point_estimate.npz", cfg, "baseline", tmp_path / "p.nc", tmp_path / "s.csv",
                         tmp_path / "f.csv", tmp_path / "j.json")
     info = json.loads((tmp_path / "j.json").read_text())
     assert info["converged"] is False and info["chain_length_ok"] is False
@@ -111,7 +81,7 @@ def test_a_run_that_cannot_converge_says_so(tiny_run, config, tmp_path, caplog):
 
 
 def test_correction_file_inverts_the_channel_model(tiny, tiny_run):
-    doc = json.loads((tiny_run[0] / "correction.json").read_text())
+    doc = json.loads((tiny_run[0] / "baseline/correction.json").read_text())
     assert "omega_body" in doc["convention"]
     in_loop = [s for s in doc["sets"] if s["in_loop"]]
     assert [s["channels"] for s in in_loop] == [["dtg3_roll", "dtg1_pitch", "dtg2_yaw"]]
@@ -133,9 +103,9 @@ def test_correction_file_inverts_the_channel_model(tiny, tiny_run):
 def test_sequential_campaign_takes_priors_from_an_earlier_posterior(tiny_run, config, tmp_path):
     out, npz = tiny_run
     cfg = copy.deepcopy(config)
-    cfg["prior_from"] = str(out / "calibration.csv")
-    channels = np.load(out / "point.npz")["labels"]
-    first = pd.read_csv(out / "calibration.csv")
+    cfg["prior_from"] = str(out / "baseline/calibration.csv")
+    channels = np.load(out / "baseline/point_estimate.npz")["labels"]
+    first = pd.read_csv(out / "baseline/calibration.csv")
     priors = steps.priors_for(steps.load_maneuvers(npz[:1])[0].channels, cfg,
                               {"sigma_cross_arcsec": 5, "sigma_about_arcsec": 20, "arw_deg_sqrt_h": 0.003})
     assert len(channels) == 24
@@ -146,7 +116,7 @@ def test_sequential_campaign_takes_priors_from_an_earlier_posterior(tiny_run, co
 def test_wls_is_within_3_sd_of_the_truth_on_the_default_scenario(mom, mom_run):
     out, npz = mom_run
     channels = telemetry.read_meta(mom[0])["channels"]
-    est, _ = steps.load_point_estimate(out / "point.npz", channels)
+    est, _ = steps.load_point_estimate(out / "baseline/point_estimate.npz", channels)
     truth = truth_vector(channels, mom[1]).to_vector()
     z = (est.theta - truth) / np.sqrt(np.diag(est.cov))
     assert np.all(np.abs(z) < 3), z
@@ -158,14 +128,14 @@ def test_posterior_95_intervals_cover_the_papers_values(mom, mom_run):
     table = calibration_with_truth(out, mom[1], telemetry.read_meta(mom[0])["channels"])
     inside = (table["ci95_low"] <= table["truth"]) & (table["truth"] <= table["ci95_high"])
     assert inside.sum() >= 22, table[~inside]
-    assert json.loads((out / "sampler.json").read_text())["converged"]
+    assert json.loads((out / "baseline/sampler.json").read_text())["converged"]
 
 
 def test_classic_reproduces_the_papers_values_within_its_own_noise(mom, mom_run):
     """Its noise: the walk (ARW sqrt(T)) and the residual bias drift (0.01 deg/h T) over a
     maneuver of T = 1430 s, divided by the rotation (sf) or about 1 rad (misalignment)."""
     out, _ = mom_run
-    classic = pd.read_csv(out / "classic.csv")
+    classic = pd.read_csv(out / "baseline/classic.csv")
     truth = mom[1]["parameters"]
     sigma_arcsec = np.hypot(0.18 * np.sqrt(1430.0), 36.0 * 1430.0 / 3600.0)
     assert len(classic) == 24
@@ -180,7 +150,7 @@ def test_linearised_model_agrees_with_the_exact_one_to_1_percent_of_the_sd(mom, 
     out, npz = mom_run
     maneuvers = steps.load_maneuvers(npz)
     channels = maneuvers[0].channels
-    est, settings = steps.load_point_estimate(out / "point.npz", channels)
+    est, settings = steps.load_point_estimate(out / "baseline/point_estimate.npz", channels)
     lins, noises = estimate.linearize_all(maneuvers, est, settings["boresight_body"])
     var = estimate.variances(est.log_sigma)
     stats = campaign_stats(noises, var)

@@ -73,7 +73,7 @@ def _augmented(maneuvers, estimate: PointEstimate, boresight, candidates, var):
     out = []
     for m, data in enumerate(maneuvers):
         lin = errormodel.linearize(data, estimate.params(m), extras, values)
-        out.append(noise.build(lin, boresight))
+        out.append(noise.build(lin, boresight, estimate.correlation_time_s))
     return campaign_stats(out, var)
 
 
@@ -93,9 +93,12 @@ def _chi2_drop(stats, n_model, idx) -> float:
     return float((r / scale) @ np.linalg.pinv(S_n, rcond=1e-8, hermitian=True) @ (r / scale))
 
 
-def rank(maneuvers, estimate: PointEstimate, boresight, model_effects, extra_columns, plugin_effects=()):
+def rank(maneuvers, estimate: PointEstimate, boresight, model_effects, extra_columns, plugin_effects=(),
+         white=None):
     """Score every library effect the model lacks and every residual signature.
 
+    A noise-model effect (correlated star-tracker noise) is scored by the score test of
+    an autocorrelation coefficient, ``n rho^2`` on one degree of freedom, from ``white``.
     Returns a list of dicts (best first) and, per signature, the per-channel breakdown.
     """
     var = variances(estimate.log_sigma)
@@ -122,6 +125,13 @@ def rank(maneuvers, estimate: PointEstimate, boresight, model_effects, extra_col
                         "description": effect.description})
         if kind == "signature":
             detail[effect.name] = {p.label: round(_chi2_drop(stats, n_model, [i]), 2) for i, p in zip(idx, params)}
+    if white is not None and not any(e.noise for e in model_effects):
+        for effect in (e for e in effects.LIBRARY.values() if e.noise):
+            drop = white["z"] ** 2
+            log_p = float(sps.chi2.logsf(drop, 1))
+            ranking.append({"name": effect.name, "kind": "effect", "score": round(-float(np.expm1(log_p)), 4),
+                            "chi2_drop": round(drop, 2), "df": 1, "log10_p": round(log_p / np.log(10), 2),
+                            "description": effect.description})
     ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
     return ranking, detail
 

@@ -102,6 +102,8 @@ class PointEstimate:
     message: str
     extras: list = field(default_factory=list)
     """`effects.ExtraParameter` of the columns after the baseline's 24."""
+    correlation_time_s: float = 0.0
+    """Correlation time of the star-tracker noise (0: white)."""
 
     @property
     def n_base(self) -> int:
@@ -120,7 +122,8 @@ def _unpack(x, n_par, n_man, n_ch):
     return theta, nuis[:, :3], nuis[:, 3:]
 
 
-def wls(maneuvers, channels, boresight, log_sigma, theta0=None, biases0=None, chi00=None, extras=()):
+def wls(maneuvers, channels, boresight, log_sigma, theta0=None, biases0=None, chi00=None, extras=(),
+        correlation_time_s=0.0):
     """Weighted least squares over every maneuver with `scipy.optimize.least_squares`.
 
     Unknowns: the channel parameters of all channels, and per maneuver the initial
@@ -141,7 +144,7 @@ def wls(maneuvers, channels, boresight, log_sigma, theta0=None, biases0=None, ch
                                     extras, theta[n_base:])
 
     first = [lin_at(m, theta0, biases0[m]) for m in range(n_man)]
-    noises = [noise.build(lin, boresight) for lin in first]
+    noises = [noise.build(lin, boresight, correlation_time_s) for lin in first]
     chols = [nz.factor(var) for nz in noises]
     cache = {}
 
@@ -174,13 +177,33 @@ def wls(maneuvers, channels, boresight, log_sigma, theta0=None, biases0=None, ch
     theta, chi0, biases = _unpack(result.x, n_par, n_man, n_ch)
     return PointEstimate(tuple(channels), theta, cov_full[:n_par, :n_par], biases, chi0,
                          np.asarray(log_sigma, dtype=float), float(2 * result.cost), int(result.nfev),
-                         str(result.message), list(extras))
+                         str(result.message), list(extras), float(correlation_time_s))
 
 
 def linearize_all(maneuvers, estimate: PointEstimate, boresight):
     """Linearisations and noise structures of every maneuver about a point estimate."""
     lins = [estimate.linearize(maneuvers, m) for m in range(len(maneuvers))]
-    return lins, [noise.build(lin, boresight) for lin in lins]
+    return lins, [noise.build(lin, boresight, estimate.correlation_time_s) for lin in lins]
+
+
+def correlation_time(lins) -> float:
+    """Correlation time of the star-tracker noise from the residuals (s; 0 if white).
+
+    For first-order Gauss-Markov noise with coefficient phi per sample, the first
+    differences have lag-1 autocorrelation -(1 - phi)/2, and -1/2 when white; the slow
+    signal and the gyro walk barely touch the differences.
+    """
+    num = den = 0.0
+    steps = []
+    for lin in lins:
+        x = np.diff(lin.body_error[:, 0, :], axis=0)
+        num += float(np.sum(x[1:] * x[:-1]))
+        den += float(np.sum(x * x))
+        steps.append(np.median(lin.st_dt[1:]))
+    phi = 1.0 + 2.0 * num / den
+    if phi <= 0.05:
+        return 0.0
+    return float(-np.median(steps) / np.log(min(phi, 0.999)))
 
 
 def _profile_reml(noises, ratios):
@@ -221,7 +244,8 @@ def classic_vector(table: pd.DataFrame, channels) -> np.ndarray:
     return theta
 
 
-def point_estimate(maneuvers, channels, boresight, log_sigma0, estimate_scales=True, extras=()) -> PointEstimate:
+def point_estimate(maneuvers, channels, boresight, log_sigma0, estimate_scales=True, extras=(),
+                   correlated=False) -> PointEstimate:
     """Classic estimate, REML noise scales about it, then WLS from it at those scales.
 
     The classic estimate is within a few tens of ppm of the optimum, so the model is
@@ -229,9 +253,14 @@ def point_estimate(maneuvers, channels, boresight, log_sigma0, estimate_scales=T
     """
     theta0 = np.concatenate([classic_vector(classic_campaign(maneuvers), channels), np.zeros(len(extras))])
     log_sigma = np.asarray(log_sigma0, dtype=float)
-    if estimate_scales:
-        start = PointEstimate(tuple(channels), theta0, None, np.zeros((len(maneuvers), len(channels))),
-                              None, log_sigma, np.nan, 0, "classic", list(extras))
-        _, noises = linearize_all(maneuvers, start, boresight)
-        log_sigma = estimate_noise(noises, log_sigma)
-    return wls(maneuvers, channels, boresight, log_sigma, theta0, extras=extras)
+    start = PointEstimate(tuple(channels), theta0, None, np.zeros((len(maneuvers), len(channels))),
+                          None, log_sigma, np.nan, 0, "classic", list(extras))
+    tau = 0.0
+    if estimate_scales or correlated:
+        lins, noises = linearize_all(maneuvers, start, boresight)
+        if correlated:
+            start.correlation_time_s = tau = correlation_time(lins)
+            noises = [noise.build(lin, boresight, tau) for lin in lins]
+        if estimate_scales:
+            log_sigma = estimate_noise(noises, log_sigma)
+    return wls(maneuvers, channels, boresight, log_sigma, theta0, extras=extras, correlation_time_s=tau)

@@ -21,21 +21,24 @@ from .errormodel import Linearization
 COMPONENTS = ("cross", "about", "walk")
 
 
-def _banded_lower(diag_blocks, lower_blocks):
-    """LAPACK lower band storage of a symmetric block-tridiagonal matrix."""
+def _banded_lower(diag_blocks, lower_blocks, depth=1):
+    """LAPACK lower band storage of a symmetric block-banded matrix.
+
+    ``lower_blocks[d - 1]`` holds the blocks d steps below the diagonal (d <= depth).
+    """
     n_blocks, m, _ = diag_blocks.shape
-    kd = 2 * m - 1
+    kd = (depth + 1) * m - 1
     ab = np.zeros((kd + 1, n_blocks * m))
     a, b = np.tril_indices(m)
     starts = m * np.arange(n_blocks)
     rows = (starts[:, None] + a[None]).ravel()
     cols = (starts[:, None] + b[None]).ravel()
     ab[rows - cols, cols] = diag_blocks[:, a, b].ravel()
-    if n_blocks > 1:
-        a, b = np.indices((m, m)).reshape(2, -1)
-        rows = (starts[1:, None] + a[None]).ravel()
-        cols = (starts[:-1, None] + b[None]).ravel()
-        ab[rows - cols, cols] = lower_blocks[:, a, b].ravel()
+    a, b = np.indices((m, m)).reshape(2, -1)
+    for d in range(1, min(depth, n_blocks - 1) + 1):
+        rows = (starts[d:, None] + a[None]).ravel()
+        cols = (starts[:-d, None] + b[None]).ravel()
+        ab[rows - cols, cols] = lower_blocks[d - 1][:, a, b].ravel()
     return ab
 
 
@@ -89,8 +92,36 @@ def nuisance_design(lin: Linearization) -> np.ndarray:
     return np.concatenate([chi0, lin.bias_design], axis=3)
 
 
-def build(lin: Linearization, boresight_body) -> ManeuverNoise:
-    """Covariance components and differenced right-hand sides of a linearised maneuver."""
+TAPER_CORRELATION_TIMES = 6.0
+"""Correlated star-tracker noise: the AR(1) correlation is tapered (Bartlett) to zero at
+this many correlation times, which keeps the covariance banded and positive definite."""
+
+
+def star_tracker_correlation(st_time, lag, correlation_time_s):
+    """Correlation of the star-tracker noise between samples ``lag`` apart (tapered AR(1))."""
+    if lag == 0:
+        return np.ones(len(st_time))
+    if correlation_time_s <= 0:
+        return np.zeros(len(st_time) - lag)
+    gap = st_time[lag:] - st_time[:-lag]
+    cutoff = TAPER_CORRELATION_TIMES * correlation_time_s
+    return np.exp(-gap / correlation_time_s) * np.clip(1 - gap / cutoff, 0, None)
+
+
+def correlation_depth(st_time, correlation_time_s) -> int:
+    """How many samples apart the tapered correlation reaches."""
+    if correlation_time_s <= 0:
+        return 0
+    step = np.median(np.diff(st_time))
+    return int(np.ceil(TAPER_CORRELATION_TIMES * correlation_time_s / step))
+
+
+def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -> ManeuverNoise:
+    """Covariance components and differenced right-hand sides of a linearised maneuver.
+
+    With ``correlation_time_s`` > 0 the star-tracker noise is first-order Gauss-Markov
+    (a filtered attitude) instead of white; the band widens to cover its reach.
+    """
     m_samples, n_sets = lin.z.shape[:2]
     block = 3 * n_sets
     b = np.asarray(boresight_body, dtype=float)
@@ -98,16 +129,43 @@ def build(lin: Linearization, boresight_body) -> ManeuverNoise:
     about_body = np.outer(b, b)
     ones = np.ones((n_sets, n_sets))
     R = lin.st_matrix
+    st_time = np.cumsum(lin.st_dt)
+    reach = min(correlation_depth(st_time, correlation_time_s), max(m_samples - 1, 0))
+    depth = reach + 1
     diag, lower = {}, {}
     for name, body_cov in (("cross", np.eye(3) - about_body), ("about", about_body)):
-        u = np.einsum("jab,bc,jdc->jad", R, body_cov, R)
-        u = np.einsum("st,jab->jsatb", ones, u).reshape(m_samples, block, block)
-        d = u.copy()
-        d[1:] += u[:-1]
-        diag[name], lower[name] = d, -u[:-1]
+        rs = np.einsum("jab,bc->jac", R, body_cov)
+
+        def cov(lag):
+            """Undifferenced covariance blocks between samples j + lag and j (zero-padded)."""
+            if lag > reach or lag >= m_samples:
+                return np.zeros((max(m_samples - lag, 0), block, block))
+            c = star_tracker_correlation(st_time, lag, correlation_time_s)
+            u = c[:, None, None] * np.einsum("jab,jcb->jac", rs[lag:], R[:m_samples - lag])
+            return np.einsum("st,jab->jsatb", ones, u).reshape(m_samples - lag, block, block)
+
+        # Cov(Z_{k+lag}, Z_k) for lag = 0 .. depth + 1; D_j = Z_j - Z_{j-1}, D_0 = Z_0, so
+        # Cov(D_{k+d}, D_k) = K(d, k) - K(d+1, k-1) - K(d-1, k) + K(d, k-1), K(., -1) = 0
+        blocks = [cov(lag) for lag in range(depth + 2)]
+
+        def get(lag, idx):
+            out = np.zeros((len(idx), block, block))
+            ok = (idx >= 0) & (idx < len(blocks[lag]))
+            out[ok] = blocks[lag][idx[ok]]
+            return out
+
+        j = np.arange(m_samples)
+        up = get(1, j - 1)
+        d0 = get(0, j) - up - np.transpose(up, (0, 2, 1)) + get(0, j - 1)
+        lowers = []
+        for d in range(1, depth + 1):
+            k = np.arange(m_samples - d)
+            lowers.append(get(d, k) - get(d + 1, k - 1) - get(d - 1, k) + get(d, k - 1))
+        diag[name], lower[name] = d0, lowers
     walk = lin.shared_walk.transpose(0, 1, 3, 2, 4).reshape(m_samples, block, block)
-    diag["walk"], lower["walk"] = walk, np.zeros((max(m_samples - 1, 0), block, block))
-    components = {k: _banded_lower(diag[k], lower[k]) for k in COMPONENTS}
+    diag["walk"] = walk
+    lower["walk"] = [np.zeros((max(m_samples - d, 0), block, block)) for d in range(1, depth + 1)]
+    components = {k: _banded_lower(diag[k], lower[k], depth) for k in COMPONENTS}
     nuis = difference(nuisance_design(lin))
     n = m_samples * block
     rhs = np.concatenate([

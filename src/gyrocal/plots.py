@@ -1,9 +1,13 @@
 """Figures in the style of the paper's Figures 1-3: the rate profile, then the error
 along yaw, roll and pitch."""
 
+import warnings
+
 import matplotlib
 
 matplotlib.use("Agg")
+# arviz 0.23's matplotlib backend calls an API matplotlib 3.11 deprecates; harmless here.
+warnings.filterwarnings("ignore", message="Passing a dict or None as alias_mapping", category=DeprecationWarning)
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
@@ -26,14 +30,14 @@ def maneuver_figure(table, title, fit=None):
     for ax, axis in zip(axes[1:], PAPER_ORDER):
         for s in sets:
             ax.plot(t, table[f"{s}_error_{axis}_arcsec"], lw=0.6,
-                    label=f"{s} {'(in loop)' if s == 'set0' else ''}".strip())
+                    label=f"{s} {'(in loop)' if s == 'set0' else '(redundant)'}")
         if fit is not None:
             tf = fit["time"] - table["time"].iloc[0]
             ax.fill_between(tf, fit[f"lo_{axis}"], fit[f"hi_{axis}"], color="C3", alpha=0.25, lw=0,
                             label="model 95 % band")
             ax.plot(tf, fit[f"mean_{axis}"], color="C3", lw=1, label="model")
             out = fit[f"outside_{axis}"].to_numpy(dtype=bool)
-            ax.plot(tf[out], fit[f"observed_{axis}"][out], "kx", ms=3, label="unexplained")
+            ax.plot(tf[out], fit[f"observed_{axis}"][out], "kx", ms=3, label="outside the band (5 % expected)")
         ax.set_ylabel(f"error {axis} (arcsec)")
         ax.legend(loc="upper left", fontsize=7)
     axes[-1].set_xlabel("time since t_start (s)")
@@ -61,5 +65,47 @@ def comparison_figure(table):
     ax.set_ylim(0, 1.25 * table["residual_rms_arcsec"].max())
     ax.legend(loc="lower right", fontsize=8)
     ax.set_title("residual RMS per model (red: misfit, green: consistent with the noise)")
+    fig.tight_layout()
+    return fig
+
+
+def residual_figure(fit, title):
+    """Star tracker minus model per axis and channel set (arcsec), unexplained points marked."""
+    fig, axes = plt.subplots(1, 3, figsize=(12, 2.6), sharex=True)
+    for ax, axis in zip(axes, PAPER_ORDER):
+        for s, group in fit.groupby("set"):
+            t = group["time"] - fit["time"].min()
+            ax.plot(t, group[f"residual_{axis}"], lw=0.5, label=f"set{s}")
+            out = group[f"outside_{axis}"].to_numpy(dtype=bool)
+            ax.plot(t[out], group[f"residual_{axis}"][out], "kx", ms=3)
+        ax.axhline(0, color="k", lw=0.5)
+        ax.set_title(f"residual {axis} (arcsec)", fontsize=9)
+    axes[0].legend(fontsize=7)
+    fig.suptitle(f"{title}: residuals", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+def pair_figure(idata, channel):
+    """Pair plot of one channel's four parameters (arviz)."""
+    import arviz as az
+    labels = [p for p in idata.posterior["parameter"].values if p.startswith(channel + ".")][:4]
+    axes = az.plot_pair(idata, var_names=["channel_param"], coords={"parameter": labels}, kind="scatter",
+                        marginals=True, figsize=(6, 6), scatter_kwargs={"alpha": 0.15, "s": 2},
+                        textsize=8)
+    fig = np.asarray(axes).ravel()[0].figure
+    fig.suptitle(f"posterior of {channel} (ppm, arcsec)", fontsize=10)
+    return fig
+
+
+def trace_figure(idata, calibration):
+    """Traces of the noise scales and of the three parameters with the lowest ESS."""
+    import arviz as az
+    worst = calibration.nsmallest(3, "ess_bulk")
+    labels = [f"{r.channel}.{r.parameter}" for r in worst.itertuples()]
+    axes = az.plot_trace(idata, var_names=["channel_param", "sigma_cross_arcsec", "sigma_about_arcsec",
+                                           "arw_deg_sqrt_h"], coords={"parameter": labels}, compact=False,
+                         figsize=(11, 12))
+    fig = np.asarray(axes).ravel()[0].figure
     fig.tight_layout()
     return fig

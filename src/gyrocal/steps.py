@@ -18,6 +18,7 @@ import arviz as az  # noqa: E402
 import numpy as np
 import pandas as pd
 import xarray as xr
+import yaml
 
 from . import __version__
 from . import channels as ch
@@ -129,13 +130,17 @@ def run_point_estimate(npz_paths, campaign_dir, cfg, model, out_npz, out_classic
     log_sigma0 = np.log([arcsec_to_rad(settings["sigma_cross_arcsec"]),
                          arcsec_to_rad(settings["sigma_about_arcsec"]),
                          np.deg2rad(settings["arw_deg_sqrt_h"]) / 60.0])
+    correlated = any(e.noise for e in model_effects(cfg, model))
     est = estimate.point_estimate(maneuvers, channels, settings["boresight_body"], log_sigma0,
-                                  cfg["noise"]["estimate_scales"], extras)
+                                  cfg["noise"]["estimate_scales"], extras, correlated)
+    if correlated:
+        log.info("star-tracker noise correlation time: %.2f s", est.correlation_time_s)
     log.info("WLS: %s (%d evaluations); noise %s", est.message, est.nfev, _noise_contract(est.log_sigma))
     with atomic(out_npz) as tmp:
         with open(tmp, "wb") as handle:
             np.savez(handle, theta=est.theta, cov=est.cov, biases=est.biases, chi0=est.chi0,
                      log_sigma=est.log_sigma, cost=est.cost, nfev=est.nfev, message=est.message,
+                     correlation_time_s=est.correlation_time_s,
                      labels=ch.parameter_labels(channels) + [e.label for e in extras],
                      maneuvers=[d.id for d in maneuvers],
                      settings=json.dumps(settings))
@@ -149,7 +154,7 @@ def load_point_estimate(path, channels, extras=()) -> tuple:
         raise ValueError(f"{path}: its parameters {list(z['labels'])} are not the model's {labels}")
     est = estimate.PointEstimate(tuple(channels), z["theta"], z["cov"], z["biases"], z["chi0"],
                                  z["log_sigma"], float(z["cost"]), int(z["nfev"]), str(z["message"]),
-                                 list(extras))
+                                 list(extras), float(z["correlation_time_s"]))
     return est, json.loads(str(z["settings"]))
 
 
@@ -201,7 +206,8 @@ def run_posterior(npz_paths, point_npz, cfg, model, out_nc, out_summary, out_fit
         "grid": {"nodes": post.grid.nodes, "start": post.grid.start.tolist(), "step": post.grid.step.tolist()},
         "settings": {k: cfg["sampler"][k] for k in cfg["sampler"]},
         "point_estimate": {"cost": est.cost, "nfev": est.nfev, "message": est.message,
-                           "noise": _noise_contract(est.log_sigma)},
+                           "noise": _noise_contract(est.log_sigma),
+                           "st_correlation_time_s": est.correlation_time_s},
         "failed_parameters": summary.loc[~summary["converged"], "label"].tolist(),
     }
     if not converged:
@@ -369,7 +375,7 @@ def run_diagnostics(npz_paths, point_npz, summary_csv, fit_csv, cfg, model, out_
     white = diagnostics.whiteness(maneuvers, lins, noises, est)
     plugins = effects.load_plugins(cfg.get("plugins") or [])
     ranking, detail = diagnostics.rank(maneuvers, est, boresight, model_fx, list(maneuvers[0].extras),
-                                       plugins.values())
+                                       plugins.values(), white)
     summary = pd.read_csv(summary_csv).set_index("label")
     noise_post = {k: float(summary.loc[f"noise.{k}", "mean"])
                   for k in ("sigma_cross_arcsec", "sigma_about_arcsec", "arw_deg_sqrt_h")}
@@ -390,6 +396,7 @@ def run_diagnostics(npz_paths, point_npz, summary_csv, fit_csv, cfg, model, out_
         "whiteness": white,
         "noise_posterior": noise_post,
         "noise_stated": {k: settings[k] for k in ("sigma_cross_arcsec", "sigma_about_arcsec", "arw_deg_sqrt_h")},
+        "st_correlation_time_s": est.correlation_time_s,
         "residual_rms_per_maneuver_arcsec": per_maneuver,
         "signature_detail_chi2": detail,
         "unexplained_fraction": round(float(fit[[f"outside_{a}" for a in AXES]].to_numpy().mean()), 4),
@@ -433,3 +440,67 @@ def _diff_se(a, b) -> float:
     la = az.loo(a, pointwise=True).loo_i.values
     lb = az.loo(b, pointwise=True).loo_i.values
     return float(np.sqrt(len(la) * np.var(la - lb)))
+
+
+def run_report(results_dir, models, npz_paths, truth_path, cfg, out_html):
+    """``report.html``: the pre-uplink review of a campaign (see `gyrocal.report`)."""
+    from . import report
+
+    results_dir = Path(results_dir)
+    maneuvers = load_maneuvers(npz_paths)
+    channels = maneuvers[0].channels
+    comparison = pd.read_csv(results_dir / "model_comparison.csv")
+    model = report.preferred_model(comparison)
+    mdir = results_dir / model
+    extras = model_extras(cfg, model, channels)
+    calibration = pd.read_csv(mdir / "calibration.csv")
+    diag = json.loads((mdir / "diagnostics.json").read_text())
+    sampler = json.loads((mdir / "sampler.json").read_text())
+    correction_doc = json.loads((mdir / "correction.json").read_text())
+    fit = pd.read_csv(mdir / "fit.csv")
+    est, _ = load_point_estimate(mdir / "point_estimate.npz", channels, extras)
+    truth = json.loads(Path(truth_path).read_text())["parameters"] if truth_path else None
+    info = json.loads((results_dir / "input.json").read_text())
+
+    base = calibration[calibration["unit"].isin(["ppm", "arcsec"])]
+    scale = contract_scale(channels)
+    mean = ch.ChannelParams.from_vector(channels, base["mean"].to_numpy() / scale)
+    params = [ch.ChannelParams(channels, mean.sf_pos, mean.sf_neg, mean.mis_rad, est.biases[m])
+              for m in range(len(maneuvers))]
+    nominal = [ch.ChannelParams(channels, np.zeros(len(channels)), np.zeros(len(channels)),
+                                np.zeros((len(channels), 3)), est.biases[m]) for m in range(len(maneuvers))]
+    effect_table = report.correction_effect(maneuvers, params, nominal)
+    checks = report.verdict_checks(calibration, sampler, diag, effect_table, cfg)
+
+    figures = {}
+    for data, path in zip(maneuvers, npz_paths):
+        table = pd.read_csv(Path(path).with_suffix(".csv"))
+        own = fit[(fit["maneuver"] == data.id) & (fit["set"] == 0)]
+        fig = plots.maneuver_figure(table, f"{data.id}: model {model}, in-loop set", own)
+        figures[data.id] = report._img(fig) + report._img(plots.residual_figure(fit[fit["maneuver"] == data.id], data.id))
+    idata = az.from_netcdf(str(mdir / "posterior.nc"))
+    posterior_figs = "".join(report._img(plots.pair_figure(idata, c.name)) for c in channels)
+    posterior_figs += report._img(plots.trace_figure(idata, calibration))
+    convergence = calibration[["channel", "parameter", "unit", "mean", "sd", "r_hat", "ess_bulk"]].round(
+        {"mean": 2, "sd": 2, "r_hat": 4, "ess_bulk": 0})
+    accounting = pd.DataFrame([{"maneuver": d.id, **d.counts} for d in maneuvers])
+    accounting.loc[len(accounting)] = {"maneuver": "campaign files", "st_read": info["rows"]["star_tracker"],
+                                       "st_invalid": info["rows"]["star_tracker_invalid"],
+                                       "gyro_read": info["rows"]["gyro"]}
+    in_loop = maneuvers[0].sets[0]
+    ctx = {
+        "campaign": info["campaign"], "model": model, "effects": cfg["models"][model], "checks": checks,
+        "simulated": truth is not None,
+        "tables": report.paper_tables(calibration, channels, in_loop, truth),
+        "maneuver_figures": figures, "posterior_figures": posterior_figs, "convergence": convergence,
+        "diagnostics": diag, "comparison": comparison.round(3),
+        "comparison_figure": report._img(plots.comparison_figure(comparison)),
+        "correction": correction_doc, "correction_path": str(mdir / "correction.json"),
+        "effect_table": effect_table.drop(columns=["before norm", "after norm"]).assign(
+            **{"before norm (arcsec)": effect_table["before norm"].round(1),
+               "after norm (arcsec)": effect_table["after norm"].round(1)}),
+        "accounting": accounting, "checksums": info["checksums_sha256"], "sampler": sampler,
+        "config": yaml.safe_dump(cfg, sort_keys=False),
+    }
+    with atomic(out_html) as tmp:
+        tmp.write_text(report.render(ctx))

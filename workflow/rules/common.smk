@@ -22,7 +22,7 @@ else:
 
 RESULTS = f"{config['results']}/{CAMPAIGN}"
 LOGS = f"logs/{CAMPAIGN}"
-MODELS = list(config["models"])
+MODELS = sorted(config["models"], key=lambda m: m != "baseline")  # baseline is the reference
 
 wildcard_constraints:
     maneuver="|".join(MANEUVERS),
@@ -45,4 +45,4 @@ def all_outputs():
     for model in MODELS:
         out += [f"{RESULTS}/{model}/calibration.csv", f"{RESULTS}/{model}/correction.json",
                 f"{RESULTS}/{model}/classic.csv", f"{RESULTS}/{model}/diagnostics.json"]
-    return out + [f"{RESULTS}/model_comparison.csv"]
+    return out + [f"{RESULTS}/model_comparison.csv", f"{RESULTS}/report.html"]

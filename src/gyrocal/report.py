@@ -1,0 +1,225 @@
+"""The pre-uplink review: one self-contained HTML file per campaign (interface.md section 7).
+
+A verdict first (GO or NO-GO, with every check and the channel or maneuver that failed
+it), then the paper's tables with uncertainty, the model against the measurements per
+maneuver, the posterior, what the residuals point to, the correction to uplink with the
+attitude error before and after it, and the data accounting a reviewer needs to
+reproduce the run.
+"""
+
+import base64
+import html
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import yaml
+
+from . import __version__
+from . import channels as ch
+from . import correction as corr
+from . import estimate, plots, preprocess
+from .units import AXES, PAPER_AXIS_NUMBER, rad_to_arcsec
+
+PAPER_AXES = ("yaw", "roll", "pitch")
+
+
+def _img(fig) -> str:
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=80)
+    plots.plt.close(fig)
+    return f'<img alt="figure" src="data:image/png;base64,{base64.b64encode(buffer.getvalue()).decode()}">'
+
+
+def _table(frame: pd.DataFrame, table_id=None, classes="") -> str:
+    attrs = f' id="{table_id}"' if table_id else ""
+    return frame.to_html(index=False, escape=True, border=0, classes=classes, na_rep="").replace(
+        "<table", f"<table{attrs}", 1)
+
+
+def _fmt(value, digits=1) -> str:
+    return "" if value is None or (isinstance(value, float) and np.isnan(value)) else f"{value:.{digits}f}"
+
+
+def entry(row, truth=None) -> str:
+    """Point, mean and 95 % interval of one parameter, as one table cell."""
+    text = f"{row['point']:.1f} | {row['mean']:.1f} [{row['ci95_low']:.1f}, {row['ci95_high']:.1f}]"
+    if truth is not None:
+        inside = row["ci95_low"] <= truth <= row["ci95_high"]
+        text += f" (truth {truth:.0f}{'' if inside else ' OUTSIDE'})"
+    return text
+
+
+def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> dict:
+    """Tables 1-3 of the paper, each entry point | mean [95 % interval] (truth)."""
+    cal = calibration.set_index(["channel", "parameter"])
+
+    def cell(channel, parameter):
+        row = cal.loc[(channel, parameter)]
+        t = truth.get(channel, {}).get(parameter) if truth else None
+        return entry(row, t)
+
+    by_name = {c.name: c for c in channels}
+    selected = {by_name[n].axis: by_name[n] for n in in_loop}
+    t1 = [{"spacecraft axis": f"{'Positive' if p == 'sf_pos' else 'Negative'} {a.capitalize()} Axis",
+           "channel": selected[a].name, "residual scale factor (ppm)": cell(selected[a].name, p)}
+          for a in PAPER_AXES for p in ("sf_pos", "sf_neg")]
+    t1_mis = []
+    for a in PAPER_AXES:
+        c = selected[a]
+        for b in PAPER_AXES:
+            if b != a:
+                t1_mis.append({"term": f"mc{PAPER_AXIS_NUMBER[a]}{PAPER_AXIS_NUMBER[b]}", "contract name": f"mis_{b}",
+                               "channel": c.name, "misalignment (arcsec)": cell(c.name, f"mis_{b}")})
+    t2, t3 = [], []
+    for a in PAPER_AXES:
+        for c in sorted((c for c in channels if c.axis == a), key=lambda c: c.dtg):
+            t2.append({"axis": a, "DTG": f"DTG#{c.dtg}", "channel": c.name,
+                       "selected": "yes" if c.name in in_loop else "no",
+                       "positive scale factor (ppm)": cell(c.name, "sf_pos"),
+                       "negative scale factor (ppm)": cell(c.name, "sf_neg")})
+            others = [b for b in PAPER_AXES if b != a]
+            row = {"axis": a, "DTG": f"DTG#{c.dtg}", "channel": c.name}
+            for b in others:
+                row[f"mc{PAPER_AXIS_NUMBER[a]}{PAPER_AXIS_NUMBER[b]} = mis_{b} (arcsec)"] = cell(c.name, f"mis_{b}")
+            t3.append(row)
+    return {"table1_sf": pd.DataFrame(t1), "table1_mis": pd.DataFrame(t1_mis),
+            "table2": pd.DataFrame(t2), "table3": pd.DataFrame(t3)}
+
+
+def correction_effect(maneuvers, params_by_maneuver, nominal_by_maneuver) -> pd.DataFrame:
+    """Attitude error left at the end of every maneuver and channel set, before the
+    correction (nominal parameters) and after it (the estimate); both with the estimated
+    biases removed, so what differs is the uplinked scale factors and misalignments."""
+    rows = []
+    for data, params, nominal in zip(maneuvers, params_by_maneuver, nominal_by_maneuver):
+        before_mask, after_mask = estimate.hold_windows(data)
+        for s, channel_set in enumerate(data.sets):
+            before = preprocess.end_of_rotation_error(data, channel_set, nominal, before_mask, after_mask)
+            after = preprocess.end_of_rotation_error(data, channel_set, params, before_mask, after_mask)
+            rows.append({"maneuver": data.id, "set": "+".join(channel_set), "in loop": s == 0,
+                         **{f"before {a} (arcsec)": round(float(rad_to_arcsec(before[i])), 1) for i, a in enumerate(AXES)},
+                         **{f"after {a} (arcsec)": round(float(rad_to_arcsec(after[i])), 1) for i, a in enumerate(AXES)},
+                         "before norm": float(rad_to_arcsec(np.linalg.norm(before))),
+                         "after norm": float(rad_to_arcsec(np.linalg.norm(after)))})
+    return pd.DataFrame(rows)
+
+
+def verdict_checks(calibration, sampler, diagnostics, effect_table, cfg) -> list:
+    """The GO/NO-GO checks; each names what failed it and why."""
+    rcfg, conv = cfg["report"], cfg["convergence"]
+    checks = []
+    base = calibration[calibration["unit"].isin(["ppm", "arcsec"])]
+    bad = base[(base["r_hat"] >= conv["r_hat_max"]) | (base["ess_bulk"] < conv["ess_bulk_min"])]
+    checks.append(("converged", bad.empty and sampler["converged"],
+                   "every parameter has r_hat < {} and bulk ESS >= {}".format(conv["r_hat_max"], conv["ess_bulk_min"])
+                   if bad.empty and sampler["converged"] else
+                   "not converged: " + (", ".join(f"{r.channel}.{r.parameter} (r_hat {r.r_hat:.3f}, ESS {r.ess_bulk:.0f})"
+                                                  for r in bad.itertuples()) or "chains shorter than the autocorrelation limit")))
+    failed = [c for c in diagnostics["checks"] if not c["passed"]]
+    checks.append(("no misfit", not diagnostics["misfit"],
+                   "the residuals are consistent with the noise model" if not failed else
+                   "misfit: " + "; ".join(f"{c['check']}: {c['why']}" for c in failed)
+                   + f". Best explanation: {diagnostics['ranking'][0]['kind']} {diagnostics['ranking'][0]['name']}"))
+    width = base["ci95_high"] - base["ci95_low"]
+    limit = np.where(base["unit"] == "ppm", rcfg["max_ci_width_ppm"], rcfg["max_ci_width_arcsec"])
+    wide = base[width.to_numpy() > limit]
+    checks.append(("intervals narrow enough", wide.empty,
+                   f"every 95 % interval is narrower than {rcfg['max_ci_width_ppm']} ppm / {rcfg['max_ci_width_arcsec']} arcsec"
+                   if wide.empty else "too wide: " + ", ".join(
+                       f"{r.channel}.{r.parameter} ({r.ci95_high - r.ci95_low:.1f} {r.unit})" for r in wide.itertuples())))
+    bound = np.where(base["unit"] == "ppm", rcfg["physical_bound_ppm"], rcfg["physical_bound_arcsec"])
+    out = base[np.abs(base["mean"].to_numpy()) > bound]
+    checks.append(("within physical bounds", out.empty,
+                   f"every estimate is within {rcfg['physical_bound_ppm']} ppm / {rcfg['physical_bound_arcsec']} arcsec"
+                   if out.empty else "outside: " + ", ".join(f"{r.channel}.{r.parameter} = {r.mean:.0f} {r.unit}"
+                                                             for r in out.itertuples())))
+    worse = effect_table[effect_table["after norm"] >= effect_table["before norm"]]
+    checks.append(("correction reduces the error", worse.empty,
+                   "the correction reduces the end-of-maneuver attitude error on every maneuver and channel set"
+                   if worse.empty else "not reduced on: " + ", ".join(
+                       f"{r['maneuver']} with {r['set']} ({r['before norm']:.1f} -> {r['after norm']:.1f} arcsec)"
+                       for r in worse.to_dict("records"))))
+    return [{"check": n, "passed": bool(p), "why": w} for n, p, w in checks]
+
+
+def preferred_model(comparison: pd.DataFrame) -> str:
+    """The variant to review: best elpd among those without misfit, else best elpd."""
+    fine = comparison[~comparison["misfit"].astype(bool)]
+    pool = fine if len(fine) else comparison
+    return str(pool.sort_values("elpd_loo", ascending=False)["model"].iloc[0])
+
+
+CSS = """
+body{font-family:system-ui,Arial,sans-serif;margin:24px;max-width:1400px;color:#222}
+h1{margin-bottom:4px} h2{border-bottom:2px solid #ccc;padding-bottom:4px;margin-top:36px}
+table{border-collapse:collapse;margin:8px 0;font-size:13px} td,th{border:1px solid #ccc;padding:3px 7px;text-align:left}
+th{background:#f0f0f0} .verdict{font-size:40px;font-weight:bold;padding:16px 24px;color:#fff;border-radius:6px}
+.go{background:#1e7d32} .nogo{background:#c62828} .fail{color:#c62828;font-weight:bold} .pass{color:#1e7d32}
+img{max-width:100%} .small{font-size:12px;color:#555} pre{background:#f6f6f6;padding:8px;font-size:12px;overflow-x:auto}
+"""
+
+
+def render(ctx: dict) -> str:
+    """The HTML document from the assembled context (all figures already embedded)."""
+    go = all(c["passed"] for c in ctx["checks"])
+    parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>gyrocal review: {html.escape(ctx['campaign'])}</title>",
+             f"<style>{CSS}</style></head><body>",
+             f"<h1>Gyro calibration review: {html.escape(ctx['campaign'])}</h1>",
+             f"<p class='small'>gyrocal {__version__}; model reviewed: <b>{html.escape(ctx['model'])}</b> "
+             f"({html.escape(', '.join(ctx['effects']))})</p>",
+             f"<div id='verdict' class='verdict {'go' if go else 'nogo'}'>{'GO' if go else 'NO-GO'}</div>",
+             "<h2>Checks behind the verdict</h2>"]
+    rows = "".join(f"<tr><td>{html.escape(c['check'])}</td><td class='{'pass' if c['passed'] else 'fail'}'>"
+                   f"{'pass' if c['passed'] else 'FAIL'}</td><td>{html.escape(c['why'])}</td></tr>" for c in ctx["checks"])
+    parts.append(f"<table id='checks'><tr><th>check</th><th>result</th><th>detail</th></tr>{rows}</table>")
+    parts.append("<h2>The paper's tables, with uncertainty</h2><p class='small'>Each entry: WLS point estimate | "
+                 "posterior mean [central 95 % interval]" + (" (true value of the simulation)" if ctx["simulated"] else "")
+                 + ". Axes numbered as in the paper: 1 = yaw, 2 = roll, 3 = pitch; mc_ij is channel i toward axis j.</p>")
+    t = ctx["tables"]
+    parts += ["<h3>Table 1. Residual scale factors and misalignments, selected channels</h3>",
+              _table(t["table1_sf"], "table1"), _table(t["table1_mis"], "table1-mis"),
+              "<h3>Table 2. Residual scale factors, all DTG channels</h3>", _table(t["table2"], "table2"),
+              "<h3>Table 3. Residual misalignments, all DTG channels</h3>", _table(t["table3"], "table3")]
+    parts.append("<h2>The model against the measurements</h2><p class='small'>Per maneuver, as in the paper's "
+                 "Figures 1-3: the rate profile, then the error of the star tracker relative to the gyro attitude with "
+                 "nominal parameters, the model's posterior prediction with its 95 % band, and crosses where the "
+                 "measurement falls outside the band. Below each, the residuals.</p>")
+    for m, figs in ctx["maneuver_figures"].items():
+        parts.append(f"<h3>{html.escape(m)}</h3>{figs}")
+    parts.append("<h2>The posterior</h2>")
+    parts.append(_table(ctx["convergence"], "convergence"))
+    parts.append(ctx["posterior_figures"])
+    parts.append("<h2>What the residuals point to</h2>")
+    parts.append(f"<p>Misfit: <b class='{'fail' if ctx['diagnostics']['misfit'] else 'pass'}'>"
+                 f"{ctx['diagnostics']['misfit']}</b>; residual RMS {ctx['diagnostics']['residual_rms_arcsec']:.2f} arcsec, "
+                 f"the stated noise predicts {ctx['diagnostics']['noise_rms_arcsec']:.2f} arcsec.</p>")
+    parts.append(_table(pd.DataFrame(ctx["diagnostics"]["checks"]), "misfit-checks"))
+    parts.append("<h3>Ranking: what most likely explains the misfit</h3>")
+    parts.append(_table(pd.DataFrame(ctx["diagnostics"]["ranking"])[["name", "kind", "score", "chi2_drop", "df",
+                                                                      "log10_p", "description"]], "ranking"))
+    parts.append("<h3>Model comparison</h3>")
+    parts.append(_table(ctx["comparison"], "comparison"))
+    parts.append(ctx["comparison_figure"])
+    parts.append("<h2>The correction to uplink</h2><p class='small'>Exactly as written to "
+                 f"<code>{html.escape(ctx['correction_path'])}</code>. {html.escape(ctx['correction']['convention'])}</p>")
+    for s in ctx["correction"]["sets"]:
+        parts.append(f"<h3>{'In-loop' if s['in_loop'] else 'Redundant'} set: {html.escape(', '.join(s['channels']))}</h3>")
+        for key in ("matrix_pos", "matrix_neg", "misalignment_correction"):
+            frame = pd.DataFrame(s[key], columns=s["channels"], index=s["axes"]).map(lambda v: f"{v:.9f}")
+            parts.append(f"<p class='small'>{key}</p>" + frame.to_html(border=0))
+        parts.append("<p class='small'>scale_correction_pos: " + ", ".join(f"{v:.9f}" for v in s["scale_correction_pos"])
+                     + "; scale_correction_neg: " + ", ".join(f"{v:.9f}" for v in s["scale_correction_neg"]) + "</p>")
+    parts.append("<h3>Attitude error at the end of every maneuver, before and after the correction</h3>")
+    parts.append(_table(ctx["effect_table"].round(1), "before-after"))
+    parts.append("<h2>Data accounting</h2>")
+    parts.append(_table(ctx["accounting"], "accounting"))
+    parts.append(f"<p>Input files (SHA-256):</p><pre>{html.escape(json.dumps(ctx['checksums'], indent=1))}</pre>")
+    parts.append(f"<p>Sampler: seed {ctx['sampler']['seed']}, {ctx['sampler']['ensembles']} ensembles x "
+                 f"{ctx['sampler']['walkers']} walkers, {ctx['sampler']['steps']} steps after {ctx['sampler']['burn_steps']} "
+                 f"burn-in, longest autocorrelation {ctx['sampler']['tau_max_steps']:.1f} steps, acceptance "
+                 f"{np.mean(ctx['sampler']['acceptance']):.2f}.</p>")
+    parts.append(f"<p>Configuration:</p><pre>{html.escape(ctx['config'])}</pre></body></html>")
+    return "".join(parts)

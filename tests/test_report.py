@@ -1,0 +1,70 @@
+"""The pre-uplink review report, in a real browser."""
+
+import json
+import shutil
+import subprocess
+
+import pytest
+
+from gyrocal import simulate
+
+from conftest import DATA, config_with, run_campaign
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
+         "--disable-component-update", "--disable-sync"]
+
+
+@pytest.fixture(scope="module")
+def hidden_run(tmp_path_factory, config):
+    """The campaign with a hidden bias drift, run with the baseline model only."""
+    root = tmp_path_factory.mktemp("hidden")
+    simulate.run(DATA / "hidden_bias_drift.yaml", root / "sim")
+    cfg = config_with(config, {"baseline": ["scale_factor", "misalignment", "bias"]})
+    run_campaign(root / "sim" / "campaign", root / "out", cfg, ("baseline",), root / "sim" / "truth.json")
+    return root / "out"
+
+
+def browser(report, tmp_path):
+    """Render in headless Chromium: the DOM it built and a screenshot (RGB array)."""
+    import matplotlib.image as mpimg
+    common = FLAGS + [f"--user-data-dir={tmp_path / 'profile'}"]
+    dom = subprocess.run([CHROMIUM, *common, "--dump-dom", report.as_uri()], capture_output=True, text=True,
+                         timeout=120, check=True).stdout
+    shot = tmp_path / "shot.png"
+    subprocess.run([CHROMIUM, *common, "--window-size=1300,900", f"--screenshot={shot}", report.as_uri()],
+                   capture_output=True, timeout=120, check=True)
+    return dom, mpimg.imread(shot)[..., :3]
+
+
+def banner_color(image):
+    """Mean colour of the verdict banner's band, just below the title."""
+    return image[110:150, 100:600].reshape(-1, 3).mean(axis=0)
+
+
+def test_default_campaign_review_says_go_with_the_papers_tables(mom_run):
+    text = (mom_run[0] / "report.html").read_text()
+    assert "class='verdict go'>GO<" in text
+    for table in ("table1", "table2", "table3", "checks", "ranking", "comparison", "before-after", "accounting"):
+        assert f'id="{table}"' in text or f"id='{table}'" in text
+    assert "truth -1712" in text and "mc12" in text and "mis_roll" in text
+    all_channels = text[text.index('id="table2"'):text.index("The model against the measurements")]
+    assert all_channels.count("OUTSIDE") <= 2       # at least 22 of the 24 intervals cover the truth
+
+
+def test_hidden_effect_with_baseline_only_is_no_go_naming_the_reason(hidden_run):
+    text = (hidden_run / "report.html").read_text()
+    assert "class='verdict nogo'>NO-GO<" in text
+    assert "misfit: structure" in text
+    assert "Best explanation: effect bias_drift" in text or "Best explanation: signature time" in text
+
+
+@pytest.mark.browser
+@pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (tests/run.sh installs it)")
+def test_report_renders_in_a_real_browser_with_verdict_and_tables(mom_run, hidden_run, tmp_path):
+    for run, verdict, rgb in ((mom_run[0], "GO", (0.12, 0.49, 0.2)), (hidden_run, "NO-GO", (0.78, 0.16, 0.16))):
+        dom, image = browser(run / "report.html", tmp_path)
+        assert f'<div id="verdict" class="verdict {"go" if verdict == "GO" else "nogo"}">{verdict}</div>' in dom
+        for table in ("table1", "table2", "table3", "checks", "before-after"):
+            assert f'id="{table}"' in dom
+        assert abs(banner_color(image) - rgb).max() < 0.08, banner_color(image)
