@@ -74,42 +74,43 @@ def closed_form_end_error(axis, angle, sf, mis_b, mis_c):
     return e
 
 
-def test_with_parameters_left_in_the_end_error_is_scale_factor_and_misalignment_times_angle(mom, mom_maneuvers):
-    """Per maneuver and channel set: the error that the scale factor and misalignments leave
-    after the rotation (noise cancels: same data propagated with and without them)."""
-    campaign, maneuvers = mom_maneuvers
-    truth = truth_vector(campaign.channels, mom[1])
-    bias_only = ch.ChannelParams(truth.channels, np.zeros(6), np.zeros(6), np.zeros((6, 3)), truth.bias_rad_s)
+def rotations(maneuvers, truth):
+    """Per maneuver and channel set: its hold masks and the closed-form end error."""
     for data in maneuvers:
         before, after = hold_windows(data)
         a = AXIS_INDEX[data.axis]
         b, c = (a + 1) % 3, (a + 2) % 3
         angle = np.deg2rad(90.0) * (1 if data.direction == "+" else -1)
         for channel_set in data.sets:
-            left_in = preprocess.error_angles(data, channel_set, bias_only)
-            removed = preprocess.error_angles(data, channel_set, truth)
-            effect = (left_in - removed)[after].mean(axis=0) - (left_in - removed)[before].mean(axis=0)
             sub = truth.subset(channel_set)
             sf = sub.sf_pos[a] if angle > 0 else sub.sf_neg[a]
             expected = closed_form_end_error(data.axis, angle, sf, sub.mis_rad[b, a], sub.mis_rad[c, a])
-            # second-order terms (scale factor times misalignment times angle) stay below 1.5"
-            assert np.allclose(rad_to_arcsec(effect), rad_to_arcsec(expected), atol=1.5), (data.id, channel_set)
+            yield data, channel_set, before, after, expected
+
+
+def bias_only(truth):
+    n = len(truth.channels)
+    return ch.ChannelParams(truth.channels, np.zeros(n), np.zeros(n), np.zeros((n, 3)), truth.bias_rad_s)
+
+
+def test_with_parameters_left_in_the_end_error_is_scale_factor_and_misalignment_times_angle(mom, mom_maneuvers):
+    """Per maneuver and channel set: the error that the scale factor and misalignments leave
+    after the rotation (noise cancels: same data propagated with and without them)."""
+    campaign, maneuvers = mom_maneuvers
+    truth = truth_vector(campaign.channels, mom[1])
+    for data, channel_set, before, after, expected in rotations(maneuvers, truth):
+        left_in = preprocess.error_angles(data, channel_set, bias_only(truth))
+        removed = preprocess.error_angles(data, channel_set, truth)
+        effect = (left_in - removed)[after].mean(axis=0) - (left_in - removed)[before].mean(axis=0)
+        # second-order terms (scale factor times misalignment times angle) stay below 1.5"
+        assert np.allclose(rad_to_arcsec(effect), rad_to_arcsec(expected), atol=1.5), (data.id, channel_set)
 
 
 def test_end_error_with_noise_matches_within_the_noise(mom, mom_maneuvers):
     """The raw nominal error at the end hold, bias removed, against the closed form."""
     campaign, maneuvers = mom_maneuvers
     truth = truth_vector(campaign.channels, mom[1])
-    no_bias = ch.ChannelParams(truth.channels, np.zeros(6), np.zeros(6), np.zeros((6, 3)), truth.bias_rad_s)
     sigma_walk = rad_to_arcsec(arw_to_rad_sqrt_s(0.003)) * np.sqrt(1500.0)
-    for data in maneuvers:
-        before, after = hold_windows(data)
-        a = AXIS_INDEX[data.axis]
-        b, c = (a + 1) % 3, (a + 2) % 3
-        angle = np.deg2rad(90.0) * (1 if data.direction == "+" else -1)
-        for channel_set in data.sets:
-            observed = preprocess.end_of_rotation_error(data, channel_set, no_bias, before, after)
-            sub = truth.subset(channel_set)
-            sf = sub.sf_pos[a] if angle > 0 else sub.sf_neg[a]
-            expected = closed_form_end_error(data.axis, angle, sf, sub.mis_rad[b, a], sub.mis_rad[c, a])
-            assert np.all(np.abs(rad_to_arcsec(observed - expected)) < 4 * sigma_walk + 5), (data.id, channel_set)
+    for data, channel_set, before, after, expected in rotations(maneuvers, truth):
+        observed = preprocess.end_of_rotation_error(data, channel_set, bias_only(truth), before, after)
+        assert np.all(np.abs(rad_to_arcsec(observed - expected)) < 4 * sigma_walk + 5), (data.id, channel_set)

@@ -127,3 +127,9 @@ def test_write_is_whole_or_nothing(tiny, tmp_path, monkeypatch):
         telemetry.write_campaign(campaign, tmp_path / "out")
     assert not (tmp_path / "out").exists()
     assert list(tmp_path.iterdir()) == []
+
+
+def test_unpaired_channel_is_refused_with_the_reason(campaign_copy):
+    edit_yaml(campaign_copy / "campaign.yaml", lambda m: m["channels"].pop("dtg3_roll"))
+    edit_csv(campaign_copy / "gyro.csv", lambda f: f.drop(columns=["dtg3_roll"]))
+    expect(campaign_copy, r"campaign\.yaml: channels: every body axis needs the same number of gyro channels")

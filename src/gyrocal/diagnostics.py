@@ -88,7 +88,11 @@ def _chi2_drop(stats, n_model, idx) -> float:
     solve = np.linalg.solve(A_mm, np.column_stack([A_cm.T, stats.b[model]]))
     S = stats.A[np.ix_(cand, cand)] - A_cm @ solve[:, :-1]
     r = stats.b[cand] - A_cm @ solve[:, -1]
-    scale = np.sqrt(np.clip(np.diag(S), 1e-300, None))
+    new = np.diag(S) > 1e-10 * np.maximum(np.diag(stats.A)[cand], 1e-300)
+    if not new.any():
+        return 0.0
+    S, r = S[np.ix_(new, new)], r[new]
+    scale = np.sqrt(np.diag(S))
     S_n = S / np.outer(scale, scale)
     return float((r / scale) @ np.linalg.pinv(S_n, rcond=1e-8, hermitian=True) @ (r / scale))
 

@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from .channels import Channel
+from .channels import Channel, channel_sets
 from .units import AXES
 
 QUAT_COLUMNS = ["q1", "q2", "q3", "q4"]
@@ -221,6 +221,10 @@ def read_meta(directory) -> dict:
             _fail(cpath, f"missing key '{key}'")
     channels = _parse_channels(cpath, meta["channels"])
     names = [c.name for c in channels]
+    try:
+        channel_sets(channels)
+    except ValueError as exc:
+        _fail(cpath, f"channels: {exc}")
     gyro = meta.get("gyro") or {}
     if set(gyro) - {"arw_deg_sqrt_h"}:
         _fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - {'arw_deg_sqrt_h'})}")
