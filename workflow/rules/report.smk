@@ -13,7 +13,7 @@ rule report:
         report(f"{RESULTS}/report.html", caption="../report/review.rst", category="Review before uplink"),
     params:
         config=config,
-        results=RESULTS,
+        results=lambda wildcards, input: str(Path(input.comparison).parent),
         models=MODELS,
     conda:
         "../envs/gyrocal.yaml"

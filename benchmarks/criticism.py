@@ -1,0 +1,62 @@
+"""The model-criticism loop on every hidden-effect scenario: prints a table, asserts nothing.
+
+    python benchmarks/criticism.py
+
+Each scenario in tests/data/hidden_*.yaml is simulated (its own seed) and run with the
+baseline and with the variant that adds the hidden effect, as the tests do.
+"""
+
+import json
+import sys
+import tempfile
+from pathlib import Path
+
+import pandas as pd
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+from conftest import DATA, config_with, run_campaign, truth_vector  # noqa: E402
+from test_criticism import BASE, CASES  # noqa: E402
+
+from gyrocal import simulate, telemetry  # noqa: E402
+
+
+def coverage(out, model, campaign, truth):
+    t = truth_vector(telemetry.read_meta(campaign)["channels"], truth).to_contract()
+    table = pd.read_csv(out / model / "calibration.csv")
+    table = table[table["unit"].isin(["ppm", "arcsec"])]
+    values = [t[r.channel][r.parameter] for r in table.itertuples()]
+    return int(((table["ci95_low"] <= values) & (values <= table["ci95_high"])).sum())
+
+
+def main():
+    from snakemake.utils import validate
+    cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
+    validate(cfg, str(ROOT / "workflow/schemas/config.schema.yaml"))
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for case, (effect, right, plugin) in CASES.items():
+            root = Path(tmp) / case
+            simulate.run(DATA / f"hidden_{case}.yaml", root / "sim")
+            campaign, truth = root / "sim/campaign", json.loads((root / "sim/truth.json").read_text())
+            run_campaign(campaign, root / "out", config_with(cfg, {"baseline": BASE, "extended": BASE + [effect]},
+                                                             [str(plugin)] if plugin else []),
+                         ("baseline", "extended"), root / "sim/truth.json")
+            comp = pd.read_csv(root / "out/model_comparison.csv").set_index("model")
+            base = json.loads((root / "out/baseline/diagnostics.json").read_text())
+            ext = json.loads((root / "out/extended/diagnostics.json").read_text())
+            rows.append({
+                "hidden effect": case, "baseline misfit": base["misfit"], "ranked first": base["ranking"][0]["name"],
+                "rms base": base["residual_rms_arcsec"], "rms variant": ext["residual_rms_arcsec"],
+                "noise rms": ext["noise_rms_arcsec"], "variant misfit": ext["misfit"],
+                "elpd gain": round(comp.loc["extended", "elpd_diff_vs_first"], 1),
+                "se": round(comp.loc["extended", "elpd_diff_se"], 1),
+                "covered base": coverage(root / "out", "baseline", campaign, truth),
+                "covered variant": coverage(root / "out", "extended", campaign, truth)})
+    print(pd.DataFrame(rows).to_string(index=False))
+
+
+if __name__ == "__main__":
+    main()
