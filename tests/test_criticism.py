@@ -26,9 +26,7 @@ CASES = {
 }
 KNOWN_SHORTFALLS = {
     ("sf_nonlinearity", "ranks_first"): "rate_sign edges out rate_squared (chi2 154 vs 143); see the issue note",
-    ("sf_nonlinearity", "variant_fits"): "rate_sign structure stays after the nonlinearity is added; see the note",
     ("sf_nonlinearity", "loo"): "elpd gain 76 +- 24 (3.1 se) on this small campaign; see the note",
-    ("temperature", "variant_fits"): "temperature structure stays on the yaw channels; see the issue note",
 }
 
 

@@ -65,6 +65,15 @@ def signature_effects(extra_columns) -> list:
     return out
 
 
+def _applies(effect, data) -> bool:
+    """Whether an effect can be evaluated on this campaign (a plugin may need columns it lacks)."""
+    try:
+        errormodel.effect_regressors(data, effects.extra_parameters([effect], data.channels))
+        return True
+    except ValueError:
+        return False
+
+
 def _augmented(maneuvers, estimate: PointEstimate, boresight, candidates, var):
     """Sufficient statistics of the fitted model's parameters followed by the candidates'
     columns, all global, with each maneuver's nuisance integrated out."""
@@ -77,10 +86,16 @@ def _augmented(maneuvers, estimate: PointEstimate, boresight, candidates, var):
     return campaign_stats(out, var)
 
 
+COLLINEAR_FRACTION = 1e-3
+"""A candidate direction whose weighted variance is more than 99.9 % explained by the
+model's own columns is not tested: there the statistic would measure second-order model
+error amplified a thousandfold, not structure."""
+
+
 def _chi2_drop(stats, n_model, idx) -> float:
     """Score statistic of candidate columns ``idx`` given the model's own parameters:
     the drop in the weighted residual sum of squares if they were added (Schur
-    complement; directions the model already spans are dropped, not inverted)."""
+    complement over the model's columns, in directions the model does not already span)."""
     model = np.arange(n_model)
     cand = n_model + np.asarray(idx)
     A_mm = stats.A[np.ix_(model, model)]
@@ -88,13 +103,11 @@ def _chi2_drop(stats, n_model, idx) -> float:
     solve = np.linalg.solve(A_mm, np.column_stack([A_cm.T, stats.b[model]]))
     S = stats.A[np.ix_(cand, cand)] - A_cm @ solve[:, :-1]
     r = stats.b[cand] - A_cm @ solve[:, -1]
-    new = np.diag(S) > 1e-10 * np.maximum(np.diag(stats.A)[cand], 1e-300)
-    if not new.any():
-        return 0.0
-    S, r = S[np.ix_(new, new)], r[new]
-    scale = np.sqrt(np.diag(S))
-    S_n = S / np.outer(scale, scale)
-    return float((r / scale) @ np.linalg.pinv(S_n, rcond=1e-8, hermitian=True) @ (r / scale))
+    scale = np.sqrt(np.maximum(np.diag(stats.A)[cand], 1e-300))
+    values, vectors = np.linalg.eigh(S / np.outer(scale, scale))
+    keep = values > COLLINEAR_FRACTION
+    projected = vectors[:, keep].T @ (r / scale)
+    return float(np.sum(projected**2 / values[keep]))
 
 
 def rank(maneuvers, estimate: PointEstimate, boresight, model_effects, extra_columns, plugin_effects=(),
@@ -108,7 +121,7 @@ def rank(maneuvers, estimate: PointEstimate, boresight, model_effects, extra_col
     var = variances(estimate.log_sigma)
     present = {e.name for e in model_effects}
     library = [e for e in list(effects.LIBRARY.values()) + list(plugin_effects)
-               if e.name not in present and not e.core and not e.noise]
+               if e.name not in present and not e.core and not e.noise and _applies(e, maneuvers[0])]
     signatures = signature_effects(extra_columns)
     channels = maneuvers[0].channels
     groups, candidates = [], []

@@ -63,7 +63,11 @@ def effect_regressors(data: ManeuverData, extras):
     for j, extra in enumerate(extras):
         effect = extra.effect
         if effect.name not in cache:
-            cache[effect.name] = (effect.gyro(view), effect.star_tracker(view))
+            try:
+                cache[effect.name] = (effect.gyro(view), effect.star_tracker(view))
+            except KeyError as exc:
+                raise ValueError(f"effect {effect.name} needs {exc} in maneuver {data.id}, which has the "
+                                 f"extra gyro.csv columns {sorted(data.extras)}") from exc
         g, s = cache[effect.name]
         name = extra.parameter.name
         if name in g:
