@@ -52,7 +52,7 @@ def sampler_figures():
     ess = steps._summary(steps._posterior_dataset(post.ensemble_draws(), est.theta, scale, post.labels),
                          steps._posterior_dataset(post.walker_draws(), est.theta, scale, post.labels),
                          post.labels, cfg["convergence"])["ess_bulk"].min()
-    lins, noises = post.lins, post.noises
+    noises = post.noises
     logpost = posterior.LogPosterior(post.grid, est.theta, priors)
     stats = campaign_stats(noises, estimate.variances(est.log_sigma))
     mean, cov = conditional_posterior(stats, priors.mean - est.theta, priors.sd)

@@ -1,6 +1,5 @@
 """The pre-uplink review report, in a real browser."""
 
-import json
 import shutil
 import subprocess
 

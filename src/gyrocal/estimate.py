@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 from . import channels as ch
 from . import errormodel, kinematics, noise
 from .likelihood import campaign_stats
-from .preprocess import ManeuverData, body_increments, error_angles
+from .preprocess import ManeuverData, body_increments
 from .units import AXES, AXIS_INDEX
 
 HOLD_RATE_FRACTION = 0.05

@@ -59,17 +59,6 @@ def campaign_stats(noises, variances: dict) -> Stats:
                  sum(s.logdet for s in parts), sum(s.n for s in parts))
 
 
-def log_evidence(stats: Stats, prior_mean: np.ndarray, prior_sd: np.ndarray) -> float:
-    """``log p(D | noise)`` with ``dtheta ~ N(prior_mean, diag(prior_sd^2))`` integrated out."""
-    prec = 1.0 / prior_sd**2
-    P = stats.A + np.diag(prec)
-    h = stats.b + prec * prior_mean
-    factor = cho_factor(P)
-    return float(-0.5 * (stats.c + stats.logdet + stats.n * LOG_2PI)
-                 + 0.5 * h @ cho_solve(factor, h) - 0.5 * np.sum(prec * prior_mean**2)
-                 - 0.5 * _logdet_chol(factor) - 0.5 * np.sum(np.log(prior_sd**2)))
-
-
 def conditional_posterior(stats: Stats, prior_mean, prior_sd):
     """Mean and covariance of ``dtheta`` given the noise: the exact Gaussian of the linear model."""
     prec = 1.0 / prior_sd**2

@@ -17,7 +17,7 @@ import numpy as np
 
 from . import channels as ch
 from .estimate import _profile_reml, variances
-from .likelihood import LOG_2PI, Stats, campaign_stats
+from .likelihood import LOG_2PI, campaign_stats
 from .units import PPM, arcsec_to_rad, arw_to_rad_sqrt_s
 
 NOISE_NAMES = ("sigma_cross", "sigma_about", "arw")

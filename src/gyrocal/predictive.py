@@ -29,20 +29,6 @@ class WhitenedManeuver:
         target = self.wd[:, None] - self.wx @ dtheta.T
         return np.linalg.solve(self.gram_g, self.wg.T @ target).T
 
-    def pointwise_loglik(self, dtheta, beta, scale, block_of_row):
-        """(D, n_blocks) log density of the whitened innovations, summed per block.
-
-        The Cholesky factor orders the innovations in time, so each block's sum is its
-        log density given the blocks before it (``scale`` is sigma_cross^2 per draw).
-        """
-        w = self.wd[None, :] - dtheta @ self.wx.T - beta @ self.wg.T
-        log_diag = np.log(self.chol[0])
-        dens = -0.5 * (w**2 / scale[:, None] + np.log(2 * np.pi * scale)[:, None]) - log_diag[None, :]
-        n_blocks = block_of_row.max() + 1
-        out = np.zeros((len(dtheta), n_blocks))
-        np.add.at(out.T, block_of_row, dens.T)
-        return out
-
     def noise_draws(self, scale, rng) -> np.ndarray:
         """(D, n) differenced noise replicates ``sqrt(scale) L xi``."""
         xi = rng.standard_normal((len(scale), self.chol.shape[1]))

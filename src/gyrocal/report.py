@@ -11,15 +11,11 @@ import base64
 import html
 import io
 import json
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import yaml
 
 from . import __version__
-from . import channels as ch
-from . import correction as corr
 from . import estimate, plots, preprocess
 from .units import AXES, PAPER_AXIS_NUMBER, rad_to_arcsec
 
@@ -37,10 +33,6 @@ def _table(frame: pd.DataFrame, table_id=None, classes="") -> str:
     attrs = f' id="{table_id}"' if table_id else ""
     return frame.to_html(index=False, escape=True, border=0, classes=classes, na_rep="").replace(
         "<table", f"<table{attrs}", 1)
-
-
-def _fmt(value, digits=1) -> str:
-    return "" if value is None or (isinstance(value, float) and np.isnan(value)) else f"{value:.{digits}f}"
 
 
 def entry(row, truth=None) -> str:

@@ -188,7 +188,7 @@ def run_posterior(npz_paths, point_npz, cfg, model, out_nc, out_summary, out_fit
     est, settings = load_point_estimate(point_npz, channels, extras)
     priors = priors_for(channels, cfg, settings, extras)
     post = posterior.sample(maneuvers, est, settings["boresight_body"], priors, cfg, cfg["seed"])
-    labels, p = post.labels, post.n_params
+    labels = post.labels
     scale = contract_scale(channels, extras)
     draws = post.ensemble_draws()
     full = _posterior_dataset(draws, est.theta, scale, labels)
