@@ -92,15 +92,13 @@ model's own columns is not tested: there the statistic would measure second-orde
 error amplified a thousandfold, not structure."""
 
 
-def _chi2_drop(stats, n_model, idx) -> float:
-    """Score statistic of candidate columns ``idx`` given the model's own parameters:
-    the drop in the weighted residual sum of squares if they were added (Schur
-    complement over the model's columns, in directions the model does not already span)."""
-    model = np.arange(n_model)
-    cand = n_model + np.asarray(idx)
-    A_mm = stats.A[np.ix_(model, model)]
-    A_cm = stats.A[np.ix_(cand, model)]
-    solve = np.linalg.solve(A_mm, np.column_stack([A_cm.T, stats.b[model]]))
+def _conditional_drop(stats, base, cand) -> float:
+    """Drop in the weighted residual sum of squares from adding columns ``cand`` to the
+    columns ``base`` (Schur complement), in directions ``base`` does not already span."""
+    base, cand = np.asarray(base, dtype=int), np.asarray(cand, dtype=int)
+    A_mm = stats.A[np.ix_(base, base)]
+    A_cm = stats.A[np.ix_(cand, base)]
+    solve = np.linalg.lstsq(A_mm, np.column_stack([A_cm.T, stats.b[base]]), rcond=1e-12)[0]
     S = stats.A[np.ix_(cand, cand)] - A_cm @ solve[:, :-1]
     r = stats.b[cand] - A_cm @ solve[:, -1]
     scale = np.sqrt(np.maximum(np.diag(stats.A)[cand], 1e-300))
@@ -108,6 +106,40 @@ def _chi2_drop(stats, n_model, idx) -> float:
     keep = values > COLLINEAR_FRACTION
     projected = vectors[:, keep].T @ (r / scale)
     return float(np.sum(projected**2 / values[keep]))
+
+
+def _chi2_drop(stats, n_model, idx) -> float:
+    """Score statistic of candidate columns ``idx`` given the model's own parameters."""
+    return _conditional_drop(stats, np.arange(n_model), n_model + np.asarray(idx))
+
+
+ENCOMPASS_TOP = 5
+
+
+def _encompass(ranking, groups, stats, n_model):
+    """Reorder the leading significant candidates by what each leaves unexplained.
+
+    Two candidates can both explain much of a misfit (a rate-squared scale factor and a
+    bias that flips with the rotation). The better explanation is the one after whose
+    addition the others explain least: for each leader, the most significant of the
+    other leaders given it (``leftover_log10_p``), highest first.
+    """
+    columns = {effect.name: idx for _, effect, idx, _ in groups}
+    leaders = [r for r in ranking[:ENCOMPASS_TOP] if r["log10_p"] < -2 and r["name"] in columns]
+    if len(leaders) < 2:
+        return
+    for r in leaders:
+        base = list(range(n_model)) + [n_model + i for i in columns[r["name"]]]
+        worst = 0.0
+        for other in leaders:
+            if other is r:
+                continue
+            drop = _conditional_drop(stats, base, [n_model + i for i in columns[other["name"]]])
+            worst = min(worst, float(sps.chi2.logsf(drop, len(columns[other["name"]]))) / np.log(10))
+        r["leftover_log10_p"] = round(worst, 2)
+    positions = sorted(ranking.index(r) for r in leaders)
+    for position, r in zip(positions, sorted(leaders, key=lambda r: (-r["leftover_log10_p"], r["log10_p"]))):
+        ranking[position] = r
 
 
 def rank(maneuvers, estimate: PointEstimate, boresight, model_effects, extra_columns, plugin_effects=(),
@@ -150,6 +182,7 @@ def rank(maneuvers, estimate: PointEstimate, boresight, model_effects, extra_col
                             "chi2_drop": round(drop, 2), "df": 1, "log10_p": round(log_p / np.log(10), 2),
                             "description": effect.description})
     ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
+    _encompass(ranking, groups, stats, n_model)
     return ranking, detail
 
 
