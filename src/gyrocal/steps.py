@@ -192,7 +192,10 @@ def run_posterior(npz_paths, point_npz, cfg, model, out_nc, out_summary, out_fit
     scale = contract_scale(channels, extras)
     draws = post.ensemble_draws()
     full = _posterior_dataset(draws, est.theta, scale, labels)
-    per_walker = _posterior_dataset(post.walker_draws(), est.theta, scale, labels)
+    with warnings.catch_warnings():
+        # every walker is a chain here, and a short run may have more walkers than steps
+        warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
+        per_walker = _posterior_dataset(post.walker_draws(), est.theta, scale, labels)
     summary = _summary(full, per_walker, labels, cfg["convergence"])
     res = post.result
     converged = bool(summary["converged"].all() and res.converged_length)
