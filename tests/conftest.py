@@ -76,17 +76,20 @@ def config_with(cfg, models=None, plugins=None):
     return out
 
 
+def _baseline_run(campaign, tmp_path_factory, config, name):
+    out = tmp_path_factory.mktemp(name)
+    npz = run_campaign(campaign[0], out, config_with(config, {"baseline": ["scale_factor", "misalignment", "bias"]}),
+                       truth_path=campaign[0].parent / "truth.json")
+    return out, npz
+
+
 @pytest.fixture(scope="session")
 def tiny_run(tiny, tmp_path_factory, config):
-    out = tmp_path_factory.mktemp("tiny_run")
-    npz = run_campaign(tiny[0], out, config_with(config, {"baseline": ["scale_factor", "misalignment", "bias"]}),
-                       truth_path=tiny[0].parent / "truth.json")
-    return out, npz
+    """The tiny campaign through every step with the baseline model."""
+    return _baseline_run(tiny, tmp_path_factory, config, "tiny_run")
 
 
 @pytest.fixture(scope="session")
 def mom_run(mom, tmp_path_factory, config):
-    out = tmp_path_factory.mktemp("mom_run")
-    npz = run_campaign(mom[0], out, config_with(config, {"baseline": ["scale_factor", "misalignment", "bias"]}),
-                       truth_path=mom[0].parent / "truth.json")
-    return out, npz
+    """The default campaign through every step with the baseline model."""
+    return _baseline_run(mom, tmp_path_factory, config, "mom_run")
