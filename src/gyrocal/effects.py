@@ -96,8 +96,7 @@ class ManeuverView:
         """(K, 3) body rate from the in-loop set (rad/s)."""
         self.acceleration = np.gradient(body_rate_rad_s, self.t_mid, axis=0)
         self.st_time = data.st_time
-        k = np.clip(np.searchsorted(data.gyro_time, data.st_time, side="left") - 1, 0, len(self.dt) - 1)
-        self.st_body_rate = body_rate_rad_s[k]
+        self.st_body_rate = body_rate_rad_s[data.st_interval()[0]]
         """(M, 3) body rate at the star-tracker samples (rad/s)."""
         self.extras = data.extras
         self.t_center = 0.5 * (data.gyro_time[0] + data.gyro_time[-1])

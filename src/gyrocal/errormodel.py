@@ -39,7 +39,7 @@ class Linearization:
     st_dt: np.ndarray
     """(M,) time since the previous star-tracker sample (the first: since t0)."""
     shared_walk: np.ndarray
-    """(M, S, S, 3, 3) per-interval random-walk covariance between sets per unit ARW^2."""
+    """(M, S, S, 3, 3) per-interval random-walk covariance of the sets per unit ARW^2."""
     body_error: np.ndarray
     """(M, S, 3) the same error in body axes (rad), for plots and diagnostics."""
 
@@ -121,8 +121,7 @@ def linearize(data: ManeuverData, params: ch.ChannelParams, extras=(), extra_val
     extra_values = np.zeros(len(extras)) if extra_values is None else np.asarray(extra_values, dtype=float)
     gyro_reg, star_reg = effect_regressors(data, extras)
     st_rot = Rotation.from_quat(data.st_quat)
-    k = np.clip(np.searchsorted(data.gyro_time, data.st_time, side="left") - 1, 0, len(data.dt) - 1)
-    frac = (data.st_time - data.gyro_time[k]) / data.dt[k]
+    k, frac = data.st_interval()
     m = len(data.st_time)
     z = np.empty((m, len(sets), 3))
     body = np.empty((m, len(sets), 3))
@@ -133,8 +132,7 @@ def linearize(data: ManeuverData, params: ch.ChannelParams, extras=(), extra_val
         attitudes, phi, dphi = _set_jacobian(data, channel_set, params, gyro_reg[:, slots, :], extra_values)
         mid = kinematics.compose(attitudes[:-1], Rotation.from_rotvec(0.5 * phi))
         inertial = np.einsum("kij,kjp->kip", mid.as_matrix(), dphi)
-        cumulative = np.concatenate([np.zeros((1,) + inertial.shape[1:]), np.cumsum(inertial, axis=0)])
-        at_st_jac = cumulative[k] + frac[:, None, None] * inertial[k]
+        at_st_jac = cumulative_at_st(inertial, k, frac)
         at_st = kinematics.attitude_at(data.gyro_time, attitudes, phi, data.st_time)
         e = kinematics.error_angles_rad(at_st, st_rot)
         st_columns = np.einsum("mab,mbe->mae", at_st.as_matrix(), star_reg)
@@ -147,33 +145,25 @@ def linearize(data: ManeuverData, params: ch.ChannelParams, extras=(), extra_val
         design[:, s, :, n_base:] = at_st_jac[:, :, 15:] + st_columns
         if s == 0:
             st_matrix = at_st.as_matrix()
-            gyro_matrix = mid.as_matrix()
     st_dt = np.diff(np.concatenate([[data.gyro_time[0]], data.st_time]))
-    shared = _shared_walk(data, sets, gyro_matrix, k, frac, st_dt)
+    shared = _shared_walk(len(sets), st_dt)
     return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, shared, body)
 
 
-def _shared_walk(data, sets, gyro_matrix, k, frac, st_dt):
+def cumulative_at_st(per_interval: np.ndarray, k: np.ndarray, frac: np.ndarray) -> np.ndarray:
+    """Running sum of per-gyro-interval terms, evaluated at the star-tracker samples
+    (a sample inside interval k has the sum of the intervals before it plus its share)."""
+    cumulative = np.concatenate([np.zeros((1,) + per_interval.shape[1:]), np.cumsum(per_interval, axis=0)])
+    return cumulative[k] + frac.reshape((-1,) + (1,) * (per_interval.ndim - 1)) * per_interval[k]
+
+
+def _shared_walk(n_sets, st_dt):
     """Random-walk covariance per star-tracker interval, per unit ARW^2 (rad^2/s).
 
-    Within a set the walk is isotropic (``dt I``); two sets that share the channel of an
-    axis share that part of the walk, ``sum R_k e_a e_a^T R_k^T dt_k``.
+    Within a set the walk is isotropic (``dt I``); the sets share no channel
+    (`channels.channel_sets`), so their walks are independent.
     """
-    n_sets = len(sets)
-    m = len(st_dt)
-    out = np.zeros((m, n_sets, n_sets, 3, 3))
+    out = np.zeros((len(st_dt), n_sets, n_sets, 3, 3))
     for s in range(n_sets):
         out[:, s, s] = st_dt[:, None, None] * np.eye(3)
-    for s in range(n_sets):
-        for t in range(s + 1, n_sets):
-            for a in range(3):
-                if sets[s][a] != sets[t][a]:
-                    continue
-                col = gyro_matrix[:, :, a]
-                per = np.einsum("ki,kj->kij", col, col) * data.dt[:, None, None]
-                cum = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(per, axis=0)])
-                at = cum[k] + frac[:, None, None] * per[k]
-                block = np.diff(np.concatenate([np.zeros((1, 3, 3)), at]), axis=0)
-                out[:, s, t] += block
-                out[:, t, s] += block
     return out

@@ -60,10 +60,7 @@ def classic(data: ManeuverData) -> pd.DataFrame:
         unit = np.zeros((len(inc), 3, 3))
         unit[:, [a] + others, [0, 1, 2]] = inc[:, a:a + 1]
         inertial = np.einsum("kij,kjp->kip", mid.as_matrix(), unit)
-        cum = np.concatenate([np.zeros((1, 3, 3)), np.cumsum(inertial, axis=0)])
-        k = np.clip(np.searchsorted(data.gyro_time, data.st_time, side="left") - 1, 0, len(inc) - 1)
-        frac = (data.st_time - data.gyro_time[k]) / data.dt[k]
-        design = cum[k] + frac[:, None, None] * inertial[k]
+        design = errormodel.cumulative_at_st(inertial, *data.st_interval())
         to_body = at_st[end].inv().as_matrix()
         kin = -to_body @ (design[after].mean(axis=0) - design[before].mean(axis=0))
         delta = to_body @ (inertial_err[after].mean(axis=0) - inertial_err[before].mean(axis=0))

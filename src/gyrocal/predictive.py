@@ -68,19 +68,19 @@ def _undifference_transpose(x: np.ndarray, block: int) -> np.ndarray:
     return out
 
 
-def leave_block_out_loglik(lin: Linearization, noise: ManeuverNoise, ratios, dtheta, scale, block_of_row):
+def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dtheta, scale, block_of_row):
     """(D, n_blocks) ``log p(block | all other data, draw)`` with the nuisance integrated out.
 
     For a Gaussian with precision P, ``log p(y_b | y_-b) = 1/2 log|P_bb| - n_b/2 log 2 pi
     - 1/2 (P r)_b' P_bb^-1 (P r)_b``; with a flat-prior nuisance G the precision is
     ``P = Q - QG (G'QG)^-1 G'Q``. Q is the inverse of the undifferenced covariance,
     ``T' C^-1 T`` with C the banded covariance of the differenced series. The noise
-    ratios are held at their posterior mean; the scale (sigma_cross^2) is per draw.
+    ratios are those ``whitened`` was factored at; the scale (sigma_cross^2) is per draw.
     These are the pointwise terms PSIS-LOO needs (one-step-ahead terms are not).
     """
     from scipy.linalg import cho_solve_banded
 
-    chol = noise.factor(variances([0.0, ratios[0], ratios[1]]))
+    chol, noise = whitened.chol, whitened.noise
     width = lin.z.shape[1] * 3
     n, p, g = noise.n, noise.n_params, noise.n_nuisance
 

@@ -40,6 +40,11 @@ class ManeuverData:
     def sets(self) -> list:
         return ch.channel_sets(self.channels, self.in_loop or None)
 
+    def st_interval(self):
+        """Gyro interval ``k`` holding each star-tracker sample, and how far into it (0..1)."""
+        k = np.clip(np.searchsorted(self.gyro_time, self.st_time, side="left") - 1, 0, len(self.dt) - 1)
+        return k, (self.st_time - self.gyro_time[k]) / self.dt[k]
+
     def set_increments(self, channel_set) -> np.ndarray:
         index = {c.name: i for i, c in enumerate(self.channels)}
         return self.increments[:, [index[n] for n in channel_set]]
@@ -134,7 +139,7 @@ def error_table(data: ManeuverData, params: ch.ChannelParams = None) -> pd.DataF
     sets = data.sets
     inc = body_increments(data, sets[0], params)
     rate = inc / data.dt[:, None]
-    k = np.clip(np.searchsorted(data.gyro_time, data.st_time, side="left") - 1, 0, len(rate) - 1)
+    k, _ = data.st_interval()
     table = {"time": data.st_time}
     for i, a in enumerate(AXES):
         table[f"rate_{a}_deg_s"] = np.rad2deg(rate[k, i])

@@ -285,11 +285,10 @@ def _inference_data(post, maneuvers, kept, scale, cfg):
     zeros = ch.ChannelParams.zeros(maneuvers[0].channels)
     for data, lin, nz in zip(maneuvers, post.lins, post.noises):
         wm = predictive.WhitenedManeuver(nz, ratios)
-        beta = wm.nuisance(dtheta)
         blocks = predictive.block_index(lin, data.st_time, cfg["sampler"]["block_s"])
-        loglik.append(predictive.leave_block_out_loglik(lin, nz, ratios, dtheta, scale2, blocks))
+        loglik.append(predictive.leave_block_out_loglik(lin, wm, dtheta, scale2, blocks))
         block_names += [f"{data.id}:{b}" for b in range(blocks.max() + 1)]
-        resid = predictive.residuals_body(lin, dtheta[pred_rows], beta[pred_rows])
+        resid = predictive.residuals_body(lin, dtheta[pred_rows], wm.nuisance(dtheta[pred_rows]))
         noise_rep = predictive.undifference_body(lin, wm.noise_draws(scale2[pred_rows], rng))
         for s, channel_set in enumerate(lin.sets):
             observed = preprocess.error_angles(data, channel_set, zeros)
