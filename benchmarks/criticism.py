@@ -17,16 +17,18 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from conftest import DATA, config_with, run_campaign, truth_vector  # noqa: E402
-from test_criticism import BASE, CASES  # noqa: E402
+from gyrocal import simulate
+from gyrocal.calibration import core_rows
+from gyrocal.estimate import PointEstimate
 
-from gyrocal import simulate, telemetry  # noqa: E402
+from conftest import DATA, config_with, run_campaign
+from test_criticism import BASE, CASES
 
 
 def coverage(out, model, campaign, truth):
-    t = truth_vector(telemetry.read_meta(campaign)["channels"], truth).to_contract()
-    table = pd.read_csv(out / model / "calibration.csv")
-    table = table[table["unit"].isin(["ppm", "arcsec"])]
+    t = truth["parameters"]
+    spec = PointEstimate.load(out / model / "point_estimate.npz").spec
+    table = core_rows(spec, pd.read_csv(out / model / "calibration.csv"))
     values = [t[r.channel][r.parameter] for r in table.itertuples()]
     return int(((table["ci95_low"] <= values) & (values <= table["ci95_high"])).sum())
 
@@ -37,7 +39,7 @@ def main():
     validate(cfg, str(ROOT / "workflow/schemas/config.schema.yaml"))
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for case, (effect, right, plugin) in CASES.items():
+        for case, (effect, _, plugin) in CASES.items():
             root = Path(tmp) / case
             simulate.run(DATA / f"hidden_{case}.yaml", root / "sim")
             campaign, truth = root / "sim/campaign", json.loads((root / "sim/truth.json").read_text())

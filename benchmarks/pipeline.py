@@ -31,8 +31,10 @@ def snakemake_wall_s() -> float:
 def sampler_figures():
     from snakemake.utils import validate
 
-    from gyrocal import estimate, posterior, preprocess, simulate, steps, telemetry
+    from gyrocal import classic, estimate, inferencedata, posterior, preprocess, simulate, steps, telemetry
     from gyrocal.likelihood import campaign_stats, conditional_posterior
+    from gyrocal.noise import variances
+    from gyrocal.spec import baseline
 
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     validate(cfg, str(ROOT / "workflow/schemas/config.schema.yaml"))
@@ -40,22 +42,21 @@ def sampler_figures():
         simulate.run(ROOT / "config/scenarios/mom.yaml", tmp)
         campaign = telemetry.read_campaign(Path(tmp) / "campaign")
     maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
-    settings = steps.noise_settings({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg)
-    log_sigma0 = np.log([settings["sigma_cross_arcsec"] / 206264.806, settings["sigma_about_arcsec"] / 206264.806,
-                         np.deg2rad(settings["arw_deg_sqrt_h"]) / 60])
-    est = estimate.point_estimate(maneuvers, campaign.channels, settings["boresight_body"], log_sigma0)
-    priors = steps.priors_for(campaign.channels, cfg, settings)
+    stated = steps.noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
+    spec = baseline(campaign.channels)
+    theta0 = classic.classic_vector(classic.classic_table(maneuvers, spec), spec)
+    est = estimate.point_estimate(maneuvers, spec, stated, theta0)
+    priors = steps.model_priors(est, cfg["priors"])
     start = time.perf_counter()
-    post = posterior.sample(maneuvers, est, settings["boresight_body"], priors, cfg, cfg["seed"])
+    post = posterior.sample(maneuvers, est, priors, cfg["sampler"], cfg["grid"], cfg["seed"])
     sampling_s = time.perf_counter() - start
-    scale = steps.contract_scale(campaign.channels)
-    ess = steps._summary(steps._posterior_dataset(post.ensemble_draws(), est.theta, scale, post.labels),
-                         steps._posterior_dataset(post.walker_draws(), est.theta, scale, post.labels),
-                         post.labels, cfg["convergence"])["ess_bulk"].min()
+    ess = inferencedata.summarize(inferencedata.posterior_dataset(post.ensemble_draws(), est.theta, spec),
+                                  inferencedata.posterior_dataset(post.walker_draws(), est.theta, spec),
+                                  spec.labels, cfg["convergence"])["ess_bulk"].min()
     noises = post.noises
     logpost = posterior.LogPosterior(post.grid, est.theta, priors)
-    stats = campaign_stats(noises, estimate.variances(est.log_sigma))
-    mean, cov = conditional_posterior(stats, priors.mean - est.theta, priors.sd)
+    stats = campaign_stats(noises, variances(est.log_sigma))
+    mean, _ = conditional_posterior(stats, priors.mean - est.theta, priors.sd)
     x = np.concatenate([mean, est.log_sigma]) + np.random.default_rng(0).normal(0, 1e-6, (64, len(mean) + 3))
     calls = 2000
     t0 = time.perf_counter()

@@ -36,33 +36,44 @@ def mom(tmp_path_factory):
 
 
 def truth_vector(channels, truth):
-    from gyrocal.channels import ChannelParams
-    return ChannelParams.from_contract(channels, truth["parameters"])
+    """The simulation's true channel model (SI), with its biases."""
+    from gyrocal.spec import baseline
+    from gyrocal.units import deg_h_to_rad_s
+    params = baseline(channels).params_from_contract(truth["parameters"])
+    params.bias_rad_s[:] = deg_h_to_rad_s([truth["parameters"][c.name]["bias_deg_h"] for c in channels])
+    return params
 
 
 def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
-    """Every workflow step in the order the rules run them, without Snakemake."""
+    """Every workflow step in the order the rules run them, each given the config the rule gives it."""
     from gyrocal import steps, telemetry
+    from gyrocal.outputs import MODEL_FILES
     ids = [m.id for m in telemetry.read_meta(campaign_dir)["maneuvers"]]
     steps.validate(campaign_dir, out / "input.json")
     for m in ids:
         steps.run_preprocess(campaign_dir, m, out / f"preprocess/{m}.npz", out / f"preprocess/{m}.csv",
                              out / f"preprocess/{m}.png")
     npz = [out / f"preprocess/{m}.npz" for m in ids]
+    steps.run_classic(npz, out / "classic.csv")
+    plugins = cfg["plugins"]
     for model in models:
         d = out / model
-        steps.run_point_estimate(npz, campaign_dir, cfg, model, d / "point_estimate.npz", d / "classic.csv")
-        steps.run_posterior(npz, d / "point_estimate.npz", cfg, model, d / "posterior.nc",
+        steps.run_point_estimate(npz, out / "input.json", out / "classic.csv", model, cfg["models"][model],
+                                 cfg["noise"], plugins, d / "point_estimate.npz")
+        steps.run_posterior(npz, d / "point_estimate.npz", plugins, cfg["priors"], cfg["prior_from"] or None,
+                            cfg["sampler"], cfg["grid"], cfg["convergence"], cfg["seed"], d / "posterior.nc",
                             d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json")
-        steps.run_calibrate(d / "point_estimate.npz", d / "posterior_summary.csv", npz, cfg, model,
-                            d / "calibration.csv", d / "correction.json")
-        steps.run_diagnostics(npz, d / "point_estimate.npz", d / "posterior_summary.csv", d / "fit.csv", cfg,
-                              model, d / "diagnostics.json")
+        steps.run_calibrate(d / "point_estimate.npz", d / "posterior_summary.csv", npz, d / "calibration.csv",
+                            d / "correction.json")
+        steps.run_diagnostics(npz, d / "point_estimate.npz", d / "posterior_summary.csv", d / "fit.csv", plugins,
+                              cfg["diagnostics"], d / "diagnostics.json")
     steps.run_compare(list(models), [out / m / "posterior.nc" for m in models],
                       [out / m / "diagnostics.json" for m in models],
                       [out / m / "posterior_summary.csv" for m in models],
                       out / "model_comparison.csv", out / "model_comparison.png")
-    steps.run_report(out, list(models), npz, truth_path, cfg, out / "report.html")
+    files = {name: [out / m / file for m in models] for name, file in MODEL_FILES.items()}
+    steps.run_report(list(models), files, npz, [out / f"preprocess/{m}.csv" for m in ids], out / "input.json",
+                     out / "model_comparison.csv", truth_path, cfg, out / "report.html")
     return npz
 
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Install gyrocal with its test dependencies (and Chromium for the browser test), run the tests.
+# Install gyrocal with its test dependencies (and Chromium for the browser test), lint, run the tests.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! command -v chromium >/dev/null 2>&1; then
@@ -10,4 +10,6 @@ if ! command -v chromium >/dev/null 2>&1; then
     fi
 fi
 python -m pip install --quiet -e ".[test]"
+python -m ruff check .
+python -m snakemake --lint >/dev/null
 python -m pytest "$@"

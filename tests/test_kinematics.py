@@ -1,6 +1,6 @@
 import numpy as np
 import pytest
-from scipy.spatial.transform import Rotation
+from scipy.spatial.transform import Rotation, Slerp
 
 from gyrocal import kinematics
 from gyrocal.units import ARCSEC_RAD
@@ -71,9 +71,14 @@ def test_error_angles_give_star_tracker_relative_to_gyro_in_body_axes():
     assert np.allclose(err, [[10, -20, 30]], atol=1e-9)
 
 
-def test_sign_continuous_removes_hemisphere_flips():
-    q = Rotation.from_rotvec(np.outer(np.linspace(0, 1, 20), [0, 0, 1])).as_quat()
+def test_quaternion_sign_flips_change_no_error_angle_and_no_interpolated_attitude():
+    """q and -q are one attitude: the star tracker's quaternions need no sign-continuity pass."""
+    q = Rotation.from_rotvec(np.outer(np.linspace(0, 1, 20), [0.2, 0.1, 1.0])).as_quat()
     flipped = q * np.where(np.arange(20) % 3 == 0, -1, 1)[:, None]
-    fixed = kinematics.sign_continuous(flipped)
-    assert np.all(np.einsum("ij,ij->i", fixed[1:], fixed[:-1]) > 0)
-    assert np.allclose(np.abs(fixed), np.abs(q))
+    model = Rotation.from_rotvec(np.random.default_rng(4).normal(0, 1e-4, (20, 3))) * Rotation.from_quat(q)
+    assert np.array_equal(kinematics.error_angles_rad(model, Rotation.from_quat(q)),
+                          kinematics.error_angles_rad(model, Rotation.from_quat(flipped)))
+    t = np.arange(20.0)
+    a = Slerp(t, Rotation.from_quat(q))([3.5, 9.25, 17.0]).as_matrix()
+    b = Slerp(t, Rotation.from_quat(flipped))([3.5, 9.25, 17.0]).as_matrix()
+    assert np.abs(a - b).max() < 1e-15

@@ -9,18 +9,26 @@ import pandas as pd
 import pytest
 
 from gyrocal import channels as ch
-from gyrocal import correction, estimate, noise, steps, telemetry
+from gyrocal import correction, effects, errormodel, estimate, noise, steps, telemetry
+from gyrocal.estimate import PointEstimate
 from gyrocal.likelihood import campaign_stats
-from gyrocal.units import ARCSEC_RAD, PPM
+from gyrocal.units import PPM
 
 from conftest import truth_vector
 
 
-def calibration_with_truth(out, truth, channels):
+def calibration_with_truth(out, truth):
     table = pd.read_csv(out / "baseline/calibration.csv")
-    t = truth_vector(channels, truth).to_contract()
+    t = truth["parameters"]
     table["truth"] = [t[r.channel][r.parameter] for r in table.itertuples()]
     return table
+
+
+def posterior_again(out, npz, cfg, tmp_path):
+    """The posterior step once more on a finished run's point estimate, with ``cfg``."""
+    steps.run_posterior(npz, out / "baseline/point_estimate.npz", [], cfg["priors"], None, cfg["sampler"],
+                        cfg["grid"], cfg["convergence"], cfg["seed"], tmp_path / "p.nc", tmp_path / "s.csv",
+                        tmp_path / "f.csv", tmp_path / "j.json")
 
 
 def test_validate_step_records_rows_and_checksums(tiny_run):
@@ -56,7 +64,7 @@ def test_tiny_posterior_converges_and_covers_a_truth_that_is_not_the_papers(tiny
     sampler = json.loads((tiny_run[0] / "baseline/sampler.json").read_text())
     assert sampler["converged"], sampler["failed_parameters"]
     assert sampler["steps"] >= 50 * sampler["tau_max_steps"]
-    table = calibration_with_truth(tiny_run[0], tiny[1], telemetry.read_meta(tiny[0])["channels"])
+    table = calibration_with_truth(tiny_run[0], tiny[1])
     assert (table["r_hat"] < 1.01).all() and (table["ess_bulk"] >= 400).all()
     inside = (table["ci95_low"] <= table["truth"]) & (table["truth"] <= table["ci95_high"])
     assert inside.sum() >= 21, table[~inside]
@@ -64,8 +72,7 @@ def test_tiny_posterior_converges_and_covers_a_truth_that_is_not_the_papers(tiny
 
 def test_same_seed_same_numbers(tiny_run, config, tmp_path):
     out, npz = tiny_run
-    steps.run_posterior(npz, out / "baseline/point_estimate.npz", config, "baseline", tmp_path / "p.nc", tmp_path / "s.csv",
-                        tmp_path / "f.csv", tmp_path / "j.json")
+    posterior_again(out, npz, config, tmp_path)
     assert (tmp_path / "s.csv").read_text() == (out / "baseline/posterior_summary.csv").read_text()
 
 
@@ -73,8 +80,7 @@ def test_a_run_that_cannot_converge_says_so(tiny_run, config, tmp_path, caplog):
     out, npz = tiny_run
     cfg = copy.deepcopy(config)
     cfg["sampler"].update(initial_steps=50, chunk_steps=10, max_steps=60, min_tau_multiple=1000)
-    steps.run_posterior(npz, out / "baseline/point_estimate.npz", cfg, "baseline", tmp_path / "p.nc", tmp_path / "s.csv",
-                        tmp_path / "f.csv", tmp_path / "j.json")
+    posterior_again(out, npz, cfg, tmp_path)
     info = json.loads((tmp_path / "j.json").read_text())
     assert info["converged"] is False and info["chain_length_ok"] is False
     assert "DID NOT CONVERGE" in caplog.text
@@ -101,23 +107,31 @@ def test_correction_file_inverts_the_channel_model(tiny, tiny_run):
 
 
 def test_sequential_campaign_takes_priors_from_an_earlier_posterior(tiny_run, config, tmp_path):
-    out, npz = tiny_run
-    cfg = copy.deepcopy(config)
-    cfg["prior_from"] = str(out / "baseline/calibration.csv")
-    channels = np.load(out / "baseline/point_estimate.npz")["labels"]
+    """Parameters the earlier calibration.csv holds take its mean and sd as their prior; the
+    others keep their effect's declared prior; a parameter in another unit is refused."""
+    out, _ = tiny_run
+    est = PointEstimate.load(out / "baseline/point_estimate.npz")
     first = pd.read_csv(out / "baseline/calibration.csv")
-    priors = steps.priors_for(steps.load_maneuvers(npz[:1])[0].channels, cfg,
-                              {"sigma_cross_arcsec": 5, "sigma_about_arcsec": 20, "arw_deg_sqrt_h": 0.003})
-    assert len(channels) == 24
-    assert priors.mean[0] == pytest.approx(first["mean"][0] * PPM)
-    assert priors.sd[3] == pytest.approx(first["sd"][3] * ARCSEC_RAD)
+    earlier = first[first["channel"] != "dtg3_roll"]
+    earlier.to_csv(tmp_path / "earlier.csv", index=False)
+    priors = steps.model_priors(est, config["priors"], tmp_path / "earlier.csv")
+    spec = est.spec
+    for r in earlier.itertuples():
+        i = spec.index(f"{r.channel}.{r.parameter}")
+        assert priors.mean[i] == pytest.approx(r.mean * spec.si_per_unit[i], rel=1e-12)
+        assert priors.sd[i] == pytest.approx(r.sd * spec.si_per_unit[i], rel=1e-12)
+    own = [spec.index(f"dtg3_roll.{n}") for n in ("sf_pos", "sf_neg", "mis_pitch", "mis_yaw")]
+    assert np.all(priors.mean[own] == 0.0)
+    assert priors.sd[own] == pytest.approx([5000 * PPM, 5000 * PPM, 1000 / 206264.806, 1000 / 206264.806])
+    earlier.assign(unit="deg").to_csv(tmp_path / "wrong_unit.csv", index=False)
+    with pytest.raises(ValueError, match=r"dtg1_roll\.sf_pos is in deg, but this model declares it in ppm"):
+        steps.model_priors(est, config["priors"], tmp_path / "wrong_unit.csv")
 
 
 def test_wls_is_within_3_sd_of_the_truth_on_the_default_scenario(mom, mom_run):
-    out, npz = mom_run
-    channels = telemetry.read_meta(mom[0])["channels"]
-    est, _ = steps.load_point_estimate(out / "baseline/point_estimate.npz", channels)
-    truth = truth_vector(channels, mom[1]).to_vector()
+    out, _ = mom_run
+    est = PointEstimate.load(out / "baseline/point_estimate.npz")
+    truth = est.spec.core_vector(truth_vector(est.spec.channels, mom[1]))
     z = (est.theta - truth) / np.sqrt(np.diag(est.cov))
     assert np.all(np.abs(z) < 3), z
 
@@ -125,7 +139,7 @@ def test_wls_is_within_3_sd_of_the_truth_on_the_default_scenario(mom, mom_run):
 def test_posterior_95_intervals_cover_the_papers_values(mom, mom_run):
     """At least 22 of the 24 channel parameters inside their central 95 % interval."""
     out, _ = mom_run
-    table = calibration_with_truth(out, mom[1], telemetry.read_meta(mom[0])["channels"])
+    table = calibration_with_truth(out, mom[1])
     inside = (table["ci95_low"] <= table["truth"]) & (table["truth"] <= table["ci95_high"])
     assert inside.sum() >= 22, table[~inside]
     assert json.loads((out / "baseline/sampler.json").read_text())["converged"]
@@ -135,7 +149,7 @@ def test_classic_reproduces_the_papers_values_within_its_own_noise(mom, mom_run)
     """Its noise: the walk (ARW sqrt(T)) and the residual bias drift (0.01 deg/h T) over a
     maneuver of T = 1430 s, divided by the rotation (sf) or about 1 rad (misalignment)."""
     out, _ = mom_run
-    classic = pd.read_csv(out / "baseline/classic.csv")
+    classic = pd.read_csv(out / "classic.csv")
     truth = mom[1]["parameters"]
     sigma_arcsec = np.hypot(0.18 * np.sqrt(1430.0), 36.0 * 1430.0 / 3600.0)
     assert len(classic) == 24
@@ -149,10 +163,9 @@ def test_linearised_model_agrees_with_the_exact_one_to_1_percent_of_the_sd(mom, 
     moves the estimate by under 1 % of each posterior sd."""
     out, npz = mom_run
     maneuvers = steps.load_maneuvers(npz)
-    channels = maneuvers[0].channels
-    est, settings = steps.load_point_estimate(out / "baseline/point_estimate.npz", channels)
-    lins, noises = estimate.linearize_all(maneuvers, est, settings["boresight_body"])
-    var = estimate.variances(est.log_sigma)
+    est = PointEstimate.load(out / "baseline/point_estimate.npz", effects.LIBRARY)
+    lins, noises = estimate.linearize_all(maneuvers, est)
+    var = noise.variances(est.log_sigma)
     stats = campaign_stats(noises, var)
     cov = np.linalg.inv(stats.A)
     sd = np.sqrt(np.diag(cov))
@@ -161,9 +174,8 @@ def test_linearised_model_agrees_with_the_exact_one_to_1_percent_of_the_sd(mom, 
         shift = 3 * rng.standard_normal(len(sd)) * sd
         deltas = []
         for m, (data, lin) in enumerate(zip(maneuvers, lins)):
-            exact = estimate.errormodel.linearize(
-                data, ch.ChannelParams.from_vector(channels, est.theta + shift, est.biases[m])).z
+            exact = errormodel.linearize(data, est.spec, est.theta + shift, est.biases[m]).z
             linear = lin.z - np.einsum("msip,p->msi", lin.design, shift)
-            deltas.append(noise.build(dataclasses.replace(lin, z=exact - linear), settings["boresight_body"]))
+            deltas.append(noise.build(dataclasses.replace(lin, z=exact - linear), est.boresight))
         moved = cov @ campaign_stats(deltas, var).b
         assert np.all(np.abs(moved) < 0.01 * sd), np.max(np.abs(moved) / sd)

@@ -7,7 +7,7 @@ import pytest
 
 from gyrocal import channels as ch
 from gyrocal import cli, preprocess, telemetry
-from gyrocal.estimate import hold_windows
+from gyrocal.classic import hold_windows
 from gyrocal.units import AXIS_INDEX, arcsec_to_rad, arw_to_rad_sqrt_s, rad_to_arcsec
 
 from conftest import DATA, truth_vector

@@ -6,9 +6,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal import simulate, telemetry
+from gyrocal import simulate
 
-from conftest import DATA, config_with, run_campaign, truth_vector
+from conftest import DATA, config_with, run_campaign
 
 SEEDS = range(101, 113)
 
@@ -24,8 +24,7 @@ def test_posterior_intervals_are_calibrated_over_many_seeds(tmp_path, config):
         simulate.run(DATA / "tiny.yaml", sim, seed=seed)
         run_campaign(sim / "campaign", tmp_path / f"out{seed}", cfg)
         table = pd.read_csv(tmp_path / f"out{seed}" / "baseline" / "calibration.csv")
-        truth = truth_vector(telemetry.read_meta(sim / "campaign")["channels"],
-                             json.loads((sim / "truth.json").read_text())).to_contract()
+        truth = json.loads((sim / "truth.json").read_text())["parameters"]
         values = np.array([truth[r.channel][r.parameter] for r in table.itertuples()])
         covered += list((table["ci95_low"] <= values) & (values <= table["ci95_high"]))
         z += list((table["mean"] - values) / table["sd"])

@@ -42,9 +42,15 @@ def test_write_read_round_trip_is_exact(tiny, tmp_path):
 
 def test_validate_cli_prints_a_summary(tiny, capsys):
     assert cli.main(["validate", str(tiny[0])]) == 0
-    out = capsys.readouterr().out
-    assert "campaign tiny: OK" in out and "6 maneuvers" not in out
-    assert "maneuvers  6" in out and "5 Hz" in out and "1 Hz" in out
+    lines = capsys.readouterr().out.splitlines()
+    campaign = telemetry.read_campaign(tiny[0])
+    invalid = int((campaign.st_valid == 0).sum())
+    assert lines[0] == "campaign tiny: OK"
+    assert lines[1] == "  channels   " + ", ".join(campaign.channel_names)
+    assert lines[3].startswith(f"  gyro       {len(campaign.gyro_time)} rows at 5 Hz")
+    assert lines[4].startswith(f"  star trk   {len(campaign.st_time)} rows at 1 Hz, {invalid} flagged invalid")
+    assert lines[6] == "  maneuvers  6"
+    assert [line.split()[0] for line in lines[7:]] == [m.id for m in campaign.maneuvers]
 
 
 def test_invalid_star_tracker_rows_are_counted_not_refused(tiny):
@@ -103,9 +109,17 @@ def test_unknown_in_loop_channel_is_refused(campaign_copy):
     expect(campaign_copy, r"maneuvers\[0\] \(yaw_pos\)\.in_loop: unknown channel 'dtg9_yaw'")
 
 
-def test_bad_valid_flag_and_bad_direction_are_named(campaign_copy):
+def test_a_valid_flag_other_than_0_or_1_names_the_line(campaign_copy):
+    def poke(f):
+        f.loc[30, "valid"] = 2
+        return f
+    edit_csv(campaign_copy / "star_tracker.csv", poke)
+    expect(campaign_copy, r"star_tracker\.csv: line 32, column 'valid': must be 0 or 1")
+
+
+def test_a_bad_direction_names_the_maneuver(campaign_copy):
     edit_yaml(campaign_copy / "campaign.yaml", lambda m: m["maneuvers"][1].update(direction="up"))
-    expect(campaign_copy, r"maneuvers\[1\] \(yaw_neg\)\.direction")
+    expect(campaign_copy, r"campaign\.yaml: maneuvers\[1\] \(yaw_neg\)\.direction: must be \"\+\" or \"-\", got 'up'")
 
 
 def test_non_numeric_cell_is_named(campaign_copy):

@@ -6,32 +6,67 @@ import subprocess
 import sys
 
 import pandas as pd
+import pytest
 
 from conftest import ROOT
 
 SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile")]
 
 
-def test_lint_is_clean():
-    run = subprocess.run(SNAKEMAKE + ["--lint"], cwd=ROOT, capture_output=True, text=True)
-    assert run.returncode == 0, run.stdout + run.stderr
-    assert "Congratulations, your workflow is in a good condition!" in run.stdout + run.stderr
-
-
-def test_user_campaign_runs_with_no_code_edit(tiny, tmp_path):
-    run = subprocess.run(SNAKEMAKE + ["--cores", "2", "-d", str(tmp_path), "--config", f"telemetry={tiny[0]}"],
-                         capture_output=True, text=True)
+@pytest.fixture(scope="module")
+def workflow_run(tiny, tmp_path_factory):
+    """The whole workflow through Snakemake on the tiny campaign, as a user runs it."""
+    work = tmp_path_factory.mktemp("workflow")
+    run = subprocess.run(SNAKEMAKE + ["--cores", "2", "-d", str(work), "--config", f"telemetry={tiny[0]}"],
+                         capture_output=True, text=True, check=False)
     assert run.returncode == 0, run.stderr[-3000:]
-    results = tmp_path / "results" / "tiny" / "baseline"
-    table = pd.read_csv(results / "calibration.csv")
+    return work
+
+
+def test_user_campaign_runs_with_no_code_edit(workflow_run):
+    results = workflow_run / "results" / "tiny"
+    table = pd.read_csv(results / "baseline" / "calibration.csv")
     assert len(table) == 24
-    assert json.loads((results / "correction.json").read_text())["sets"]
-    assert not any("WARNING" in p.read_text() for p in (tmp_path / "logs").rglob("*.log"))
+    assert json.loads((results / "baseline" / "correction.json").read_text())["sets"]
+    classic = pd.read_csv(results / "classic.csv")
+    assert len(classic) == 24 and not (results / "baseline" / "classic.csv").exists()
+    assert not any("WARNING" in p.read_text() for p in (workflow_run / "logs").rglob("*.log"))
+
+
+def dry_run_with(tiny, work, tmp_path, override: str):
+    """What ``snakemake -n`` would run after a finished run, with a config file overriding some
+    settings: the jobs by rule (from its ``Job stats`` table) and all it said."""
+    config = tmp_path / "override.yaml"
+    config.write_text(override)
+    run = subprocess.run(SNAKEMAKE + ["-n", "-d", str(work), "--configfile", str(config),
+                                      "--config", f"telemetry={tiny[0]}"], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr[-3000:]
+    said = run.stdout + run.stderr
+    if "Job stats:" not in said:
+        return {}, said
+    rows = [line.split() for line in said[said.index("Job stats:"):].splitlines()[3:] if line.strip()]
+    return {r[0]: int(r[1]) for r in rows if len(r) == 2 and r[0] != "total" and r[1].isdigit()}, said
+
+
+def test_a_report_threshold_change_reruns_the_report_and_nothing_upstream(tiny, workflow_run, tmp_path):
+    jobs, said = dry_run_with(tiny, workflow_run, tmp_path, "report:\n  max_ci_width_ppm: 150\n")
+    assert jobs == {"report": 1, "all": 1}, said[-3000:]
+    assert "Params have changed since last execution" in said
+
+
+def test_a_sampler_setting_change_reruns_the_posterior_but_not_the_point_estimate(tiny, workflow_run, tmp_path):
+    jobs, said = dry_run_with(tiny, workflow_run, tmp_path, "sampler:\n  chunk_steps: 150\n")
+    assert jobs.get("posterior") == 1 and "point_estimate" not in jobs and "classic" not in jobs, said[-3000:]
+
+
+def test_an_unchanged_config_schedules_nothing(tiny, workflow_run, tmp_path):
+    jobs, said = dry_run_with(tiny, workflow_run, tmp_path, "seed: 1\n")
+    assert jobs == {}, said[-3000:]
 
 
 def test_bad_config_value_is_refused_with_a_clear_message(tmp_path):
     run = subprocess.run(SNAKEMAKE + ["--cores", "1", "-n", "-d", str(tmp_path), "--config", "seed=-3"],
-                         capture_output=True, text=True)
+                         capture_output=True, text=True, check=False)
     assert run.returncode != 0
     said = run.stdout + run.stderr
     assert "-3 is less than the minimum of 0" in said and "['seed']" in said
@@ -42,7 +77,7 @@ def test_bad_telemetry_is_refused_naming_the_file(tiny, tmp_path):
     shutil.copytree(tiny[0], broken)
     (broken / "campaign.yaml").write_text((broken / "campaign.yaml").read_text().replace("direction: +", "direction: up"))
     run = subprocess.run(SNAKEMAKE + ["--cores", "1", "-n", "-d", str(tmp_path), "--config", f"telemetry={broken}"],
-                         capture_output=True, text=True)
+                         capture_output=True, text=True, check=False)
     assert run.returncode != 0
     said = run.stdout + run.stderr
     assert "campaign.yaml: maneuvers[0] (yaw_pos).direction" in said

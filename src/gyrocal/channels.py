@@ -1,4 +1,4 @@
-"""The gyro channel model of interface.md section 2 (the paper's eq. 3, per channel).
+"""The gyro channel model of docs/interface.md section 2 (the paper's eq. 3, per channel).
 
 For channel c with input axis a::
 
@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .units import AXES, AXIS_INDEX, PAPER_AXIS_NUMBER, PPM, arcsec_to_rad, rad_to_arcsec
+from .units import AXES, AXIS_INDEX
 
 
 @dataclass(frozen=True)
@@ -37,11 +37,6 @@ class Channel:
         """The two axes a channel can be misaligned toward, in body-axis order."""
         return tuple(a for a in AXES if a != self.axis)
 
-    @property
-    def parameter_names(self) -> tuple:
-        """The contract's parameter names for this channel, in vector order."""
-        return ("sf_pos", "sf_neg") + tuple(f"mis_{b}" for b in self.other_axes)
-
 
 MOM_CHANNELS = (
     Channel("dtg1_roll", 1, "roll"),
@@ -53,23 +48,9 @@ MOM_CHANNELS = (
 )
 """The Mars Orbiter Mission arrangement: DTG1 roll+pitch, DTG2 yaw+pitch, DTG3 yaw+roll."""
 
-N_PARAMS_PER_CHANNEL = 4
-PARAMETER_UNITS = {"sf_pos": "ppm", "sf_neg": "ppm", "mis_roll": "arcsec",
-                   "mis_pitch": "arcsec", "mis_yaw": "arcsec"}
-
-
-def paper_name(channel: Channel, parameter: str) -> str:
-    """The paper's name of a contract parameter: ``mc12`` is the yaw channel toward roll."""
-    if parameter.startswith("mis_"):
-        toward = parameter[4:]
-        return f"mc{PAPER_AXIS_NUMBER[channel.axis]}{PAPER_AXIS_NUMBER[toward]}"
-    sign = "positive" if parameter == "sf_pos" else "negative"
-    return f"{sign} {channel.axis} scale factor"
-
-
-def parameter_labels(channels) -> list:
-    """``channel.parameter`` labels in the order of `ChannelParams.to_vector`."""
-    return [f"{c.name}.{p}" for c in channels for p in c.parameter_names]
+SYMBOLS = {"sf_pos": ("sf_pos", None), "sf_neg": ("sf_neg", None),
+           **{f"mis_{b}": ("mis_rad", i) for i, b in enumerate(AXES)}}
+"""Eq. 3's terms by their contract names: ``mis_<b>`` is the misalignment toward axis b."""
 
 
 @dataclass
@@ -98,21 +79,19 @@ class ChannelParams:
         n = len(channels)
         return cls(channels, np.zeros(n), np.zeros(n), np.zeros((n, 3)), np.zeros(n))
 
-    def to_vector(self) -> np.ndarray:
-        """Flat SI vector: per channel ``[sf_pos, sf_neg, mis_b1, mis_b2]`` (bias excluded)."""
-        rows = []
-        for i, c in enumerate(self.channels):
-            others = [AXIS_INDEX[b] for b in c.other_axes]
-            rows.append([self.sf_pos[i], self.sf_neg[i], *self.mis_rad[i, others]])
-        return np.asarray(rows, dtype=float).ravel()
+    def get(self, i: int, name: str) -> float:
+        """Channel i's term ``name`` (a `SYMBOLS` key), SI."""
+        field_name, column = SYMBOLS[name]
+        values = getattr(self, field_name)
+        return float(values[i] if column is None else values[i, column])
 
-    @classmethod
-    def from_vector(cls, channels, theta, bias_rad_s=None):
-        theta = np.asarray(theta, dtype=float).reshape(len(channels), N_PARAMS_PER_CHANNEL)
-        mis = np.zeros((len(channels), 3))
-        for i, c in enumerate(channels):
-            mis[i, [AXIS_INDEX[b] for b in c.other_axes]] = theta[i, 2:]
-        return cls(channels, theta[:, 0], theta[:, 1], mis, bias_rad_s)
+    def set(self, i: int, name: str, value: float):
+        field_name, column = SYMBOLS[name]
+        values = getattr(self, field_name)
+        if column is None:
+            values[i] = value
+        else:
+            values[i, column] = value
 
     def subset(self, names):
         """The parameters of the named channels, in the given order."""
@@ -120,31 +99,6 @@ class ChannelParams:
         idx = [index[n] for n in names]
         return ChannelParams(tuple(self.channels[i] for i in idx), self.sf_pos[idx],
                              self.sf_neg[idx], self.mis_rad[idx], self.bias_rad_s[idx])
-
-    def to_contract(self) -> dict:
-        """``{channel: {parameter: value}}`` in the contract's units (ppm, arcsec)."""
-        out = {}
-        for i, c in enumerate(self.channels):
-            entry = {"sf_pos": self.sf_pos[i] / PPM, "sf_neg": self.sf_neg[i] / PPM}
-            for b in c.other_axes:
-                entry[f"mis_{b}"] = float(rad_to_arcsec(self.mis_rad[i, AXIS_INDEX[b]]))
-            entry["bias_deg_h"] = float(np.rad2deg(self.bias_rad_s[i]) * 3600.0)
-            out[c.name] = {k: round(float(v), 9) for k, v in entry.items()}
-        return out
-
-    @classmethod
-    def from_contract(cls, channels, values: dict):
-        """Inverse of `to_contract`; missing entries are zero."""
-        n = len(channels)
-        sf_pos, sf_neg, mis, bias = np.zeros(n), np.zeros(n), np.zeros((n, 3)), np.zeros(n)
-        for i, c in enumerate(channels):
-            entry = values.get(c.name, {})
-            sf_pos[i] = entry.get("sf_pos", 0.0) * PPM
-            sf_neg[i] = entry.get("sf_neg", 0.0) * PPM
-            for b in c.other_axes:
-                mis[i, AXIS_INDEX[b]] = arcsec_to_rad(entry.get(f"mis_{b}", 0.0))
-            bias[i] = np.deg2rad(entry.get("bias_deg_h", 0.0)) / 3600.0
-        return cls(channels, sf_pos, sf_neg, mis, bias)
 
 
 def input_axes(channels) -> np.ndarray:

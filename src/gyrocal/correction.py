@@ -9,7 +9,7 @@ with bias-free channel rates ``w`` (rad/s), the corrected body rate is
 set's channel i toward axis b) and ``k_i = 1 / (1 + sf_i)``, with ``sf_pos`` when
 ``w_i > 0`` and ``sf_neg`` when ``w_i < 0``. ``matrix_pos`` and ``matrix_neg`` are
 ``M diag(k)`` with every channel on its positive or negative branch: the exact
-inverse of the channel model (interface.md section 2) for a single-axis rotation.
+inverse of the channel model (docs/interface.md section 2) for a single-axis rotation.
 """
 
 import numpy as np
@@ -56,3 +56,11 @@ def correction_file(params: ch.ChannelParams, sets, in_loop_sets, source: str) -
         entry["in_loop"] = tuple(channel_set) in {tuple(s) for s in in_loop_sets}
         entries.append(entry)
     return {"convention": CONVENTION, "estimate": source, "sets": entries}
+
+
+def campaign_correction(params: ch.ChannelParams, maneuvers, source: str) -> dict:
+    """`correction_file` for every channel set the campaign's maneuvers use; a set is in
+    the loop where some maneuver flew with it selected onboard."""
+    in_loop = {tuple(d.sets[0]) for d in maneuvers}
+    sets = list(dict.fromkeys(tuple(s) for d in maneuvers for s in d.sets))
+    return correction_file(params, sets, in_loop, source)

@@ -2,7 +2,7 @@
 
 Three checks of the residuals against the noise model (their level, their whiteness,
 their structure) and a ranking of what could explain a misfit: each library effect the
-model lacks and each residual signature (interface.md section 5), scored by a
+model lacks and each residual signature (docs/interface.md section 5), scored by a
 Lagrange-multiplier (score) test at the fitted model, which needs no refit: the drop in
 the weighted residual sum of squares that adding its columns would buy, with the
 model's own parameters and the nuisance re-fitted. Its ``score`` is one minus the
@@ -10,15 +10,15 @@ test's p-value: near 1 for structure the noise cannot explain.
 """
 
 import numpy as np
+import pandas as pd
 from scipy import stats as sps
 
 from . import effects, errormodel, noise
-from .estimate import PointEstimate, variances
+from .estimate import PointEstimate, linearize_all
 from .likelihood import campaign_stats
+from .noise import NOISE_SCALES, variances
 from .predictive import WhitenedManeuver
-from .units import arcsec_to_rad, arw_to_rad_sqrt_s, rad_to_arcsec
-
-SIGNATURES = ("time", "rate", "rate_squared", "rate_sign", "cross_rate", "acceleration")
+from .units import AXES, rad_to_arcsec
 
 
 class Signature(effects.Effect):
@@ -40,17 +40,18 @@ def _own(m, values):
 
 
 def signature_effects(extra_columns) -> list:
-    """The signatures of section 5, plus one per extra ``gyro.csv`` column."""
+    """The signatures of docs/interface.md section 5, plus one per extra ``gyro.csv`` column.
+
+    ``time`` and ``rate_squared`` are the columns of the library's ``bias_drift`` and
+    ``sf_nonlinearity``: they are ranked once, under the effect (see `rank`).
+    """
     def cross(m):
         rate = m.body_rate
         own = _own(m, rate)
         return {"k": own * (rate.sum(axis=1, keepdims=True) - own) * m.dt[:, None]}
 
     out = [
-        Signature("time", lambda m: {"k": np.repeat(((m.t_mid - m.t_center) * m.dt)[:, None], len(m.channels), 1)},
-                  "a bias that ramps in time"),
         Signature("rate", lambda m: {"k": m.increments}, "an error proportional to the rate"),
-        Signature("rate_squared", lambda m: {"k": m.rate**2 * m.increments}, "a scale factor growing with rate^2"),
         Signature("rate_sign", lambda m: {"k": np.sign(m.rate) * m.moving * m.dt[:, None]},
                   "a bias that flips with the direction of rotation"),
         Signature("cross_rate", cross, "own rate times the other axes' rates (anisoinertia)"),
@@ -68,22 +69,22 @@ def signature_effects(extra_columns) -> list:
 def _applies(effect, data) -> bool:
     """Whether an effect can be evaluated on this campaign (a plugin may need columns it lacks)."""
     try:
-        errormodel.effect_regressors(data, effects.extra_parameters([effect], data.channels))
+        errormodel.effect_derivatives(effect, errormodel.view(data))
         return True
     except ValueError:
         return False
 
 
-def _augmented(maneuvers, estimate: PointEstimate, boresight, candidates, var):
-    """Sufficient statistics of the fitted model's parameters followed by the candidates'
-    columns, all global, with each maneuver's nuisance integrated out."""
-    extras = list(estimate.extras) + candidates
-    values = np.concatenate([estimate.theta[estimate.n_base:], np.zeros(len(candidates))])
+def _augmented(maneuvers, estimate: PointEstimate, candidates, var):
+    """Sufficient statistics of the fitted model's parameters followed by the candidate
+    effects' columns, all global, with each maneuver's nuisance integrated out."""
+    spec = estimate.spec.augmented(candidates)
+    theta = np.concatenate([estimate.theta, np.zeros(len(spec) - len(estimate.spec))])
     out = []
     for m, data in enumerate(maneuvers):
-        lin = errormodel.linearize(data, estimate.params(m), extras, values)
-        out.append(noise.build(lin, boresight, estimate.correlation_time_s))
-    return campaign_stats(out, var)
+        lin = errormodel.linearize(data, spec, theta, estimate.biases[m])
+        out.append(noise.build(lin, estimate.boresight, estimate.correlation_time_s))
+    return spec, campaign_stats(out, var)
 
 
 COLLINEAR_FRACTION = 1e-3
@@ -92,7 +93,7 @@ model's own columns is not tested: there the statistic would measure second-orde
 error amplified a thousandfold, not structure."""
 
 
-def _conditional_drop(stats, base, cand) -> float:
+def conditional_drop(stats, base, cand) -> float:
     """Drop in the weighted residual sum of squares from adding columns ``cand`` to the
     columns ``base`` (Schur complement), in directions ``base`` does not already span."""
     base, cand = np.asarray(base, dtype=int), np.asarray(cand, dtype=int)
@@ -110,7 +111,7 @@ def _conditional_drop(stats, base, cand) -> float:
 
 def _chi2_drop(stats, n_model, idx) -> float:
     """Score statistic of candidate columns ``idx`` given the model's own parameters."""
-    return _conditional_drop(stats, np.arange(n_model), n_model + np.asarray(idx))
+    return conditional_drop(stats, np.arange(n_model), n_model + np.asarray(idx))
 
 
 ENCOMPASS_TOP = 5
@@ -124,7 +125,7 @@ def _encompass(ranking, groups, stats, n_model):
     addition the others explain least: for each leader, the most significant of the
     other leaders given it (``leftover_log10_p``), highest first.
     """
-    columns = {effect.name: idx for _, effect, idx, _ in groups}
+    columns = {effect.name: idx for _, effect, idx in groups}
     leaders = [r for r in ranking[:ENCOMPASS_TOP] if r["log10_p"] < -2 and r["name"] in columns]
     if len(leaders) < 2:
         return
@@ -134,7 +135,7 @@ def _encompass(ranking, groups, stats, n_model):
         for other in leaders:
             if other is r:
                 continue
-            drop = _conditional_drop(stats, base, [n_model + i for i in columns[other["name"]]])
+            drop = conditional_drop(stats, base, [n_model + i for i in columns[other["name"]]])
             worst = min(worst, float(sps.chi2.logsf(drop, len(columns[other["name"]]))) / np.log(10))
         r["leftover_log10_p"] = round(worst, 2)
     positions = sorted(ranking.index(r) for r in leaders)
@@ -142,45 +143,43 @@ def _encompass(ranking, groups, stats, n_model):
         ranking[position] = r
 
 
-def rank(maneuvers, estimate: PointEstimate, boresight, model_effects, extra_columns, plugin_effects=(),
-         white=None):
+def _entry(name, kind, drop, df, description, signature=""):
+    log_p = float(sps.chi2.logsf(drop, df))
+    entry = {"name": name, "kind": kind, "score": round(-float(np.expm1(log_p)), 4), "chi2_drop": round(drop, 2),
+             "df": df, "log10_p": round(log_p / np.log(10), 2), "description": description}
+    return {**entry, "signature": signature} if signature else entry
+
+
+def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), white=None):
     """Score every library effect the model lacks and every residual signature.
 
-    A noise-model effect (correlated star-tracker noise) is scored by the score test of
-    an autocorrelation coefficient, ``n rho^2`` on one degree of freedom, from ``white``.
-    Returns a list of dicts (best first) and, per signature, the per-channel breakdown.
+    A library effect whose columns are a signature's (``bias_drift`` and ``time``) is
+    scored once, under its name, with the signature beside it. A noise-model effect
+    (correlated star-tracker noise) is scored by the score test of an autocorrelation
+    coefficient, ``n rho^2`` on one degree of freedom, from ``white``.
+    Returns a list of dicts (best first) and, per candidate with per-channel columns,
+    its statistic channel by channel.
     """
     var = variances(estimate.log_sigma)
-    present = {e.name for e in model_effects}
+    present = set(estimate.spec.effect_names)
     library = [e for e in list(effects.LIBRARY.values()) + list(plugin_effects)
                if e.name not in present and not e.core and not e.noise and _applies(e, maneuvers[0])]
-    signatures = signature_effects(extra_columns)
-    channels = maneuvers[0].channels
-    groups, candidates = [], []
-    for kind, items in (("effect", library), ("signature", signatures)):
-        for effect in items:
-            params = effects.extra_parameters([effect], channels)
-            groups.append((kind, effect, list(range(len(candidates), len(candidates) + len(params))), params))
-            candidates += params
-    stats = _augmented(maneuvers, estimate, boresight, candidates, var)
-    n_model = len(estimate.theta)
+    candidates = [("effect", e) for e in library] + [("signature", e) for e in signature_effects(extra_columns)]
+    spec, stats = _augmented(maneuvers, estimate, [e for _, e in candidates], var)
+    n_model = len(estimate.spec)
+    extras = spec.parameters[n_model:]
+    groups = [(kind, e, [i for i, p in enumerate(extras) if p.effect == e.name]) for kind, e in candidates]
     ranking, detail = [], {}
-    for kind, effect, idx, params in groups:
+    for kind, effect, idx in groups:
         drop = _chi2_drop(stats, n_model, idx)
-        df = len(idx)
-        log_p = float(sps.chi2.logsf(drop, df))
-        ranking.append({"name": effect.name, "kind": kind, "score": round(-float(np.expm1(log_p)), 4),
-                        "chi2_drop": round(drop, 2), "df": df, "log10_p": round(log_p / np.log(10), 2),
-                        "description": effect.description})
-        if kind == "signature":
-            detail[effect.name] = {p.label: round(_chi2_drop(stats, n_model, [i]), 2) for i, p in zip(idx, params)}
-    if white is not None and not any(e.noise for e in model_effects):
+        ranking.append(_entry(effect.name, kind, drop, len(idx), effect.description, effect.signature))
+        per_channel = [i for i in idx if extras[i].channel is not None]
+        if per_channel:
+            detail[effect.name] = {extras[i].label: round(_chi2_drop(stats, n_model, [i]), 2)
+                                                       for i in per_channel}
+    if white is not None and not estimate.spec.correlated_noise:
         for effect in (e for e in effects.LIBRARY.values() if e.noise):
-            drop = white["z"] ** 2
-            log_p = float(sps.chi2.logsf(drop, 1))
-            ranking.append({"name": effect.name, "kind": "effect", "score": round(-float(np.expm1(log_p)), 4),
-                            "chi2_drop": round(drop, 2), "df": 1, "log10_p": round(log_p / np.log(10), 2),
-                            "description": effect.description})
+            ranking.append(_entry(effect.name, "effect", white["z"] ** 2, 1, effect.description))
     ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
     _encompass(ranking, groups, stats, n_model)
     return ranking, detail
@@ -208,30 +207,27 @@ def whiteness(maneuvers, lins, noises, estimate: PointEstimate):
     return {"lag1": round(rho, 4), "z": round(rho * np.sqrt(n), 2), "per_maneuver": per}
 
 
-def noise_rms_arcsec(maneuvers, settings) -> float:
+def noise_rms_arcsec(maneuvers, stated_noise) -> float:
     """What the stated noise alone predicts for the residual RMS per axis: the star
     tracker's variance averaged over the axes, plus the walk left after the initial
     attitude and bias are fitted (detrended Brownian motion: q T / 15)."""
-    b = np.asarray(settings["boresight_body"], dtype=float)
+    b = np.asarray(stated_noise["boresight_body"], dtype=float)
     b = b / np.linalg.norm(b)
-    cross, about = arcsec_to_rad(settings["sigma_cross_arcsec"]), arcsec_to_rad(settings["sigma_about_arcsec"])
+    cross, about, arw = noise.stated_si(stated_noise)
     st_var = (2 * cross**2 + about**2) / 3
-    q = arw_to_rad_sqrt_s(settings["arw_deg_sqrt_h"]) ** 2
     durations = np.array([d.st_time[-1] - d.gyro_time[0] for d in maneuvers])
-    return float(rad_to_arcsec(np.sqrt(st_var + q * np.mean(durations) / 15)))
+    return float(rad_to_arcsec(np.sqrt(st_var + arw**2 * np.mean(durations) / 15)))
 
 
-def misfit_checks(residual_rms, noise_rms, white, ranking, noise_posterior, settings, cfg) -> list:
+def misfit_checks(residual_rms, noise_rms, white, ranking, noise_posterior, stated_noise, cfg) -> list:
     """Each check: name, passed, and a sentence a reviewer can act on."""
     checks = []
     ratio = residual_rms / noise_rms
     checks.append({"check": "level", "passed": bool(ratio <= cfg["rms_ratio_max"]),
                    "why": f"residual RMS {residual_rms:.2f} arcsec is {ratio:.2f} times what the stated noise "
                           f"predicts ({noise_rms:.2f}); limit {cfg['rms_ratio_max']}"})
-    for name, stated in (("sigma_cross_arcsec", settings["sigma_cross_arcsec"]),
-                         ("sigma_about_arcsec", settings["sigma_about_arcsec"]),
-                         ("arw_deg_sqrt_h", settings["arw_deg_sqrt_h"])):
-        fitted = noise_posterior[name]
+    for name in (s.key for s in NOISE_SCALES):
+        fitted, stated = noise_posterior[name], stated_noise[name]
         r = fitted / stated
         ok = 1 / cfg["noise_ratio_max"] <= r <= cfg["noise_ratio_max"]
         checks.append({"check": f"noise:{name}", "passed": bool(ok),
@@ -246,3 +242,42 @@ def misfit_checks(residual_rms, noise_rms, white, ranking, noise_posterior, sett
                           f"{worst['df']} degrees of freedom (log10 p = {worst['log10_p']:.1f}; "
                           f"limit {cfg['structure_log10_p_min']})"})
     return checks
+
+
+def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.DataFrame, thresholds: dict,
+             plugin_effects=()) -> dict:
+    """``diagnostics.json`` (docs/interface.md section 5): the misfit checks of the fitted
+    model, the ranking of what could explain a misfit, and what they rest on.
+
+    ``fit`` is the posterior step's per-sample fit table, ``summary`` its posterior
+    summary indexed by label; ``thresholds`` the config's ``diagnostics`` section.
+    """
+    lins, noises = linearize_all(maneuvers, estimate)
+    residuals = fit[[f"residual_{a}" for a in AXES]].to_numpy()
+    residual_rms = float(np.sqrt(np.mean(residuals**2)))
+    noise_rms = noise_rms_arcsec(maneuvers, estimate.stated_noise)
+    white = whiteness(maneuvers, lins, noises, estimate)
+    ranking, detail = rank(maneuvers, estimate, list(maneuvers[0].extras), plugin_effects, white)
+    keys = [s.key for s in NOISE_SCALES]
+    noise_post = {k: float(summary.loc[f"noise.{k}", "mean"]) for k in keys}
+    checks = misfit_checks(residual_rms, noise_rms, white, ranking, noise_post, estimate.stated_noise, thresholds)
+    per_maneuver = {}
+    for (m, s), group in fit.groupby(["maneuver", "set"], sort=False):
+        per_maneuver.setdefault(m, {})[f"set{s}"] = {
+            a: round(float(np.sqrt(np.mean(group[f"residual_{a}"] ** 2))), 3) for a in AXES}
+    return {
+        "model": estimate.spec.model,
+        "effects": list(estimate.spec.effect_names),
+        "residual_rms_arcsec": round(residual_rms, 4),
+        "noise_rms_arcsec": round(noise_rms, 4),
+        "misfit": not all(c["passed"] for c in checks),
+        "ranking": ranking,
+        "checks": checks,
+        "whiteness": white,
+        "noise_posterior": noise_post,
+        "noise_stated": {k: estimate.stated_noise[k] for k in keys},
+        "st_correlation_time_s": estimate.correlation_time_s,
+        "residual_rms_per_maneuver_arcsec": per_maneuver,
+        "signature_detail_chi2": detail,
+        "unexplained_fraction": round(float(fit[[f"outside_{a}" for a in AXES]].to_numpy().mean()), 4),
+    }

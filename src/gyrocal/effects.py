@@ -1,6 +1,6 @@
 """The effect library: the physical terms a model is built from.
 
-A model is a named list of effects (interface.md section 6). Each effect says which
+A model is a named list of effects (docs/interface.md section 6). Each effect says which
 parameters it adds and how it changes what the gyro channels put out or what the
 star tracker measures; gyrocal turns that into columns of the linear error model, so
 an effect costs no code anywhere else. The baseline's own terms (`scale_factor`,
@@ -34,9 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .units import AXES, PPM, arcsec_to_rad
-
-DEG_H = np.deg2rad(1.0) / 3600.0
+from .preprocess import MOVING_RATE_FRACTION
+from .units import AXES, DEG_H_RAD_S, PPM, arcsec_to_rad
 
 
 @dataclass(frozen=True)
@@ -47,7 +46,7 @@ class Parameter:
     unit: str
     si_per_unit: float
     prior_sd: float
-    """Prior standard deviation in ``unit`` (a zero-mean normal prior)."""
+    """Prior standard deviation in ``unit`` (a normal prior, zero mean unless configured)."""
     bound: float = np.inf
     """Physical bound on ``|value|`` in ``unit``."""
     per_channel: bool = True
@@ -65,6 +64,12 @@ class Effect:
     """Baseline terms whose columns come from the exact channel model."""
     noise = False
     """A noise-model effect: it changes the covariance, not the mean."""
+    signature = ""
+    """The residual signature whose columns are this effect's own (ranked once, under the effect)."""
+
+    def channel_parameters(self, channel) -> tuple:
+        """The per-channel parameters a channel carries (all of them, unless an effect says otherwise)."""
+        return tuple(p for p in self.parameters if p.per_channel)
 
     def gyro(self, m) -> dict:
         return {}
@@ -89,9 +94,9 @@ class ManeuverView:
         self.increments = data.increments
         self.rate = data.increments / data.dt[:, None]
         """(K, n_channels) each channel's rate (rad/s)."""
-        self.moving = np.abs(self.rate) > 0.05 * np.abs(self.rate).max()
-        """(K, n_channels) where a channel turns at over 5 % of the maneuver's peak rate:
-        there the sign of its rate is the rotation's, not the gyro noise's."""
+        self.moving = np.abs(self.rate) > MOVING_RATE_FRACTION * np.abs(self.rate).max()
+        """(K, n_channels) where a channel turns faster than `MOVING_RATE_FRACTION` of the
+        maneuver's peak rate: there the sign of its rate is the rotation's, not the noise's."""
         self.body_rate = body_rate_rad_s
         """(K, 3) body rate from the in-loop set (rad/s)."""
         self.acceleration = np.gradient(body_rate_rad_s, self.t_mid, axis=0)
@@ -115,6 +120,10 @@ class Misalignment(Effect):
     parameters = tuple(Parameter(f"mis_{a}", "arcsec", arcsec_to_rad(1.0), 1000.0, 3600.0) for a in AXES)
     core = True
 
+    def channel_parameters(self, channel) -> tuple:
+        """Only toward the other two axes: a channel is not misaligned toward its own."""
+        return tuple(p for p in self.parameters if p.name != f"mis_{channel.axis}")
+
 
 class Bias(Effect):
     name = "bias"
@@ -125,7 +134,8 @@ class Bias(Effect):
 class BiasDrift(Effect):
     name = "bias_drift"
     description = "the residual bias ramps linearly in time within a maneuver"
-    parameters = (Parameter("bias_drift", "deg/h/h", DEG_H / 3600.0, 0.5, 100.0),)
+    parameters = (Parameter("bias_drift", "deg/h/h", DEG_H_RAD_S / 3600.0, 0.5, 100.0),)
+    signature = "time"
 
     def gyro(self, m):
         return {"bias_drift": np.repeat(((m.t_mid - m.t_center) * m.dt)[:, None], len(m.channels), axis=1)}
@@ -135,6 +145,7 @@ class SfNonlinearity(Effect):
     name = "sf_nonlinearity"
     description = "the scale factor grows with the square of the channel's rate"
     parameters = (Parameter("sf_quadratic", "ppm/(deg/s)^2", PPM / np.deg2rad(1.0) ** 2, 5000.0, 1e6),)
+    signature = "rate_squared"
 
     def gyro(self, m):
         return {"sf_quadratic": m.rate**2 * m.increments}
@@ -195,6 +206,9 @@ def check_effect(effect, where):
         raise PluginError(f"plugin {where}: {type(effect).__name__}.name must be an identifier, got {effect.name!r}")
     if effect.name in LIBRARY:
         raise PluginError(f"plugin {where}: effect name {effect.name!r} is taken by the library")
+    if effect.core or effect.noise:
+        raise PluginError(f"plugin {where}: {effect.name}: 'core' and 'noise' are reserved for the library's "
+                          "channel model and noise model")
     if not effect.parameters:
         raise PluginError(f"plugin {where}: {effect.name}.parameters is empty; declare at least one Parameter")
     for p in effect.parameters:
@@ -216,28 +230,3 @@ def resolve(model_name: str, names, plugins: dict) -> list:
     if missing:
         raise ValueError(f"model {model_name}: every model builds on the paper's baseline; add {missing}")
     return [known[n] for n in names]
-
-
-@dataclass(frozen=True)
-class ExtraParameter:
-    """One column of the model beyond the baseline's 24."""
-
-    label: str
-    effect: Effect
-    parameter: Parameter
-    channel: int = None
-    """Index of the channel a per-channel copy belongs to."""
-
-
-def extra_parameters(effects, channels) -> list:
-    """The parameters the non-core effects add, in column order."""
-    out = []
-    for effect in effects:
-        if effect.core or effect.noise:
-            continue
-        for p in effect.parameters:
-            if p.per_channel:
-                out += [ExtraParameter(f"{c.name}.{p.name}", effect, p, i) for i, c in enumerate(channels)]
-            else:
-                out.append(ExtraParameter(f"{effect.name}.{p.name}", effect, p))
-    return out

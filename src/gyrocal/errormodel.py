@@ -20,6 +20,7 @@ from . import channels as ch
 from . import kinematics
 from .effects import ManeuverView
 from .preprocess import ManeuverData
+from .spec import ModelSpec
 
 
 @dataclass
@@ -44,105 +45,114 @@ class Linearization:
     """(M, S, 3) the same error in body axes (rad), for plots and diagnostics."""
 
 
-def effect_regressors(data: ManeuverData, extras):
-    """What the extra effects change, per unit parameter (SI), at nominal parameters.
+def view(data: ManeuverData) -> ManeuverView:
+    """What an effect sees of a maneuver: its data at nominal parameters, body rate from the
+    in-loop set."""
+    zeros = ch.ChannelParams.zeros(data.channels)
+    first = data.sets[0]
+    body = ch.solve_body(data.set_increments(first), zeros.subset(first), dt_s=data.dt)
+    return ManeuverView(data, body / data.dt[:, None])
+
+
+def effect_derivatives(effect, m: ManeuverView) -> tuple:
+    """An effect's ``gyro`` and ``star_tracker`` derivatives on one maneuver; a missing
+    extra column is named with the columns the maneuver has."""
+    try:
+        return effect.gyro(m), effect.star_tracker(m)
+    except KeyError as exc:
+        raise ValueError(f"effect {effect.name} needs {exc} in maneuver {m.id}, which has the "
+                         f"extra gyro.csv columns {sorted(m.extras)}") from exc
+
+
+def effect_regressors(data: ManeuverData, spec: ModelSpec):
+    """What the model's extra effects change, per unit parameter (SI), at nominal parameters.
 
     Returns (K, n_channels, E) changes of the raw channel increments and (M, 3, E)
-    changes of the body-frame star-tracker error.
+    changes of the body-frame star-tracker error, E = the spec's extra parameters.
     """
     n_ch = len(data.channels)
+    extras = spec.extras
     gyro = np.zeros((len(data.dt), n_ch, len(extras)))
     star = np.zeros((len(data.st_time), 3, len(extras)))
     if not extras:
         return gyro, star
-    zeros = ch.ChannelParams.zeros(data.channels)
-    first = data.sets[0]
-    view = ManeuverView(data, ch.solve_body(data.set_increments(first), zeros.subset(first), dt_s=data.dt)
-                        / data.dt[:, None])
+    m = view(data)
     cache = {}
-    for j, extra in enumerate(extras):
-        effect = extra.effect
-        if effect.name not in cache:
-            try:
-                cache[effect.name] = (effect.gyro(view), effect.star_tracker(view))
-            except KeyError as exc:
-                raise ValueError(f"effect {effect.name} needs {exc} in maneuver {data.id}, which has the "
-                                 f"extra gyro.csv columns {sorted(data.extras)}") from exc
-        g, s = cache[effect.name]
-        name = extra.parameter.name
-        if name in g:
-            column = np.asarray(g[name], dtype=float).reshape(len(data.dt), n_ch)
-            if extra.channel is None:
+    for j, p in enumerate(extras):
+        if p.effect not in cache:
+            cache[p.effect] = effect_derivatives(spec.effect(p.effect), m)
+        g, s = cache[p.effect]
+        if p.name in g:
+            column = np.asarray(g[p.name], dtype=float).reshape(len(data.dt), n_ch)
+            if p.channel is None:
                 gyro[:, :, j] = column
             else:
-                gyro[:, extra.channel, j] = column[:, extra.channel]
-        if name in s:
-            star[:, :, j] = np.asarray(s[name], dtype=float).reshape(len(data.st_time), 3)
+                gyro[:, p.channel, j] = column[:, p.channel]
+        if p.name in s:
+            star[:, :, j] = np.asarray(s[p.name], dtype=float).reshape(len(data.st_time), 3)
     return gyro, star
 
 
-def _set_jacobian(data: ManeuverData, channel_set, params: ch.ChannelParams, regressors, extra_values):
-    """Propagate one set and return attitudes, increments and d(phi)/d(set params).
+def _channel_derivatives(sub: ch.ChannelParams, u, phi, dt):
+    """d(body increment)/d(parameter) of one channel set (eq. 3 inverted), (K, 3) each.
 
-    ``regressors`` (K, 3, E) are the extra effects' changes of this set's channel
-    increments per unit parameter; the model removes ``regressors @ extra_values``.
+    Returns the channel-model terms keyed by ``(channel, name)``, the set's three bias
+    columns (K, 3, 3) and the inverse response matrices (K, 3, 3).
     """
-    sub = params.subset(channel_set)
-    dt = data.dt
-    u = data.set_increments(channel_set) - regressors @ extra_values
-    phi = ch.solve_body(u, sub, dt_s=dt)
-    attitudes = kinematics.propagate(Rotation.from_quat(data.attitude0_quat), phi)
     positive = (u - np.outer(dt, sub.bias_rad_s)) > 0
     scale = 1.0 + np.where(positive, sub.sf_pos, sub.sf_neg)
     rows = ch.response_rows(sub)
     m_inv = np.linalg.inv(scale[:, :, None] * rows[None])
     sensed = phi @ rows.T
-    columns = []
+    terms = {}
     for i, c in enumerate(sub.channels):
         w = -m_inv[:, :, i]
-        columns.append(w * (sensed[:, i] * positive[:, i])[:, None])
-        columns.append(w * (sensed[:, i] * ~positive[:, i])[:, None])
+        terms[c.name, "sf_pos"] = w * (sensed[:, i] * positive[:, i])[:, None]
+        terms[c.name, "sf_neg"] = w * (sensed[:, i] * ~positive[:, i])[:, None]
         for b in c.other_axes:
-            columns.append(w * (scale[:, i] * phi[:, ch.AXIS_INDEX[b]])[:, None])
-    for i in range(3):
-        columns.append(-m_inv[:, :, i] * dt[:, None])
-    for j in range(regressors.shape[2]):
-        columns.append(-np.einsum("kai,ki->ka", m_inv, regressors[:, :, j]))
-    return attitudes, phi, np.stack(columns, axis=2)
+            terms[c.name, f"mis_{b}"] = w * (scale[:, i] * phi[:, ch.AXIS_INDEX[b]])[:, None]
+    return terms, -m_inv * dt[:, None, None], m_inv
 
 
-def linearize(data: ManeuverData, params: ch.ChannelParams, extras=(), extra_values=None) -> Linearization:
-    """Residuals and Jacobian of one maneuver about ``params`` (all channels; biases are
-    this maneuver's) and, for the extra effects, about ``extra_values`` (SI)."""
+def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Linearization:
+    """Residuals and Jacobian of one maneuver about the parameters ``theta`` (SI, in the
+    spec's column order) and this maneuver's channel biases."""
+    params = spec.channel_params(theta, bias_rad_s)
+    extra_values = np.asarray(theta, dtype=float)[spec.extra]
     sets = data.sets
-    names = [c.name for c in params.channels]
-    n_base = ch.N_PARAMS_PER_CHANNEL * len(names)
-    n_par = n_base + len(extras)
-    extra_values = np.zeros(len(extras)) if extra_values is None else np.asarray(extra_values, dtype=float)
-    gyro_reg, star_reg = effect_regressors(data, extras)
+    names = [c.name for c in spec.channels]
+    gyro_reg, star_reg = effect_regressors(data, spec)
     st_rot = Rotation.from_quat(data.st_quat)
     k, frac = data.st_interval()
     m = len(data.st_time)
     z = np.empty((m, len(sets), 3))
     body = np.empty((m, len(sets), 3))
-    design = np.zeros((m, len(sets), 3, n_par))
+    design = np.zeros((m, len(sets), 3, len(spec)))
     bias_design = np.zeros((m, len(sets), 3, len(names)))
     for s, channel_set in enumerate(sets):
         slots = [names.index(n) for n in channel_set]
-        attitudes, phi, dphi = _set_jacobian(data, channel_set, params, gyro_reg[:, slots, :], extra_values)
+        sub = params.subset(channel_set)
+        regressors = gyro_reg[:, slots, :]
+        u = data.set_increments(channel_set) - regressors @ extra_values
+        phi = ch.solve_body(u, sub, dt_s=data.dt)
+        attitudes = kinematics.propagate(Rotation.from_quat(data.attitude0_quat), phi)
+        terms, bias_columns, m_inv = _channel_derivatives(sub, u, phi, data.dt)
+        core = [i for i, p in enumerate(spec.parameters[:spec.n_core]) if p.owner in channel_set]
+        columns = [terms[spec.parameters[i].owner, spec.parameters[i].name] for i in core]
+        columns += [bias_columns[:, :, i] for i in range(3)]
+        columns += [-np.einsum("kai,ki->ka", m_inv, regressors[:, :, j]) for j in range(regressors.shape[2])]
         mid = kinematics.compose(attitudes[:-1], Rotation.from_rotvec(0.5 * phi))
-        inertial = np.einsum("kij,kjp->kip", mid.as_matrix(), dphi)
+        inertial = np.einsum("kij,kjp->kip", mid.as_matrix(), np.stack(columns, axis=2))
         at_st_jac = cumulative_at_st(inertial, k, frac)
         at_st = kinematics.attitude_at(data.gyro_time, attitudes, phi, data.st_time)
         e = kinematics.error_angles_rad(at_st, st_rot)
         st_columns = np.einsum("mab,mbe->mae", at_st.as_matrix(), star_reg)
         body[:, s] = e - star_reg @ extra_values
         z[:, s] = at_st.apply(e) - st_columns @ extra_values
-        for slot, name in enumerate(channel_set):
-            j = names.index(name)
-            design[:, s, :, 4 * j:4 * j + 4] = at_st_jac[:, :, 4 * slot:4 * slot + 4]
-            bias_design[:, s, :, j] = at_st_jac[:, :, 12 + slot]
-        design[:, s, :, n_base:] = at_st_jac[:, :, 15:] + st_columns
+        n = len(core)
+        design[:, s][:, :, core] = at_st_jac[:, :, :n]
+        bias_design[:, s][:, :, slots] = at_st_jac[:, :, n:n + 3]
+        design[:, s, :, spec.extra] = at_st_jac[:, :, n + 3:] + st_columns
         if s == 0:
             st_matrix = at_st.as_matrix()
     st_dt = np.diff(np.concatenate([[data.gyro_time[0]], data.st_time]))

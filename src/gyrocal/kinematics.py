@@ -1,6 +1,6 @@
 """Attitude kinematics: propagation from gyro increments and the error quaternion.
 
-Convention (interface.md section 1): quaternions are scalar last, ``v_body = A(q) v_inertial``
+Convention (docs/interface.md section 1): quaternions are scalar last, ``v_body = A(q) v_inertial``
 and ``dq/dt = 1/2 Omega(omega) q`` (paper eqs. 1-2). A `scipy.spatial.transform.Rotation`
 built from such a quaternion maps body vectors into the inertial frame (its matrix is
 ``A(q)`` transposed), so a body-frame rotation increment composes on the right.
@@ -93,17 +93,3 @@ def error_angles_rad(model: Rotation, measured: Rotation) -> np.ndarray:
 def error_angles_arcsec(model: Rotation, measured: Rotation) -> np.ndarray:
     """`error_angles_rad` in arcsec, for tables and plots."""
     return rad_to_arcsec(error_angles_rad(model, measured))
-
-
-def sign_continuous(quat: np.ndarray) -> np.ndarray:
-    """Flip quaternion signs so consecutive samples lie in the same hemisphere.
-
-    ``q`` and ``-q`` are the same attitude; a sign-continuous series can be
-    interpolated and differenced component-wise.
-    """
-    quat = np.array(quat, dtype=float, copy=True)
-    if len(quat) < 2:
-        return quat
-    dots = np.einsum("ij,ij->i", quat[1:], quat[:-1])
-    flips = np.concatenate([[1.0], np.cumprod(np.where(dots < 0, -1.0, 1.0))])
-    return quat * flips[:, None]

@@ -17,8 +17,49 @@ from scipy.linalg import cholesky_banded
 from scipy.linalg.lapack import dtbtrs
 
 from .errormodel import Linearization
+from .units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
 COMPONENTS = ("cross", "about", "walk")
+
+
+@dataclass(frozen=True)
+class NoiseScale:
+    """One noise scale: its name in the contract's unit, and that unit in SI."""
+
+    key: str
+    si_per_unit: float
+
+
+NOISE_SCALES = (NoiseScale("sigma_cross_arcsec", ARCSEC_RAD), NoiseScale("sigma_about_arcsec", ARCSEC_RAD),
+                NoiseScale("arw_deg_sqrt_h", DEG_SQRT_H_RAD_SQRT_S))
+"""The three sampled scales, in the order of ``log_sigma``: star tracker across and about its
+boresight (rad), gyro angle random walk (rad/sqrt(s))."""
+
+
+def stated_si(stated: dict) -> np.ndarray:
+    """The three scales (SI) of noise given in the contract's units."""
+    return np.array([stated[s.key] * s.si_per_unit for s in NOISE_SCALES])
+
+
+def log_sigma_of(stated: dict) -> np.ndarray:
+    """``log_sigma`` of noise given in the contract's units."""
+    return np.log(stated_si(stated))
+
+
+def scales_in_units(log_sigma) -> np.ndarray:
+    """The noise scales of ``log_sigma`` (last axis) in the contract's units."""
+    return np.exp(np.asarray(log_sigma, dtype=float)) / np.array([s.si_per_unit for s in NOISE_SCALES])
+
+
+def stated_scales(log_sigma) -> dict:
+    """``{key: value}`` of one ``log_sigma`` in the contract's units, for JSON files."""
+    return {s.key: float(v) for s, v in zip(NOISE_SCALES, scales_in_units(log_sigma))}
+
+
+def variances(log_sigma) -> dict:
+    """Noise variances from ``log [sigma_cross_rad, sigma_about_rad, arw_rad_sqrt_s]``."""
+    s = np.exp(2.0 * np.asarray(log_sigma, dtype=float))
+    return {"cross": s[0], "about": s[1], "walk": s[2]}
 
 
 def _banded_lower(diag_blocks, lower_blocks, depth=1):
@@ -136,7 +177,7 @@ def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -
     for name, body_cov in (("cross", np.eye(3) - about_body), ("about", about_body)):
         rs = np.einsum("jab,bc->jac", R, body_cov)
 
-        def cov(lag):
+        def cov(lag, rs=rs):
             """Undifferenced covariance blocks between samples j + lag and j (zero-padded)."""
             if lag > reach or lag >= m_samples:
                 return np.zeros((max(m_samples - lag, 0), block, block))
@@ -148,7 +189,7 @@ def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -
         # Cov(D_{k+d}, D_k) = K(d, k) - K(d+1, k-1) - K(d-1, k) + K(d, k-1), K(., -1) = 0
         blocks = [cov(lag) for lag in range(depth + 2)]
 
-        def get(lag, idx):
+        def get(lag, idx, blocks=blocks):
             out = np.zeros((len(idx), block, block))
             ok = (idx >= 0) & (idx < len(blocks[lag]))
             out[ok] = blocks[lag][idx[ok]]

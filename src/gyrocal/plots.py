@@ -1,17 +1,11 @@
 """Figures in the style of the paper's Figures 1-3: the rate profile, then the error
-along yaw, roll and pitch."""
+along yaw, roll and pitch. Headless use needs the Agg backend, which a workflow step
+selects when it starts (`gyrocal.stepenv.start`), not this module on import."""
 
-import warnings
+import matplotlib.pyplot as plt
+import numpy as np
 
-import matplotlib
-
-matplotlib.use("Agg")
-# arviz 0.23's matplotlib backend calls an API matplotlib 3.11 deprecates; harmless here.
-warnings.filterwarnings("ignore", message="Passing a dict or None as alias_mapping", category=DeprecationWarning)
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-PAPER_ORDER = ("yaw", "roll", "pitch")
+from .units import PAPER_AXES
 
 
 def maneuver_figure(table, title, fit=None):
@@ -27,7 +21,7 @@ def maneuver_figure(table, title, fit=None):
     axes[0].set_ylabel("rate (deg/s)")
     axes[0].legend(loc="upper right", fontsize=8, ncol=3)
     sets = sorted({c.split("_")[0] for c in table.columns if c.startswith("set")})
-    for ax, axis in zip(axes[1:], PAPER_ORDER):
+    for ax, axis in zip(axes[1:], PAPER_AXES):
         for s in sets:
             ax.plot(t, table[f"{s}_error_{axis}_arcsec"], lw=0.6,
                     label=f"{s} {'(in loop)' if s == 'set0' else '(redundant)'}")
@@ -72,7 +66,7 @@ def comparison_figure(table):
 def residual_figure(fit, title):
     """Star tracker minus model per axis and channel set (arcsec), unexplained points marked."""
     fig, axes = plt.subplots(1, 3, figsize=(12, 2.6), sharex=True)
-    for ax, axis in zip(axes, PAPER_ORDER):
+    for ax, axis in zip(axes, PAPER_AXES):
         for s, group in fit.groupby("set"):
             t = group["time"] - fit["time"].min()
             ax.plot(t, group[f"residual_{axis}"], lw=0.5, label=f"set{s}")

@@ -15,17 +15,16 @@ from dataclasses import dataclass
 import emcee
 import numpy as np
 
-from . import channels as ch
-from .estimate import _profile_reml, variances
-from .likelihood import LOG_2PI, campaign_stats
-from .units import PPM, arcsec_to_rad, arw_to_rad_sqrt_s
+from .estimate import linearize_all, profile_reml
+from .likelihood import LOG_2PI, campaign_stats, conditional_posterior
+from .noise import log_sigma_of, variances
 
 NOISE_NAMES = ("sigma_cross", "sigma_about", "arw")
 
 
 @dataclass
 class Priors:
-    """Weakly informative priors, with bounds that say what is physical (SI inside)."""
+    """Normal priors with bounds that say what is physical (SI), and log-normal noise priors."""
 
     mean: np.ndarray
     sd: np.ndarray
@@ -34,27 +33,11 @@ class Priors:
     log_sigma_sd: np.ndarray
 
     @classmethod
-    def from_config(cls, channels, cfg: dict, noise_center: dict, extras=()):
-        """``cfg`` is the config's ``priors`` section; ``noise_center`` the prior noise guess;
-        ``extras`` the extra effects' parameters, whose priors their effects declare."""
-        is_sf = np.array([p.startswith("sf") for c in channels for p in c.parameter_names])
-        sd = np.where(is_sf, cfg["sf_sd_ppm"] * PPM, arcsec_to_rad(cfg["mis_sd_arcsec"]))
-        bound = np.where(is_sf, cfg["sf_bound_ppm"] * PPM, arcsec_to_rad(cfg["mis_bound_arcsec"]))
-        mean = np.zeros(len(sd))
-        labels = ch.parameter_labels(channels)
-        for label, value in (cfg.get("mean") or {}).items():
-            i = labels.index(label)
-            mean[i] = value * (PPM if is_sf[i] else arcsec_to_rad(1.0))
-        for label, value in (cfg.get("sd") or {}).items():
-            i = labels.index(label)
-            sd[i] = value * (PPM if is_sf[i] else arcsec_to_rad(1.0))
-        sd = np.concatenate([sd, [e.parameter.prior_sd * e.parameter.si_per_unit for e in extras]])
-        bound = np.concatenate([bound, [e.parameter.bound * e.parameter.si_per_unit for e in extras]])
-        mean = np.concatenate([mean, np.zeros(len(extras))])
-        center = np.log([arcsec_to_rad(noise_center["sigma_cross_arcsec"]),
-                         arcsec_to_rad(noise_center["sigma_about_arcsec"]),
-                         arw_to_rad_sqrt_s(noise_center["arw_deg_sqrt_h"])])
-        return cls(mean, sd, bound, center, np.full(3, cfg["noise_log_sd"]))
+    def from_spec(cls, spec, stated_noise: dict, noise_log_sd: float) -> "Priors":
+        """The spec's priors (as declared, or overridden by `ModelSpec.with_priors`); the noise
+        scales' priors are centred on the stated noise."""
+        return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, log_sigma_of(stated_noise),
+                   np.full(3, float(noise_log_sd)))
 
 
 class RatioGrid:
@@ -130,7 +113,7 @@ class LogPosterior:
 
 def ratio_curvature(noises, ratios, step=0.02):
     """Standard deviations of the two ratios from the REML profile's Hessian."""
-    f = lambda r: _profile_reml(noises, r)[0]
+    f = lambda r: profile_reml(noises, r)[0]
     h = np.zeros((2, 2))
     f0 = f(ratios)
     e = np.eye(2) * step
@@ -195,9 +178,12 @@ def _autocorr_times(chain) -> np.ndarray:
         logger.setLevel(level)
 
 
-def _sampler(logpost, walkers, dim, proposal):
+def _sampler(logpost, walkers, dim, proposal, seed):
+    """An emcee sampler with its own random state, seeded: numpy's global state is untouched."""
     moves = [(emcee.moves.MHMove(proposal), 0.7), (emcee.moves.DEMove(), 0.3)]
-    return emcee.EnsembleSampler(walkers, dim, logpost, vectorize=True, moves=moves)
+    sampler = emcee.EnsembleSampler(walkers, dim, logpost, vectorize=True, moves=moves)
+    sampler.random_state = np.random.RandomState(seed).get_state()
+    return sampler
 
 
 def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict, seed: int) -> SamplerResult:
@@ -207,8 +193,8 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
     evolution. Each ensemble burns in with a proposal from the Laplace approximation,
     fits its own proposal to that, burns in again, refits, and keeps that proposal
     fixed for production, so adaptation never touches the production chain and the
-    ensembles stay independent.
-    emcee draws from numpy's legacy global RandomState, so each ensemble seeds it.
+    ensembles stay independent. Every sampler of ensemble e starts its own random
+    state from the same seed of e; the start points come from a generator of its own.
     """
     dim = len(proposal_mean)
     walkers = max(int(cfg["walkers"]), 2 * dim + 2)
@@ -219,7 +205,7 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
     start = StudentProposal(proposal_mean, proposal_cov, dof=5.0, inflate=2.0)
     samplers = []
     for e in range(n_ens):
-        np.random.seed((seed * 7919 + e) % 2**32)
+        sampler_seed = (seed * 7919 + e) % 2**32
         rng = np.random.default_rng([seed, e])
         p0 = start.draw(rng.standard_normal((walkers, dim)), rng.chisquare(start.dof, walkers))
         bad = ~np.isfinite(logpost(p0))
@@ -227,12 +213,12 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
             p0[bad] = laplace.draw(rng.standard_normal((bad.sum(), dim)), rng.chisquare(laplace.dof, bad.sum()))
             bad = ~np.isfinite(logpost(p0))
         proposal, state = laplace, p0
-        for stage in range(2):
-            warm = _sampler(logpost, walkers, dim, proposal)
+        for _ in range(2):
+            warm = _sampler(logpost, walkers, dim, proposal, sampler_seed)
             state = warm.run_mcmc(state, burn // 2)
             fitted = warm.get_chain(discard=burn // 4, flat=True)
             proposal = StudentProposal(fitted.mean(axis=0), np.cov(fitted.T), dof=30.0, inflate=1.05)
-        samplers.append([_sampler(logpost, walkers, dim, proposal), state])
+        samplers.append([_sampler(logpost, walkers, dim, proposal, sampler_seed), state])
     steps = 0
     while True:
         n_new = int(cfg["initial_steps"]) if steps == 0 else chunk
@@ -290,19 +276,15 @@ class Posterior:
         return np.transpose(c, (0, 2, 1, 3)).reshape(-1, c.shape[1], c.shape[-1])
 
 
-def sample(maneuvers, estimate, boresight, priors: Priors, cfg: dict, seed: int) -> Posterior:
+def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dict, seed: int) -> Posterior:
     """Linearise about the point estimate, tabulate the noise ratios and run the ensembles."""
-    from .estimate import linearize_all
-    from .likelihood import conditional_posterior
-    lins, noises = linearize_all(maneuvers, estimate, boresight)
+    lins, noises = linearize_all(maneuvers, estimate)
     ratios = estimate.log_sigma[1:] - estimate.log_sigma[0]
     ratio_sd = ratio_curvature(noises, ratios)
-    grid = RatioGrid(noises, ratios, ratio_sd, cfg["grid"]["nodes"], cfg["grid"]["half_width_sd"])
+    grid = RatioGrid(noises, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"])
     logpost = LogPosterior(grid, estimate.theta, priors)
     stats = campaign_stats(noises, variances(estimate.log_sigma))
     mean, cov = conditional_posterior(stats, priors.mean - estimate.theta, priors.sd)
     start_mean = np.concatenate([mean, estimate.log_sigma])
-    result = run_ensembles(logpost, start_mean, start_covariance(cov, stats.n, ratio_sd),
-                           cfg["sampler"], seed)
-    labels = ch.parameter_labels(estimate.channels) + [e.label for e in estimate.extras]
-    return Posterior(estimate, lins, noises, grid, result, labels)
+    result = run_ensembles(logpost, start_mean, start_covariance(cov, stats.n, ratio_sd), sampler_cfg, seed)
+    return Posterior(estimate, lins, noises, grid, result, list(estimate.spec.labels))

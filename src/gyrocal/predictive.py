@@ -9,8 +9,7 @@ replicates come from the banded covariance of `noise`.
 import numpy as np
 
 from .errormodel import Linearization
-from .estimate import variances
-from .noise import ManeuverNoise, nuisance_design
+from .noise import ManeuverNoise, nuisance_design, variances
 
 
 class WhitenedManeuver:

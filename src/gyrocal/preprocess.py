@@ -12,6 +12,10 @@ from . import kinematics
 from .telemetry import Campaign, TelemetryError
 from .units import AXES, rad_to_arcsec
 
+MOVING_RATE_FRACTION = 0.05
+"""A gyro sample counts as turning while its rate exceeds this share of the maneuver's peak;
+below it, a maneuver is holding inertial (the paper's holds before and after a rotation)."""
+
 
 @dataclass
 class ManeuverData:
@@ -84,14 +88,13 @@ def slice_maneuver(campaign: Campaign, maneuver_id: str) -> ManeuverData:
     valid = campaign.st_valid == 1
     usable = valid & (campaign.st_time > g[i0]) & (campaign.st_time <= g[i1])
     st_idx = np.flatnonzero(valid)
-    st_quat_all = kinematics.sign_continuous(campaign.st_quat[st_idx])
     if g[i0] < campaign.st_time[st_idx[0]] or g[i0] > campaign.st_time[st_idx[-1]]:
         raise TelemetryError(f"{campaign.source}/star_tracker.csv: no valid sample brackets the start "
                              f"of maneuver {m.id} at {g[i0]} s")
-    slerp = Slerp(campaign.st_time[st_idx], Rotation.from_quat(st_quat_all))
+    slerp = Slerp(campaign.st_time[st_idx], Rotation.from_quat(campaign.st_quat[st_idx]))
     attitude0 = slerp([g[i0]])[0]
     st_time = campaign.st_time[usable]
-    quat = kinematics.sign_continuous(campaign.st_quat[usable])
+    quat = campaign.st_quat[usable]
     if len(st_time) < 10:
         raise TelemetryError(f"{campaign.source}/star_tracker.csv: maneuver {m.id} has only "
                              f"{len(st_time)} valid samples")

@@ -1,4 +1,4 @@
-"""The pre-uplink review: one self-contained HTML file per campaign (interface.md section 7).
+"""The pre-uplink review: one self-contained HTML file per campaign (docs/interface.md section 7).
 
 A verdict first (GO or NO-GO, with every check and the channel or maneuver that failed
 it), then the paper's tables with uncertainty, the model against the measurements per
@@ -14,15 +14,16 @@ import json
 
 import numpy as np
 import pandas as pd
+import yaml
 
-from . import __version__
-from . import estimate, plots, preprocess
-from .units import AXES, PAPER_AXIS_NUMBER, rad_to_arcsec
+from . import __version__, plots, preprocess
+from .calibration import core_rows, posterior_mean_params
+from .classic import hold_windows
+from .units import AXES, PAPER_AXES, paper_term, rad_to_arcsec
 
-PAPER_AXES = ("yaw", "roll", "pitch")
 
-
-def _img(fig) -> str:
+def embed(fig) -> str:
+    """A figure as an inline PNG ``<img>``, so the report is one self-contained file."""
     buffer = io.BytesIO()
     fig.savefig(buffer, format="png", dpi=80)
     plots.plt.close(fig)
@@ -63,7 +64,7 @@ def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> di
         c = selected[a]
         for b in PAPER_AXES:
             if b != a:
-                t1_mis.append({"term": f"mc{PAPER_AXIS_NUMBER[a]}{PAPER_AXIS_NUMBER[b]}", "contract name": f"mis_{b}",
+                t1_mis.append({"term": paper_term(a, b), "contract name": f"mis_{b}",
                                "channel": c.name, "misalignment (arcsec)": cell(c.name, f"mis_{b}")})
     t2, t3 = [], []
     for a in PAPER_AXES:
@@ -75,7 +76,7 @@ def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> di
             others = [b for b in PAPER_AXES if b != a]
             row = {"axis": a, "DTG": f"DTG#{c.dtg}", "channel": c.name}
             for b in others:
-                row[f"mc{PAPER_AXIS_NUMBER[a]}{PAPER_AXIS_NUMBER[b]} = mis_{b} (arcsec)"] = cell(c.name, f"mis_{b}")
+                row[f"{paper_term(a, b)} = mis_{b} (arcsec)"] = cell(c.name, f"mis_{b}")
             t3.append(row)
     return {"table1_sf": pd.DataFrame(t1), "table1_mis": pd.DataFrame(t1_mis),
             "table2": pd.DataFrame(t2), "table3": pd.DataFrame(t3)}
@@ -87,7 +88,7 @@ def correction_effect(maneuvers, params_by_maneuver, nominal_by_maneuver) -> pd.
     biases removed, so what differs is the uplinked scale factors and misalignments."""
     rows = []
     for data, params, nominal in zip(maneuvers, params_by_maneuver, nominal_by_maneuver):
-        before_mask, after_mask = estimate.hold_windows(data)
+        before_mask, after_mask = hold_windows(data)
         for s, channel_set in enumerate(data.sets):
             before = preprocess.end_of_rotation_error(data, channel_set, nominal, before_mask, after_mask)
             after = preprocess.end_of_rotation_error(data, channel_set, params, before_mask, after_mask)
@@ -99,11 +100,12 @@ def correction_effect(maneuvers, params_by_maneuver, nominal_by_maneuver) -> pd.
     return pd.DataFrame(rows)
 
 
-def verdict_checks(calibration, sampler, diagnostics, effect_table, cfg) -> list:
-    """The GO/NO-GO checks; each names what failed it and why."""
-    rcfg, conv = cfg["report"], cfg["convergence"]
+def verdict_checks(calibration, spec, sampler, diagnostics, effect_table, rcfg, conv) -> list:
+    """The GO/NO-GO checks; each names what failed it and why. The interval and bound
+    checks apply to the channel model's terms, with the thresholds of their unit
+    (``max_ci_width_<unit>``, ``physical_bound_<unit>`` in the config's ``report:``)."""
     checks = []
-    base = calibration[calibration["unit"].isin(["ppm", "arcsec"])]
+    base = core_rows(spec, calibration)
     bad = base[(base["r_hat"] >= conv["r_hat_max"]) | (base["ess_bulk"] < conv["ess_bulk_min"])]
     checks.append(("converged", bad.empty and sampler["converged"],
                    "every parameter has r_hat < {} and bulk ESS >= {}".format(conv["r_hat_max"], conv["ess_bulk_min"])
@@ -116,13 +118,13 @@ def verdict_checks(calibration, sampler, diagnostics, effect_table, cfg) -> list
                    "misfit: " + "; ".join(f"{c['check']}: {c['why']}" for c in failed)
                    + f". Best explanation: {diagnostics['ranking'][0]['kind']} {diagnostics['ranking'][0]['name']}"))
     width = base["ci95_high"] - base["ci95_low"]
-    limit = np.where(base["unit"] == "ppm", rcfg["max_ci_width_ppm"], rcfg["max_ci_width_arcsec"])
+    limit = np.array([rcfg[f"max_ci_width_{unit}"] for unit in base["unit"]])
     wide = base[width.to_numpy() > limit]
     checks.append(("intervals narrow enough", wide.empty,
                    f"every 95 % interval is narrower than {rcfg['max_ci_width_ppm']} ppm / {rcfg['max_ci_width_arcsec']} arcsec"
                    if wide.empty else "too wide: " + ", ".join(
                        f"{r.channel}.{r.parameter} ({r.ci95_high - r.ci95_low:.1f} {r.unit})" for r in wide.itertuples())))
-    bound = np.where(base["unit"] == "ppm", rcfg["physical_bound_ppm"], rcfg["physical_bound_arcsec"])
+    bound = np.array([rcfg[f"physical_bound_{unit}"] for unit in base["unit"]])
     out = base[np.abs(base["mean"].to_numpy()) > bound]
     checks.append(("within physical bounds", out.empty,
                    f"every estimate is within {rcfg['physical_bound_ppm']} ppm / {rcfg['physical_bound_arcsec']} arcsec"
@@ -135,6 +137,45 @@ def verdict_checks(calibration, sampler, diagnostics, effect_table, cfg) -> list
                        f"{r['maneuver']} with {r['set']} ({r['before norm']:.1f} -> {r['after norm']:.1f} arcsec)"
                        for r in worse.to_dict("records"))))
     return [{"check": n, "passed": bool(p), "why": w} for n, p, w in checks]
+
+
+def build_context(campaign, model, effects, maneuvers, tables, est, calibration, diagnostics, sampler,
+                  correction_doc, correction_path, fit, idata, comparison, info, truth, cfg) -> dict:
+    """Everything `render` shows, from what the report step read: the reviewed model's
+    files, the campaign's maneuvers and preprocess tables (same order), ``input.json``
+    (``info``), the simulation's truth (or None) and the whole config."""
+    spec, channels = est.spec, est.spec.channels
+    params = [posterior_mean_params(spec, calibration, est.biases[m]) for m in range(len(maneuvers))]
+    nominal = [spec.channel_params(np.zeros(len(spec)), est.biases[m]) for m in range(len(maneuvers))]
+    effect_table = correction_effect(maneuvers, params, nominal)
+    checks = verdict_checks(calibration, spec, sampler, diagnostics, effect_table, cfg["report"], cfg["convergence"])
+    figures = {}
+    for data, table in zip(maneuvers, tables):
+        own = fit[(fit["maneuver"] == data.id) & (fit["set"] == 0)]
+        figures[data.id] = (embed(plots.maneuver_figure(table, f"{data.id}: model {model}, in-loop set", own))
+                            + embed(plots.residual_figure(fit[fit["maneuver"] == data.id], data.id)))
+    posterior_figs = "".join(embed(plots.pair_figure(idata, c.name)) for c in channels)
+    posterior_figs += embed(plots.trace_figure(idata, calibration))
+    convergence = calibration[["channel", "parameter", "unit", "mean", "sd", "r_hat", "ess_bulk"]].round(
+        {"mean": 2, "sd": 2, "r_hat": 4, "ess_bulk": 0})
+    accounting = pd.DataFrame([{"maneuver": d.id, **d.counts} for d in maneuvers])
+    accounting.loc[len(accounting)] = {"maneuver": "campaign files", "st_read": info["rows"]["star_tracker"],
+                                       "st_invalid": info["rows"]["star_tracker_invalid"],
+                                       "gyro_read": info["rows"]["gyro"]}
+    return {
+        "campaign": campaign, "model": model, "effects": effects, "checks": checks,
+        "simulated": truth is not None,
+        "tables": paper_tables(calibration, channels, maneuvers[0].sets[0], truth),
+        "maneuver_figures": figures, "posterior_figures": posterior_figs, "convergence": convergence,
+        "diagnostics": diagnostics, "comparison": comparison.round(3),
+        "comparison_figure": embed(plots.comparison_figure(comparison)),
+        "correction": correction_doc, "correction_path": str(correction_path),
+        "effect_table": effect_table.drop(columns=["before norm", "after norm"]).assign(
+            **{"before norm (arcsec)": effect_table["before norm"].round(1),
+               "after norm (arcsec)": effect_table["after norm"].round(1)}),
+        "accounting": accounting, "checksums": info["checksums_sha256"], "sampler": sampler,
+        "config": yaml.safe_dump(cfg, sort_keys=False),
+    }
 
 
 def preferred_model(comparison: pd.DataFrame) -> str:

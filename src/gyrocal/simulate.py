@@ -2,7 +2,7 @@
 
 Every setting comes from a scenario YAML (``config/scenarios/*.yaml``). The true body
 rate is piecewise constant on a fine grid, so the true attitude is propagated exactly;
-the gyros integrate that rate through the channel model (interface.md section 2) plus
+the gyros integrate that rate through the channel model (docs/interface.md section 2) plus
 angle random walk and pulse quantisation, and the star tracker samples the true
 attitude with anisotropic, optionally time-correlated noise.
 """
@@ -19,8 +19,9 @@ from scipy.spatial.transform import Rotation
 
 from . import channels as ch
 from . import kinematics
+from .spec import ModelSpec, baseline
 from .telemetry import Campaign, Maneuver, write_campaign
-from .units import AXIS_INDEX, PPM, arcsec_to_rad, arw_to_rad_sqrt_s
+from .units import AXIS_INDEX, PPM, arcsec_to_rad, arw_to_rad_sqrt_s, deg_h_to_rad_s, rad_s_to_deg_h
 
 DEFAULTS = {
     "name": "simulated",
@@ -148,17 +149,27 @@ def _temperatures(t, dtgs, swing_K, rng):
     return out
 
 
+def truth_parameters(spec: ModelSpec, truth: ch.ChannelParams) -> dict:
+    """``truth.json``'s parameters: the channel model in the contract's units and each bias in deg/h."""
+    out = spec.contract(truth)
+    for i, c in enumerate(spec.channels):
+        out[c.name]["bias_deg_h"] = rad_s_to_deg_h(truth.bias_rad_s[i])
+    return {c: {k: round(float(v), 9) for k, v in entry.items()} for c, entry in out.items()}
+
+
 def simulate(scenario: dict, seed=None):
     """Simulate a campaign; returns ``(Campaign, truth_dict)``."""
     seed = scenario["seed"] if seed is None else seed
     rng = np.random.default_rng(seed)
     channels = tuple(ch.Channel(n, int(v["dtg"]), v["axis"]) for n, v in scenario["channels"].items())
-    truth = ch.ChannelParams.from_contract(channels, scenario["truth"])
+    spec = baseline(channels)
+    truth = spec.params_from_contract(scenario["truth"])
     gyro_cfg, st_cfg, eff = scenario["gyro"], scenario["star_tracker"], scenario["effects"]
-    missing_bias = [c.name for c in channels if "bias_deg_h" not in scenario["truth"].get(c.name, {})]
-    if missing_bias:
-        idx = [i for i, c in enumerate(channels) if c.name in missing_bias]
-        truth.bias_rad_s[idx] = np.deg2rad(rng.normal(0, gyro_cfg["bias_sd_deg_h"], len(idx))) / 3600
+    given_bias = [scenario["truth"].get(c.name, {}).get("bias_deg_h") for c in channels]
+    truth.bias_rad_s[:] = deg_h_to_rad_s([0.0 if b is None else b for b in given_bias])
+    idx = [i for i, b in enumerate(given_bias) if b is None]
+    if idx:
+        truth.bias_rad_s[idx] = deg_h_to_rad_s(rng.normal(0, gyro_cfg["bias_sd_deg_h"], len(idx)))
 
     profiles = build_profiles(scenario)
     dt_g = 1.0 / scenario["gyro_hz"]
@@ -177,7 +188,7 @@ def simulate(scenario: dict, seed=None):
     attitude0 = Rotation.random(random_state=rng.integers(2**32))
     attitudes_fine = kinematics.propagate(attitude0, increments_fine)
 
-    # Gyro channels: model of interface.md section 2 with the optional effects.
+    # Gyro channels: model of docs/interface.md section 2 with the optional effects.
     temps = _temperatures(t_mid, sorted({c.dtg for c in channels}), eff["temperature_swing_K"], rng)
     extra_scale = np.zeros((len(t_mid), len(channels)))
     if eff["sf_nonlinearity_ppm_per_deg2_s2"]:
@@ -187,7 +198,7 @@ def simulate(scenario: dict, seed=None):
         for i, c in enumerate(channels):
             extra_scale[:, i] += eff["sf_temperature_ppm_per_K"] * PPM * temps[f"temp_dtg{c.dtg}"]
     fine = ch.measure(increments_fine, truth, dt_s=np.full(len(t_mid), dt_sub), extra_scale=extra_scale)
-    drift = np.deg2rad(eff["bias_drift_deg_h_per_h"]) / 3600.0 / 3600.0  # rad/s per s
+    drift = deg_h_to_rad_s(eff["bias_drift_deg_h_per_h"]) / 3600.0  # rad/s per s
     fine += drift * (t_mid - t0)[:, None] * dt_sub
     continuous = fine.reshape(n_gyro, n_sub, len(channels)).sum(axis=1)
     arw = arw_to_rad_sqrt_s(gyro_cfg["arw_deg_sqrt_h"])
@@ -208,7 +219,7 @@ def simulate(scenario: dict, seed=None):
     measured = true_st * Rotation.from_rotvec(noise)
     quat = measured.as_quat()
     valid = np.ones(len(t_st), dtype=int)
-    n_bad = int(round(st_cfg["invalid_fraction"] * len(t_st)))
+    n_bad = round(st_cfg["invalid_fraction"] * len(t_st))
     if n_bad:
         bad = rng.choice(len(t_st), n_bad, replace=False)
         valid[bad] = 0
@@ -229,7 +240,7 @@ def simulate(scenario: dict, seed=None):
     )
     truth_out = {
         "seed": int(seed),
-        "parameters": truth.to_contract(),
+        "parameters": truth_parameters(spec, truth),
         "noise": {"sigma_cross_arcsec": st_cfg["sigma_cross_arcsec"],
                   "sigma_about_arcsec": st_cfg["sigma_about_arcsec"],
                   "arw_deg_sqrt_h": gyro_cfg["arw_deg_sqrt_h"]},

@@ -1,4 +1,4 @@
-"""Campaign directories (interface.md section 3): read, validate, write.
+"""Campaign directories (docs/interface.md section 3): read, validate, write.
 
 A campaign is ``campaign.yaml``, ``star_tracker.csv`` and ``gyro.csv``. Bad input is
 refused with a `TelemetryError` that names the file, the row or column and what is
@@ -240,7 +240,7 @@ def read_meta(directory) -> dict:
 
 
 def read_campaign(directory) -> Campaign:
-    """Read and validate a campaign directory (interface.md section 3)."""
+    """Read and validate a campaign directory (docs/interface.md section 3)."""
     directory = Path(directory)
     meta = read_meta(directory)
     cpath = directory / "campaign.yaml"

@@ -4,6 +4,7 @@ from pathlib import Path
 
 from gyrocal import simulate as _simulate
 from gyrocal import telemetry as _telemetry
+from gyrocal.outputs import MODEL_FILES as _MODEL_FILES
 
 if config["telemetry"]:
     CAMPAIGN_DIR = config["telemetry"]
@@ -23,6 +24,7 @@ else:
 RESULTS = f"{config['results']}/{CAMPAIGN}"
 LOGS = f"logs/{CAMPAIGN}"
 MODELS = sorted(config["models"], key=lambda m: m != "baseline")  # baseline is the reference
+PLUGINS = config["plugins"]
 
 wildcard_constraints:
     maneuver="|".join(MANEUVERS),
@@ -40,9 +42,19 @@ def maneuver_files(ext):
     return expand(f"{RESULTS}/preprocess/{{maneuver}}.{ext}", maneuver=MANEUVERS)
 
 
+def report_model_files(wildcards):
+    """Every model's files the report reads, named as gyrocal.outputs.MODEL_FILES, in MODELS' order."""
+    return {name: expand(f"{RESULTS}/{{model}}/{file}", model=MODELS) for name, file in _MODEL_FILES.items()}
+
+
+def model_effects(wildcards):
+    """The effects of one model variant: all its point estimate needs of the config's models."""
+    return config["models"][wildcards.model]
+
+
 def all_outputs():
     out = [f"{RESULTS}/input.json"] + maneuver_files("png")
     for model in MODELS:
         out += [f"{RESULTS}/{model}/calibration.csv", f"{RESULTS}/{model}/correction.json",
-                f"{RESULTS}/{model}/classic.csv", f"{RESULTS}/{model}/diagnostics.json"]
-    return out + [f"{RESULTS}/model_comparison.csv", f"{RESULTS}/report.html"]
+                f"{RESULTS}/{model}/diagnostics.json"]
+    return out + [f"{RESULTS}/classic.csv", f"{RESULTS}/model_comparison.csv", f"{RESULTS}/report.html"]

@@ -5,10 +5,11 @@ rule diagnostics:
         point=f"{RESULTS}/{{model}}/point_estimate.npz",
         summary=f"{RESULTS}/{{model}}/posterior_summary.csv",
         fit=f"{RESULTS}/{{model}}/fit.csv",
+        plugins=PLUGINS,
     output:
         f"{RESULTS}/{{model}}/diagnostics.json",
     params:
-        config=config,
+        thresholds=config["diagnostics"],
     conda:
         "../envs/gyrocal.yaml"
     log:

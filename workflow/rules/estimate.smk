@@ -1,14 +1,29 @@
+rule classic:
+    """The paper's method: hold-averaged error after each rotation per unit rotation (once per campaign)."""
+    input:
+        maneuvers=maneuver_files("npz"),
+    output:
+        f"{RESULTS}/classic.csv",
+    conda:
+        "../envs/gyrocal.yaml"
+    log:
+        f"{LOGS}/classic.log",
+    script:
+        "../scripts/classic.py"
+
+
 rule point_estimate:
-    """The paper's classic estimate and the full-trajectory weighted least squares."""
+    """The full-trajectory weighted least squares of one model, started from the classic estimate."""
     input:
         maneuvers=maneuver_files("npz"),
         checked=f"{RESULTS}/input.json",
+        classic=f"{RESULTS}/classic.csv",
+        plugins=PLUGINS,
     output:
-        point=f"{RESULTS}/{{model}}/point_estimate.npz",
-        classic=f"{RESULTS}/{{model}}/classic.csv",
+        f"{RESULTS}/{{model}}/point_estimate.npz",
     params:
-        campaign_dir=CAMPAIGN_DIR,
-        config=config,
+        effects=model_effects,
+        noise=config["noise"],
     conda:
         "../envs/gyrocal.yaml"
     log:

@@ -1,15 +1,21 @@
 rule posterior:
-    """emcee over the channel parameters and noise scales; convergence across ensembles."""
+    """emcee over the model's parameters and noise scales; convergence across ensembles."""
     input:
         maneuvers=maneuver_files("npz"),
         point=f"{RESULTS}/{{model}}/point_estimate.npz",
+        plugins=PLUGINS,
+        prior_from=[config["prior_from"]] if config["prior_from"] else [],
     output:
         posterior=f"{RESULTS}/{{model}}/posterior.nc",
         summary=f"{RESULTS}/{{model}}/posterior_summary.csv",
         fit=f"{RESULTS}/{{model}}/fit.csv",
         sampler=f"{RESULTS}/{{model}}/sampler.json",
     params:
-        config=config,
+        priors=config["priors"],
+        sampler=config["sampler"],
+        grid=config["grid"],
+        convergence=config["convergence"],
+        seed=config["seed"],
     conda:
         "../envs/gyrocal.yaml"
     log:
@@ -32,8 +38,6 @@ rule calibrate:
             subcategory="{model}",
         ),
         correction=f"{RESULTS}/{{model}}/correction.json",
-    params:
-        config=config,
     conda:
         "../envs/gyrocal.yaml"
     log:

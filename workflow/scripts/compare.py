@@ -1,5 +1,5 @@
 from gyrocal import steps
 
-steps.log_to(snakemake.log[0])
+steps.start(snakemake.log[0])
 steps.run_compare(snakemake.params.models, snakemake.input.posterior, snakemake.input.diagnostics,
                   snakemake.input.summary, snakemake.output.table, snakemake.output.figure)

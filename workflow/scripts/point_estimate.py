@@ -1,5 +1,6 @@
 from gyrocal import steps
 
-steps.log_to(snakemake.log[0])
-steps.run_point_estimate(snakemake.input.maneuvers, snakemake.params.campaign_dir, snakemake.params.config,
-                         snakemake.wildcards.model, snakemake.output.point, snakemake.output.classic)
+steps.start(snakemake.log[0])
+steps.run_point_estimate(snakemake.input.maneuvers, snakemake.input.checked, snakemake.input.classic,
+                         snakemake.wildcards.model, snakemake.params.effects, snakemake.params.noise,
+                         snakemake.input.plugins, snakemake.output[0])

@@ -1,6 +1,8 @@
 from gyrocal import steps
 
-steps.log_to(snakemake.log[0])
-steps.run_posterior(snakemake.input.maneuvers, snakemake.input.point, snakemake.params.config,
-                    snakemake.wildcards.model, snakemake.output.posterior, snakemake.output.summary,
+p = snakemake.params
+steps.start(snakemake.log[0])
+steps.run_posterior(snakemake.input.maneuvers, snakemake.input.point, snakemake.input.plugins, p.priors,
+                    snakemake.input.prior_from[0] if snakemake.input.prior_from else None, p.sampler, p.grid,
+                    p.convergence, p.seed, snakemake.output.posterior, snakemake.output.summary,
                     snakemake.output.fit, snakemake.output.sampler)

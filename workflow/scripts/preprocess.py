@@ -1,5 +1,5 @@
 from gyrocal import steps
 
-steps.log_to(snakemake.log[0])
+steps.start(snakemake.log[0])
 steps.run_preprocess(snakemake.params.campaign_dir, snakemake.wildcards.maneuver,
                      snakemake.output.data, snakemake.output.table, snakemake.output.figure)

@@ -1,6 +1,8 @@
 from gyrocal import steps
+from gyrocal.outputs import MODEL_FILES
 
-steps.log_to(snakemake.log[0])
-steps.run_report(snakemake.params.results, snakemake.params.models, snakemake.input.maneuvers,
-                 snakemake.input.truth[0] if snakemake.input.truth else None, snakemake.params.config,
+i = snakemake.input
+steps.start(snakemake.log[0])
+steps.run_report(snakemake.params.models, {name: list(getattr(i, name)) for name in MODEL_FILES}, i.maneuvers,
+                 i.tables, i.checked, i.comparison, i.truth[0] if i.truth else None, snakemake.params.config,
                  snakemake.output[0])

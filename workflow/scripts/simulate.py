@@ -1,4 +1,4 @@
 from gyrocal import simulate, steps
 
-steps.log_to(snakemake.log[0])
+steps.start(snakemake.log[0])
 simulate.run(snakemake.input.scenario, snakemake.output.campaign.rsplit("/", 1)[0], snakemake.params.seed)

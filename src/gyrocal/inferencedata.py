@@ -1,0 +1,164 @@
+"""What the posterior step writes: the InferenceData, its summary and the fit table.
+
+`assemble` turns a sampled `posterior.Posterior` into an arviz InferenceData holding
+the thinned posterior (in each parameter's unit), the leave-one-block-out pointwise
+log-likelihood PSIS-LOO needs, and a posterior predictive of the attitude errors;
+with it, the per-sample fit table behind the report's figures, the posterior summary
+and the sampler record. The array maths lives in `predictive`; this is the xarray layer.
+"""
+
+import logging
+import warnings
+
+import arviz as az
+import numpy as np
+import pandas as pd
+import xarray as xr
+
+from . import __version__, predictive, preprocess
+from . import channels as ch
+from .noise import NOISE_SCALES, scales_in_units, stated_scales
+from .units import AXES, rad_to_arcsec
+
+log = logging.getLogger("gyrocal")
+
+NOISE_LABELS = [f"noise.{s.key}" for s in NOISE_SCALES]
+
+
+def posterior_dataset(draws, theta_hat, spec) -> az.InferenceData:
+    """(chains, draws, P + 3) sampled offsets and log noise scales, in the parameters' units."""
+    p = len(spec)
+    values = spec.to_unit(theta_hat + draws[..., :p])
+    noise = scales_in_units(draws[..., p:])
+    return az.from_dict(
+        posterior={"channel_param": values, **{s.key: noise[..., i] for i, s in enumerate(NOISE_SCALES)}},
+        coords={"parameter": spec.labels}, dims={"channel_param": ["parameter"]})
+
+
+def summarize(idata, per_walker, labels, convergence: dict) -> pd.DataFrame:
+    """Mean, sd, central 95 % interval (arviz), r_hat across the independent ensembles
+    (each one chain, step-major) and bulk ESS over every walker's own chain."""
+    stats = az.summary(idata, kind="stats", stat_focus="mean", round_to="none")
+    eti = az.summary(idata, kind="stats", stat_focus="median", hdi_prob=0.95, round_to="none")
+    rhat = az.rhat(idata)
+    ess = az.ess(per_walker, method="bulk")
+    rows = []
+    names = [f"channel_param[{label}]" for label in labels] + [s.key for s in NOISE_SCALES]
+    for label, name in zip(list(labels) + NOISE_LABELS, names):
+        if name.startswith("channel_param"):
+            sel = {"parameter": label}
+            r, e = float(rhat["channel_param"].sel(sel)), float(ess["channel_param"].sel(sel))
+        else:
+            r, e = float(rhat[name]), float(ess[name])
+        rows.append({"label": label, "mean": stats.loc[name, "mean"], "sd": stats.loc[name, "sd"],
+                     "ci95_low": eti.loc[name, "eti_2.5%"], "ci95_high": eti.loc[name, "eti_97.5%"],
+                     "r_hat": r, "ess_bulk": e})
+    frame = pd.DataFrame(rows)
+    frame["converged"] = (frame["r_hat"] < convergence["r_hat_max"]) & (frame["ess_bulk"] >= convergence["ess_bulk_min"])
+    return frame
+
+
+def sampler_record(post, summary, sampler_cfg: dict, seed: int) -> dict:
+    """``sampler.json``: the convergence verdict and what it rests on."""
+    res, est = post.result, post.estimate
+    return {
+        "converged": bool(summary["converged"].all() and res.converged_length),
+        "chain_length_ok": res.converged_length,
+        "steps": res.steps, "burn_steps": res.burn, "walkers": res.walkers,
+        "ensembles": int(res.chains.shape[0]), "seed": seed,
+        "tau_max_steps": float(res.tau.max()), "steps_over_tau": float(res.steps / res.tau.max()),
+        "acceptance": res.acceptance.tolist(),
+        "grid": {"nodes": post.grid.nodes, "start": post.grid.start.tolist(), "step": post.grid.step.tolist()},
+        "settings": dict(sampler_cfg),
+        "point_estimate": {"cost": est.cost, "nfev": est.nfev, "message": est.message,
+                           "noise": stated_scales(est.log_sigma), "st_correlation_time_s": est.correlation_time_s},
+        "failed_parameters": summary.loc[~summary["converged"], "label"].tolist(),
+    }
+
+
+def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
+    """Pointwise leave-one-block-out log-likelihood, the fit table and predictive draws."""
+    p = post.n_params
+    n_chain, n_draw = kept.shape[:2]
+    flat = kept.reshape(-1, kept.shape[-1])
+    dtheta, log_sigma = flat[:, :p], flat[:, p:]
+    ratios = np.mean(log_sigma[:, 1:] - log_sigma[:, :1], axis=0)
+    scale2 = np.exp(2 * log_sigma[:, 0])
+    n_pred = min(sampler_cfg["predictive_draws"], n_draw)
+    pred_rows = (np.arange(n_chain)[:, None] * n_draw + np.arange(n_pred)[None]).ravel()
+    rng = np.random.default_rng([seed, 99])
+    loglik, block_names, fit_tables = [], [], []
+    pp_values, obs_values, sample_maneuver, sample_time = [], [], [], []
+    zeros = ch.ChannelParams.zeros(maneuvers[0].channels)
+    for data, lin, nz in zip(maneuvers, post.lins, post.noises):
+        wm = predictive.WhitenedManeuver(nz, ratios)
+        blocks = predictive.block_index(lin, data.st_time, sampler_cfg["block_s"])
+        loglik.append(predictive.leave_block_out_loglik(lin, wm, dtheta, scale2, blocks))
+        block_names += [f"{data.id}:{b}" for b in range(blocks.max() + 1)]
+        resid = predictive.residuals_body(lin, dtheta[pred_rows], wm.nuisance(dtheta[pred_rows]))
+        noise_rep = predictive.undifference_body(lin, wm.noise_draws(scale2[pred_rows], rng))
+        for s, channel_set in enumerate(lin.sets):
+            observed = preprocess.error_angles(data, channel_set, zeros)
+            mean_pred = observed[None] - resid[:, :, s]
+            replicate = mean_pred + noise_rep[:, :, s]
+            lo, hi = np.quantile(replicate, [0.025, 0.975], axis=0)
+            table = {"maneuver": data.id, "set": s, "channels": "+".join(channel_set), "time": data.st_time}
+            mean = mean_pred.mean(axis=0)
+            for i, axis in enumerate(AXES):
+                table[f"observed_{axis}"] = rad_to_arcsec(observed[:, i])
+                table[f"mean_{axis}"] = rad_to_arcsec(mean[:, i])
+                table[f"lo_{axis}"] = rad_to_arcsec(lo[:, i])
+                table[f"hi_{axis}"] = rad_to_arcsec(hi[:, i])
+                table[f"residual_{axis}"] = rad_to_arcsec(observed[:, i] - mean[:, i])
+                table[f"outside_{axis}"] = (observed[:, i] < lo[:, i]) | (observed[:, i] > hi[:, i])
+            fit_tables.append(pd.DataFrame(table))
+            if s == 0:
+                keep = np.arange(0, len(data.st_time), max(1, len(data.st_time) // 300))
+                pp_values.append(rad_to_arcsec(replicate[:, keep]))
+                obs_values.append(rad_to_arcsec(observed[keep]))
+                sample_maneuver += [data.id] * len(keep)
+                sample_time.append(data.st_time[keep])
+    loglik = np.concatenate(loglik, axis=1).reshape(n_chain, n_draw, -1)
+    pp = np.concatenate(pp_values, axis=1).reshape(n_chain, n_pred, -1, 3)
+    sample_coords = {"axis": list(AXES), "maneuver": ("sample", sample_maneuver),
+                     "time": ("sample", np.concatenate(sample_time))}
+    groups = {
+        "log_likelihood": xr.Dataset({"attitude_error": (("chain", "draw", "block"), loglik)},
+                                     coords={"chain": np.arange(n_chain), "draw": np.arange(n_draw),
+                                             "block": block_names}),
+        "posterior_predictive": xr.Dataset({"attitude_error": (("chain", "draw", "sample", "axis"), pp)},
+                                           coords={"chain": np.arange(n_chain), "draw": np.arange(n_pred),
+                                                   **sample_coords}),
+        "observed_data": xr.Dataset({"attitude_error": (("sample", "axis"), np.concatenate(obs_values))},
+                                    coords=sample_coords),
+    }
+    return groups, pd.concat(fit_tables, ignore_index=True)
+
+
+def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
+    """Everything the posterior step writes: ``(idata, summary, fit, sampler record)``.
+
+    The summary and convergence use every draw; the InferenceData keeps
+    ``loglik_draws`` evenly spaced draws per ensemble, with the pointwise
+    log-likelihood per ``block_s`` block and ``predictive_draws`` predictive draws.
+    """
+    spec, theta_hat = post.estimate.spec, post.estimate.theta
+    draws = post.ensemble_draws()
+    full = posterior_dataset(draws, theta_hat, spec)
+    with warnings.catch_warnings():
+        # every walker is a chain here, and a short run may have more walkers than steps
+        warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
+        per_walker = posterior_dataset(post.walker_draws(), theta_hat, spec)
+    summary = summarize(full, per_walker, spec.labels, convergence)
+    record = sampler_record(post, summary, sampler_cfg, seed)
+    if not record["converged"]:
+        log.warning("THE SAMPLER DID NOT CONVERGE: %s; numbers are not reliable",
+                    record["failed_parameters"] or "chains shorter than the autocorrelation limit")
+    thin = np.linspace(0, draws.shape[1] - 1, sampler_cfg["loglik_draws"]).astype(int)
+    kept = draws[:, thin]
+    groups, fit = _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed)
+    idata = posterior_dataset(kept, theta_hat, spec)
+    idata.add_groups(**groups)
+    units = ", ".join(f"{label} {unit}" for label, unit in zip(spec.labels, spec.units))
+    idata.posterior.attrs.update({"gyrocal_version": __version__, "seed": seed, "units": units})
+    return idata, summary, fit, record

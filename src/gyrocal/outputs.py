@@ -1,0 +1,48 @@
+"""Writing results whole or not at all: each file is written beside its place under a
+temporary name and renamed into place only when complete."""
+
+import json
+import os
+from contextlib import contextmanager
+from pathlib import Path
+
+
+@contextmanager
+def atomic(path):
+    """Yield a temporary path beside ``path``; rename it into place on success only."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.tmp")
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def write_json(obj, path):
+    with atomic(path) as tmp:
+        tmp.write_text(json.dumps(obj, indent=2, sort_keys=False, default=float))
+
+
+def write_csv(frame, path):
+    with atomic(path) as tmp:
+        frame.to_csv(tmp, index=False)
+
+
+def write_text(text: str, path):
+    with atomic(path) as tmp:
+        tmp.write_text(text)
+
+
+def write_with(save, path):
+    """Write through ``save(handle)`` (e.g. an object's ``save`` method or a figure's)."""
+    with atomic(path) as tmp, open(tmp, "wb") as handle:
+        save(handle)
+
+
+MODEL_FILES = {"calibration": "calibration.csv", "diagnostics": "diagnostics.json", "sampler": "sampler.json",
+               "correction": "correction.json", "fit": "fit.csv", "posterior": "posterior.nc",
+               "point": "point_estimate.npz"}
+"""Each model's files the report reads, by the name its rule and step give them."""
