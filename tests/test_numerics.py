@@ -198,3 +198,32 @@ def test_score_test_ignores_a_candidate_the_model_already_spans_and_tests_a_part
     assert least_squares_rss(base, y) - least_squares_rss(x[:, :m + 1], y) > 0
     expected = least_squares_rss(base, y) - least_squares_rss(np.column_stack([base, partly]), y)
     assert diagnostics.conditional_drop(stats, np.arange(m), [m + 1]) == pytest.approx(expected, rel=1e-9)
+
+
+def test_leave_one_maneuver_out_evidence_equals_dense_gaussian_refits():
+    """log p(y_m | y_-m) from the summed statistics against the dense marginal of the data
+    (parameters integrated over their prior, nuisance over a flat prior), with and without m."""
+    from gyrocal.likelihood import leave_one_out_log_evidence, maneuver_stats
+    noises = [noise.build(tiny_linearization(s, m=12), BORESIGHT) for s in (8, 9, 10)]
+    prior_mean, prior_sd = np.array([0.01, -0.02, 0.0, 0.03]), np.array([0.05, 0.1, 0.02, 0.08])
+    got = leave_one_out_log_evidence([maneuver_stats(nz, VAR) for nz in noises], prior_mean, prior_sd)
+
+    def dense_log_marginal(keep):
+        covs = [band_to_dense(noises[k].covariance(VAR)) for k in keep]
+        x = np.vstack([noises[k].rhs[:, :P] for k in keep])
+        d = np.concatenate([noises[k].rhs[:, -1] for k in keep])
+        sizes = [len(c) for c in covs]
+        cov = np.zeros((sum(sizes), sum(sizes)))
+        g = np.zeros((sum(sizes), sum(noises[k].n_nuisance for k in keep)))
+        row = col = 0
+        for k, c in zip(keep, covs):
+            cov[row:row + len(c), row:row + len(c)] = c
+            nuisance = noises[k].rhs[:, P:P + noises[k].n_nuisance]
+            g[row:row + len(c), col:col + nuisance.shape[1]] = nuisance
+            row, col = row + len(c), col + nuisance.shape[1]
+        return integrated_loglik(d - x @ prior_mean, cov + x @ np.diag(prior_sd**2) @ x.T, g)
+
+    full = dense_log_marginal([0, 1, 2])
+    for m in range(3):
+        expected = full - dense_log_marginal([k for k in range(3) if k != m])
+        assert got[m] == pytest.approx(expected, rel=1e-8, abs=1e-6)

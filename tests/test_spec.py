@@ -76,23 +76,24 @@ def test_config_overrides_a_declared_prior_and_refuses_a_unit_it_does_not_declar
 
 
 def test_a_plugin_parameter_in_arcsec_is_not_taken_for_a_channel_term(tmp_path):
-    plugins = effects.load_plugins([DATA / "plugin_st_mounting.py"])
-    spec = spec_of(BASE + ["st_mounting"], plugins)
-    assert spec.n_core == 24 and spec.labels[24:] == ["st_mounting.mount_roll", "st_mounting.mount_pitch"]
-    assert spec.units[24:] == ["arcsec", "arcsec"] and not any(p.core for p in spec.extras)
+    plugins = effects.load_plugins([DATA / "plugin_cyclic_error.py"])
+    spec = spec_of(BASE + ["cyclic_error"], plugins)
+    assert spec.n_core == 24 and spec.labels[24:] == ["cyclic_error.amplitude"]
+    assert spec.units[24:] == ["arcsec"] and not any(p.core for p in spec.extras)
 
 
 def test_a_model_with_an_arcsec_plugin_parameter_runs_end_to_end(tiny, tmp_path, config):
-    """Every step, through the report, with two campaign-wide arcsec rows after the 24."""
-    plugin = str(DATA / "plugin_st_mounting.py")
-    cfg = config_with(config, {"mounted": BASE + ["st_mounting"]}, [plugin])
-    run_campaign(tiny[0], tmp_path, cfg, ("mounted",), tiny[0].parent / "truth.json")
-    table = pd.read_csv(tmp_path / "mounted" / "calibration.csv")
-    assert len(table) == 26
-    extra = table.iloc[24:]
-    assert list(extra["channel"]) == ["st_mounting", "st_mounting"] and set(extra["unit"]) == {"arcsec"}
-    assert (extra["ci95_low"] < 0).all() and (extra["ci95_high"] > 0).all()   # the truth has no mounting offset
-    assert PointEstimate.load(tmp_path / "mounted" / "point_estimate.npz").spec.n_core == 24
+    """Every step, through the report, with one campaign-wide arcsec row after the 24."""
+    plugin = str(DATA / "plugin_cyclic_error.py")
+    cfg = config_with(config, {"cyclic": BASE + ["cyclic_error"]}, [plugin])
+    run_campaign(tiny[0], tmp_path, cfg, ("cyclic",), tiny[0].parent / "truth.json")
+    table = pd.read_csv(tmp_path / "cyclic" / "calibration.csv")
+    assert len(table) == 25
+    extra = table.iloc[24]
+    assert (extra["channel"], extra["parameter"], extra["unit"]) == ("cyclic_error", "amplitude", "arcsec")
+    assert extra["ci95_low"] < 0 < extra["ci95_high"]           # the simulation has no cyclic error
+    assert extra["ci95_high"] - extra["ci95_low"] < 30           # and the data say so, well inside the prior
+    assert PointEstimate.load(tmp_path / "cyclic" / "point_estimate.npz").spec.n_core == 24
     html = (tmp_path / "report.html").read_text()
-    assert "model reviewed: <b>mounted</b>" in html and "st_mounting" in html
+    assert "model reviewed: <b>cyclic</b>" in html and "cyclic_error" in html
     assert "class='verdict go'>GO<" in html

@@ -65,3 +65,27 @@ def conditional_posterior(stats: Stats, prior_mean, prior_sd):
     P = stats.A + np.diag(prec)
     cov = np.linalg.inv(P)
     return cov @ (stats.b + prec * prior_mean), cov
+
+
+def log_evidence(stats: Stats, prior_mean, prior_sd) -> float:
+    """``log of the integral of N(dtheta; prior) exp(loglik(dtheta))``: the marginal likelihood of
+    the data behind ``stats`` under independent normal priors (exact: the model is linear)."""
+    prec = 1.0 / np.asarray(prior_sd, dtype=float) ** 2
+    prior_mean = np.asarray(prior_mean, dtype=float)
+    factor = cho_factor(stats.A + np.diag(prec))
+    h = stats.b + prec * prior_mean
+    return float(-0.5 * (stats.c + stats.logdet + stats.n * LOG_2PI)
+                 + 0.5 * np.sum(np.log(prec)) - 0.5 * _logdet_chol(factor)
+                 + 0.5 * h @ cho_solve(factor, h) - 0.5 * np.sum(prec * prior_mean**2))
+
+
+def leave_one_out_log_evidence(parts, prior_mean, prior_sd) -> np.ndarray:
+    """``log p(y_m | y_-m)`` for each part m (e.g. a maneuver) of data that are independent given
+    the parameters: the exact predictive density after refitting without m, as the ratio of
+    two evidences. ``parts`` are each part's `Stats` at the same noise variances."""
+    total = Stats(sum(s.A for s in parts), sum(s.b for s in parts), sum(s.c for s in parts),
+                  sum(s.logdet for s in parts), sum(s.n for s in parts))
+    full = log_evidence(total, prior_mean, prior_sd)
+    return np.array([full - log_evidence(Stats(total.A - s.A, total.b - s.b, total.c - s.c,
+                                                total.logdet - s.logdet, total.n - s.n), prior_mean, prior_sd)
+                     for s in parts])

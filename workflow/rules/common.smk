@@ -47,6 +47,19 @@ def report_model_files(wildcards):
     return {name: expand(f"{RESULTS}/{{model}}/{file}", model=MODELS) for name, file in _MODEL_FILES.items()}
 
 
+def section(*keys):
+    """A config section as a rule's param, keys sorted at every level: Snakemake compares params by
+    their repr, so the order a config file happens to give must not rerun a job."""
+
+    def canonical(value):
+        return {k: canonical(value[k]) for k in sorted(value)} if isinstance(value, dict) else value
+
+    value = config
+    for key in keys:
+        value = value[key]
+    return canonical(value)
+
+
 def model_effects(wildcards):
     """The effects of one model variant: all its point estimate needs of the config's models."""
     return config["models"][wildcards.model]

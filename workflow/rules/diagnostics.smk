@@ -9,7 +9,7 @@ rule diagnostics:
     output:
         f"{RESULTS}/{{model}}/diagnostics.json",
     params:
-        thresholds=config["diagnostics"],
+        thresholds=section("diagnostics"),
     conda:
         "../envs/gyrocal.yaml"
     log:

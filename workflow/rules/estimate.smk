@@ -23,7 +23,7 @@ rule point_estimate:
         f"{RESULTS}/{{model}}/point_estimate.npz",
     params:
         effects=model_effects,
-        noise=config["noise"],
+        noise=section("noise"),
     conda:
         "../envs/gyrocal.yaml"
     log:

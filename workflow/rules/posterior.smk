@@ -11,10 +11,10 @@ rule posterior:
         fit=f"{RESULTS}/{{model}}/fit.csv",
         sampler=f"{RESULTS}/{{model}}/sampler.json",
     params:
-        priors=config["priors"],
-        sampler=config["sampler"],
-        grid=config["grid"],
-        convergence=config["convergence"],
+        priors=section("priors"),
+        sampler=section("sampler"),
+        grid=section("grid"),
+        convergence=section("convergence"),
         seed=config["seed"],
     conda:
         "../envs/gyrocal.yaml"

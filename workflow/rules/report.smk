@@ -11,7 +11,7 @@ rule report:
     output:
         report(f"{RESULTS}/report.html", caption="../report/review.rst", category="Review before uplink"),
     params:
-        config=config,
+        config=section(),
         models=MODELS,
     conda:
         "../envs/gyrocal.yaml"
