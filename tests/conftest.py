@@ -62,7 +62,7 @@ def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
                                  cfg["noise"], plugins, d / "point_estimate.npz")
         steps.run_posterior(npz, d / "point_estimate.npz", plugins, cfg["priors"], cfg["prior_from"] or None,
                             cfg["sampler"], cfg["grid"], cfg["convergence"], cfg["seed"], d / "posterior.nc",
-                            d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json")
+                            d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json", d / "elpd_maneuvers.csv")
         steps.run_calibrate(d / "point_estimate.npz", d / "posterior_summary.csv", npz, d / "calibration.csv",
                             d / "correction.json")
         steps.run_diagnostics(npz, d / "point_estimate.npz", d / "posterior_summary.csv", d / "fit.csv", plugins,
@@ -70,6 +70,7 @@ def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
     steps.run_compare(list(models), [out / m / "posterior.nc" for m in models],
                       [out / m / "diagnostics.json" for m in models],
                       [out / m / "posterior_summary.csv" for m in models],
+                      [out / m / "elpd_maneuvers.csv" for m in models], cfg["model_choice"],
                       out / "model_comparison.csv", out / "model_comparison.png")
     files = {name: [out / m / file for m in models] for name, file in MODEL_FILES.items()}
     steps.run_report(list(models), files, npz, [out / f"preprocess/{m}.csv" for m in ids], out / "input.json",

@@ -82,6 +82,21 @@ def test_the_variant_covers_the_truth_again(runs, case):
     assert inside.sum() >= 22, table[~inside.to_numpy()]
 
 
+@pytest.mark.parametrize("case", CASES)
+def test_the_review_rests_on_the_true_effect(runs, case):
+    table = pd.read_csv(runs[case] / "out" / "model_comparison.csv").set_index("model")
+    assert table.loc["extended", "reviewed"] and table.loc["extended", "plausible"]
+    assert not table.loc["baseline", "plausible"] and table.loc["baseline", "loo_rejected"]
+    assert "model reviewed: <b>extended</b>" in (runs[case] / "out" / "report.html").read_text()
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_exact_leave_one_maneuver_out_prefers_the_true_effect(runs, case):
+    table = pd.read_csv(runs[case] / "out" / "model_comparison.csv").set_index("model")
+    diff, se = table.loc["extended", "elpd_lomo_diff_vs_first"], table.loc["extended", "elpd_lomo_diff_se"]
+    assert diff > 2.5 * se, (diff, se)
+
+
 def test_on_clean_data_no_variant_wins_and_nothing_misfits(tiny, tmp_path, config):
     variants = {"baseline": BASE, "drift": BASE + ["bias_drift"], "latency": BASE + ["st_latency"]}
     run_campaign(tiny[0], tmp_path, config_with(config, variants), tuple(variants), tiny[0].parent / "truth.json")
@@ -90,6 +105,8 @@ def test_on_clean_data_no_variant_wins_and_nothing_misfits(tiny, tmp_path, confi
         assert load_from(tmp_path, model)["misfit"] is False
         if model != "baseline":
             assert table.loc[model, "elpd_diff_vs_first"] < 4 * max(table.loc[model, "elpd_diff_se"], 1.0)
+            assert table.loc[model, "elpd_lomo_diff_vs_first"] < 4 * max(table.loc[model, "elpd_lomo_diff_se"], 1.0)
+    assert table["plausible"].all() and table.loc["baseline", "reviewed"]
 
 
 def load_from(out, model):

@@ -28,7 +28,7 @@ def posterior_again(out, npz, cfg, tmp_path):
     """The posterior step once more on a finished run's point estimate, with ``cfg``."""
     steps.run_posterior(npz, out / "baseline/point_estimate.npz", [], cfg["priors"], None, cfg["sampler"],
                         cfg["grid"], cfg["convergence"], cfg["seed"], tmp_path / "p.nc", tmp_path / "s.csv",
-                        tmp_path / "f.csv", tmp_path / "j.json")
+                        tmp_path / "f.csv", tmp_path / "j.json", tmp_path / "e.csv")
 
 
 def test_validate_step_records_rows_and_checksums(tiny_run):

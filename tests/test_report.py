@@ -51,6 +51,24 @@ def test_hidden_effect_with_baseline_only_is_no_go_naming_the_reason(hidden_run)
     assert "Best explanation: effect bias_drift" in text or "Best explanation: signature time" in text
 
 
+def test_a_plan_that_cannot_tell_two_effects_apart_gives_no_go_naming_both(tmp_path_factory, config):
+    """One rate per direction: a rate-squared scale factor (hidden here, 2000 ppm at the flown
+    rate) looks like the scale factor itself. Both variants fit; the baseline's intervals are
+    narrow and wrong, the other's honestly wide. The review must not say GO."""
+    root = tmp_path_factory.mktemp("confounded")
+    simulate.run(DATA / "onerate_nonlinearity.yaml", root / "sim")
+    variants = {"baseline": ["scale_factor", "misalignment", "bias"],
+                "nonlinear": ["scale_factor", "misalignment", "bias", "sf_nonlinearity"]}
+    run_campaign(root / "sim" / "campaign", root / "out", config_with(config, variants), tuple(variants),
+                 root / "sim" / "truth.json")
+    text = (root / "out" / "report.html").read_text()
+    assert "class='verdict nogo'>NO-GO<" in text
+    why = text[text.index("the answer does not hang on the model"):]
+    why = why[:why.index("</tr>")]
+    assert "the data cannot tell baseline from nonlinear" in why
+    assert "under nonlinear, dtg" in why and "sf_nonlinearity: a second rotation rate in each direction" in why
+
+
 @pytest.mark.browser
 @pytest.mark.skipif(CHROMIUM is None, reason="Chromium is not installed (tests/run.sh installs it)")
 def test_report_renders_in_a_real_browser_with_verdict_and_tables(mom_run, hidden_run, tmp_path):

@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 
 from .inferencedata import NOISE_LABELS
+from .modelchoice import classify, reviewed_model, stacking_weights
 
 log = logging.getLogger("gyrocal")
 
@@ -46,20 +47,43 @@ def moved(reference: pd.DataFrame, current: pd.DataFrame) -> list:
     return out
 
 
-def compare(models, idatas, diagnostics, summaries) -> pd.DataFrame:
-    """One row per model, in the given order; the first is the reference."""
+def paired_se(diff) -> float:
+    """Standard error of a sum of pointwise differences."""
+    return float(np.sqrt(len(diff) * np.var(diff)))
+
+
+def compare(models, idatas, diagnostics, summaries, lomo, reject_se: float) -> pd.DataFrame:
+    """One row per model, in the given order; the first is the reference of the differences.
+
+    ``lomo`` holds each model's exact leave-one-maneuver-out densities (one per maneuver):
+    the criterion that decides which variants are plausible (`modelchoice`). PSIS-LOO over
+    60-s blocks stays beside it: each block is predicted from its neighbours too, so it
+    measures how well a model fills a gap, and sees little of a smooth effect.
+    """
     loos = [loo(idata, m) for m, idata in zip(models, idatas)]
     reference = models[0]
     ref_loo = loos[0][0]
-    rows = []
+    rows, loo_pointwise = [], []
     for m, d, (result, high), summary in zip(models, diagnostics, loos, summaries):
+        loo_pointwise.append(result.loo_i.values)
         paired = result.loo_i.values - ref_loo.loo_i.values
         rows.append({"model": m, "effects": "+".join(d["effects"]),
                      "residual_rms_arcsec": d["residual_rms_arcsec"], "noise_rms_arcsec": d["noise_rms_arcsec"],
                      "misfit": d["misfit"], "elpd_loo": float(result.elpd_loo), "elpd_loo_se": float(result.se),
                      "p_loo": float(result.p_loo),
                      "elpd_diff_vs_first": float(result.elpd_loo - ref_loo.elpd_loo),
-                     "elpd_diff_se": float(np.sqrt(len(paired) * np.var(paired))),
+                     "elpd_diff_se": paired_se(paired),
                      "pareto_k_max": float(np.max(result.pareto_k.values)), "pareto_k_over_0.7": high,
                      f"moved_over_2sd_vs_{reference}": " ".join(moved(summaries[0], summary))})
-    return pd.DataFrame(rows)
+    table = pd.DataFrame(rows)
+    pointwise = np.array([np.asarray(v, dtype=float) for v in lomo])
+    table["elpd_lomo"] = pointwise.sum(axis=1)
+    table["elpd_lomo_diff_vs_first"] = table["elpd_lomo"] - table["elpd_lomo"].iloc[0]
+    table["elpd_lomo_diff_se"] = [paired_se(p - pointwise[0]) for p in pointwise]
+    table["stacking_weight"] = stacking_weights(pointwise) if len(models) > 1 else [1.0]
+    classified = classify(table.assign(lomo_pointwise=list(pointwise), loo_pointwise=loo_pointwise), reject_se)
+    table["loo_rejected"] = classified["loo_rejected"]
+    table["rejected_by"] = classified["rejected_by"]
+    table["plausible"] = classified["plausible"]
+    table["reviewed"] = table["model"] == reviewed_model(classified)
+    return table

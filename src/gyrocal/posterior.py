@@ -16,7 +16,7 @@ import emcee
 import numpy as np
 
 from .estimate import linearize_all, profile_reml
-from .likelihood import LOG_2PI, campaign_stats, conditional_posterior
+from .likelihood import LOG_2PI, campaign_stats, conditional_posterior, leave_one_out_log_evidence, maneuver_stats
 from .noise import log_sigma_of, variances
 
 NOISE_NAMES = ("sigma_cross", "sigma_about", "arw")
@@ -274,6 +274,18 @@ class Posterior:
         each walker's autocorrelation in time."""
         c = self.result.chains
         return np.transpose(c, (0, 2, 1, 3)).reshape(-1, c.shape[1], c.shape[-1])
+
+
+def leave_one_maneuver_out(post: Posterior, priors: Priors) -> np.ndarray:
+    """Exact ``log p(maneuver m | all others)`` per maneuver, the parameters refitted without it.
+
+    The maneuvers are independent given the parameters (each has its own nuisance), and the
+    linearised model is Gaussian given the noise scales (held at the point estimate's), so
+    each refit is a ratio of two closed-form evidences: no importance sampling.
+    """
+    var = variances(post.estimate.log_sigma)
+    return leave_one_out_log_evidence([maneuver_stats(nz, var) for nz in post.noises],
+                                      priors.mean - post.estimate.theta, priors.sd)
 
 
 def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dict, seed: int) -> Posterior:

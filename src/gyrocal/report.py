@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from . import __version__, plots, preprocess
+from . import __version__, modelchoice, plots, preprocess
 from .calibration import core_rows, posterior_mean_params
 from .classic import hold_windows
 from .units import AXES, PAPER_AXES, paper_term, rad_to_arcsec
@@ -140,15 +140,24 @@ def verdict_checks(calibration, spec, sampler, diagnostics, effect_table, rcfg, 
 
 
 def build_context(campaign, model, effects, maneuvers, tables, est, calibration, diagnostics, sampler,
-                  correction_doc, correction_path, fit, idata, comparison, info, truth, cfg) -> dict:
+                  correction_doc, correction_path, fit, idata, comparison, info, truth, cfg, calibrations) -> dict:
     """Everything `render` shows, from what the report step read: the reviewed model's
     files, the campaign's maneuvers and preprocess tables (same order), ``input.json``
-    (``info``), the simulation's truth (or None) and the whole config."""
+    (``info``), the simulation's truth (or None), the whole config and every model's
+    ``calibration.csv`` (for the model-sensitivity check)."""
     spec, channels = est.spec, est.spec.channels
     params = [posterior_mean_params(spec, calibration, est.biases[m]) for m in range(len(maneuvers))]
     nominal = [spec.channel_params(np.zeros(len(spec)), est.biases[m]) for m in range(len(maneuvers))]
     effect_table = correction_effect(maneuvers, params, nominal)
     checks = verdict_checks(calibration, spec, sampler, diagnostics, effect_table, cfg["report"], cfg["convergence"])
+    classified = comparison.assign(plausible=comparison["plausible"].astype(bool),
+                                   loo_rejected=comparison["loo_rejected"].astype(bool),
+                                   rejected_by=comparison["rejected_by"].astype("string").fillna(""))
+    core_labels = spec.labels[spec.core]
+    checks += [modelchoice.plausibility_check(classified),
+               modelchoice.sensitivity_check(classified, calibrations, core_labels, cfg["model_choice"]["agree_sd"],
+                                             {u: cfg["report"][f"max_ci_width_{u}"] for u in set(spec.units[spec.core])},
+                                             {})]
     figures = {}
     for data, table in zip(maneuvers, tables):
         own = fit[(fit["maneuver"] == data.id) & (fit["set"] == 0)]
@@ -176,13 +185,6 @@ def build_context(campaign, model, effects, maneuvers, tables, est, calibration,
         "accounting": accounting, "checksums": info["checksums_sha256"], "sampler": sampler,
         "config": yaml.safe_dump(cfg, sort_keys=False),
     }
-
-
-def preferred_model(comparison: pd.DataFrame) -> str:
-    """The variant to review: best elpd among those without misfit, else best elpd."""
-    fine = comparison[~comparison["misfit"].astype(bool)]
-    pool = fine if len(fine) else comparison
-    return str(pool.sort_values("elpd_loo", ascending=False)["model"].iloc[0])
 
 
 CSS = """
@@ -233,7 +235,11 @@ def render(ctx: dict) -> str:
     parts.append("<h3>Ranking: what most likely explains the misfit</h3>")
     parts.append(_table(pd.DataFrame(ctx["diagnostics"]["ranking"])[["name", "kind", "score", "chi2_drop", "df",
                                                                       "log10_p", "description"]], "ranking"))
-    parts.append("<h3>Model comparison</h3>")
+    parts.append("<h3>Model comparison</h3><p class='small'>The reviewed model is the plausible variant (no misfit, "
+                 "and not more than model_choice.reject_se paired se below the best by exact leave-one-maneuver-out "
+                 "elpd) with the best elpd_lomo. Every variant LOO does not reject must agree with the others on each "
+                 "scale factor and misalignment within model_choice.agree_sd combined sd, and know each within the "
+                 "interval limits; otherwise the verdict is NO-GO.</p>")
     parts.append(_table(ctx["comparison"], "comparison"))
     parts.append(ctx["comparison_figure"])
     parts.append("<h2>The correction to uplink</h2><p class='small'>Exactly as written to "

@@ -133,8 +133,9 @@ def model_priors(est: PointEstimate, priors_cfg: dict, prior_from=None) -> poste
 
 
 def run_posterior(npz_paths, point_npz, plugin_paths, priors_cfg, prior_from, sampler_cfg, grid_cfg,
-                  convergence_cfg, seed, out_nc, out_summary, out_fit, out_sampler):
-    """Sample the posterior, check convergence, save InferenceData, summary and model fit."""
+                  convergence_cfg, seed, out_nc, out_summary, out_fit, out_sampler, out_elpd):
+    """Sample the posterior, check convergence, save InferenceData, summary, model fit and the
+    exact leave-one-maneuver-out predictive densities."""
     maneuvers = load_maneuvers(npz_paths)
     est = PointEstimate.load(point_npz, known_effects(plugin_paths))
     priors = model_priors(est, priors_cfg, prior_from)
@@ -145,6 +146,8 @@ def run_posterior(npz_paths, point_npz, plugin_paths, priors_cfg, prior_from, sa
     write_csv(summary, out_summary)
     write_csv(fit, out_fit)
     write_json(record, out_sampler)
+    elpd = posterior.leave_one_maneuver_out(post, priors)
+    write_csv(pd.DataFrame({"maneuver": [d.id for d in maneuvers], "elpd": elpd}), out_elpd)
 
 
 def run_calibrate(point_npz, summary_csv, npz_paths, out_csv, out_correction):
@@ -169,11 +172,13 @@ def run_diagnostics(npz_paths, point_npz, summary_csv, fit_csv, plugin_paths, th
     write_json(doc, out_json)
 
 
-def run_compare(models, posterior_paths, diagnostics_paths, summary_paths, out_csv, out_png):
-    """``model_comparison.csv``: residual RMS and PSIS-LOO per variant, and what moved."""
+def run_compare(models, posterior_paths, diagnostics_paths, summary_paths, elpd_paths, choice_cfg, out_csv, out_png):
+    """``model_comparison.csv``: residual RMS, PSIS-LOO and exact leave-one-maneuver-out per
+    variant, what moved, which variants are plausible and which one is reviewed."""
     table = comparison.compare(models, [az.from_netcdf(p) for p in posterior_paths],
                                [read_json(p) for p in diagnostics_paths],
-                               [pd.read_csv(p).set_index("label") for p in summary_paths])
+                               [pd.read_csv(p).set_index("label") for p in summary_paths],
+                               [pd.read_csv(p)["elpd"].to_numpy() for p in elpd_paths], choice_cfg["reject_se"])
     write_csv(table, out_csv)
     fig = plots.comparison_figure(table)
     write_with(lambda handle: plots.save(fig, handle), out_png)
@@ -187,8 +192,9 @@ def run_report(models, model_files, npz_paths, table_paths, input_json, comparis
     the order of ``models``; the reviewed model's are read.
     """
     table = pd.read_csv(comparison_csv)
-    model = review.preferred_model(table)
+    model = str(table.loc[table["reviewed"], "model"].iloc[0])
     files = {name: paths[models.index(model)] for name, paths in model_files.items()}
+    calibrations = {m: pd.read_csv(p) for m, p in zip(models, model_files["calibration"])}
     maneuvers = load_maneuvers(npz_paths)
     est = PointEstimate.load(files["point"])
     ctx = review.build_context(
@@ -196,6 +202,6 @@ def run_report(models, model_files, npz_paths, table_paths, input_json, comparis
         [pd.read_csv(p) for p in table_paths], est, pd.read_csv(files["calibration"]),
         read_json(files["diagnostics"]), read_json(files["sampler"]), read_json(files["correction"]),
         files["correction"], pd.read_csv(files["fit"]), az.from_netcdf(str(files["posterior"])), table,
-        read_json(input_json), read_json(truth_json)["parameters"] if truth_json else None, cfg)
+        read_json(input_json), read_json(truth_json)["parameters"] if truth_json else None, cfg, calibrations)
     write_text(review.render(ctx), out_html)
 

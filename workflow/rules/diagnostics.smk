@@ -19,11 +19,12 @@ rule diagnostics:
 
 
 rule compare:
-    """Residual RMS and PSIS-LOO of every model variant, and the parameters that moved."""
+    """Residual RMS, PSIS-LOO and exact leave-one-maneuver-out of every variant; which are plausible."""
     input:
         posterior=expand(f"{RESULTS}/{{model}}/posterior.nc", model=MODELS),
         diagnostics=expand(f"{RESULTS}/{{model}}/diagnostics.json", model=MODELS),
         summary=expand(f"{RESULTS}/{{model}}/posterior_summary.csv", model=MODELS),
+        elpd=expand(f"{RESULTS}/{{model}}/elpd_maneuvers.csv", model=MODELS),
     output:
         table=report(f"{RESULTS}/model_comparison.csv", caption="../report/comparison.rst",
                      category="Model comparison"),
@@ -31,6 +32,7 @@ rule compare:
                       category="Model comparison"),
     params:
         models=MODELS,
+        choice=section("model_choice"),
     conda:
         "../envs/gyrocal.yaml"
     log:

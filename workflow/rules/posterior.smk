@@ -10,6 +10,7 @@ rule posterior:
         summary=f"{RESULTS}/{{model}}/posterior_summary.csv",
         fit=f"{RESULTS}/{{model}}/fit.csv",
         sampler=f"{RESULTS}/{{model}}/sampler.json",
+        elpd=f"{RESULTS}/{{model}}/elpd_maneuvers.csv",
     params:
         priors=section("priors"),
         sampler=section("sampler"),

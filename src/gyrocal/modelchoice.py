@@ -1,0 +1,171 @@
+"""Which model the review rests on, and whether the answer hangs on that choice.
+
+The rule (README, "Which model is reviewed"):
+
+1. A variant is *rejected* when its residuals misfit the noise model, or when LOO rejects
+   it: its exact leave-one-maneuver-out elpd, or its PSIS-LOO elpd over 60-s blocks, falls
+   more than ``reject_se`` paired standard errors (of at least one nat) below the best
+   variant's by the same measure. The two see different things: a maneuver left out shows a
+   smooth effect, which a block's neighbours would interpolate, but six maneuvers give a
+   rough standard error; hundreds of blocks give a sharp one.
+2. The variants left are *plausible*; the one with the best elpd is reviewed. With none
+   left, the best elpd is reviewed and the verdict is NO-GO.
+3. The answer must not hang on the model. Every variant LOO does not reject (a misfitting
+   one too: a misfit in a variant that predicts as well says the others lack something)
+   must agree with the others, each channel-model term within ``agree_sd`` combined
+   standard deviations, and must know every term within the report's interval limits.
+   Otherwise the verdict is NO-GO, naming the models, the terms and what would separate
+   them. A model the data cannot rule out, under which the correction is unknown or
+   different, leaves the correction unknown or different.
+"""
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import minimize
+from scipy.special import logsumexp, softmax
+
+SEPARATED_BY = {
+    "bias_drift": "longer inertial holds before and after each rotation (a drift bends the held error)",
+    "sf_nonlinearity": "a second rotation rate in each direction (the scale factor then differs by rate)",
+    "st_latency": "shorter, sharper ramps (a time-tag offset shows where the rate changes)",
+    "st_correlated_noise": "a long inertial hold without rotation (the noise's correlation shows at rest)",
+}
+"""For each library effect, the change to the maneuver plan that shows it apart."""
+
+
+def stacking_weights(pointwise: np.ndarray) -> np.ndarray:
+    """Stacking weights (Yao et al. 2018) of models from their pointwise log predictive
+    densities, (n_models, n_points): the mixture maximising the summed log score."""
+    pointwise = np.asarray(pointwise, dtype=float)
+
+    def negative_score(z):
+        return -np.sum(logsumexp(pointwise + np.log(softmax(np.append(z, 0.0)))[:, None], axis=0))
+
+    z = minimize(negative_score, np.zeros(len(pointwise) - 1), method="BFGS").x
+    return softmax(np.append(z, 0.0))
+
+
+MEASURES = {"lomo_pointwise": "leave-one-maneuver-out", "loo_pointwise": "block PSIS-LOO"}
+"""The pointwise columns `classify` compares, and how a reason names each."""
+
+
+def classify(table: pd.DataFrame, reject_se: float) -> pd.DataFrame:
+    """The comparison table with ``loo_rejected``, ``rejected_by`` ("" when plausible) and
+    ``plausible``.
+
+    ``table`` holds ``misfit`` and, per variant, the pointwise values of each measure of
+    `MEASURES` present (an array per row); each variant is compared with the best by the
+    sum of the measure, using the paired standard error of the pointwise difference.
+    """
+    out = table.copy()
+    reasons, loo_rejected = [], []
+    for i, row in out.iterrows():
+        why = ["misfit"] if bool(row["misfit"]) else []
+        rejected = False
+        for column, name in MEASURES.items():
+            if column not in out:
+                continue
+            sums = out[column].apply(np.sum)
+            best = sums.idxmax()
+            diff = np.asarray(row[column]) - np.asarray(out.loc[best, column])
+            se = max(float(np.sqrt(len(diff) * np.var(diff))), 1.0)
+            if i != best and diff.sum() < -reject_se * se:
+                rejected = True
+                why.append(f"{name}: elpd {diff.sum():.1f} below {out.loc[best, 'model']} ({-diff.sum() / se:.1f} se)")
+        loo_rejected.append(rejected)
+        reasons.append("; ".join(why))
+    out["loo_rejected"] = loo_rejected
+    out["rejected_by"] = reasons
+    out["plausible"] = out["rejected_by"] == ""
+    return out
+
+
+def reviewed_model(classified: pd.DataFrame) -> str:
+    """The plausible variant with the best elpd; the best elpd of all when none is plausible."""
+    pool = classified[classified["plausible"]]
+    pool = pool if len(pool) else classified
+    return str(pool.loc[pool["elpd_lomo"].idxmax(), "model"])
+
+
+def disagreements(calibrations: dict, core_labels: list, agree_sd: float) -> list:
+    """Channel-model terms on which two variants disagree beyond their intervals.
+
+    ``calibrations`` maps each model to its ``calibration.csv``. Returns dicts (models,
+    label, difference, unit, z), largest ``z`` first.
+    """
+    tables = {m: t.assign(label=t["channel"] + "." + t["parameter"]).set_index("label")
+              for m, t in calibrations.items()}
+    models = list(tables)
+    out = []
+    for i, a in enumerate(models):
+        for b in models[i + 1:]:
+            ta, tb = tables[a].loc[core_labels], tables[b].loc[core_labels]
+            diff = (tb["mean"] - ta["mean"]).to_numpy()
+            z = np.abs(diff) / np.sqrt(ta["sd"].to_numpy() ** 2 + tb["sd"].to_numpy() ** 2)
+            for k in np.flatnonzero(z > agree_sd):
+                out.append({"models": (a, b), "label": core_labels[k], "difference": float(diff[k]),
+                            "unit": ta["unit"].iloc[k], "z": float(z[k])})
+    return sorted(out, key=lambda d: -d["z"])
+
+
+def separating_advice(effects_a, effects_b, descriptions: dict) -> str:
+    """What would tell two variants apart: the plan change for each effect one has and the
+    other lacks (a plugin's effect is named with its description)."""
+    differing = sorted(set(effects_a) ^ set(effects_b))
+    advice = [f"{e}: {SEPARATED_BY.get(e, 'maneuvers that excite ' + descriptions.get(e, e))}" for e in differing]
+    return "; ".join(advice) or "the variants hold the same effects"
+
+
+def too_wide(calibration: pd.DataFrame, core_labels: list, width_limits: dict) -> list:
+    """Channel-model terms whose 95 % interval is wider than the limit of their unit."""
+    table = calibration.assign(label=calibration["channel"] + "." + calibration["parameter"]).set_index("label")
+    table = table.loc[core_labels]
+    width = table["ci95_high"] - table["ci95_low"]
+    limit = np.array([width_limits[u] for u in table["unit"]])
+    return [{"label": label, "width": float(w), "unit": u, "limit": float(lim)}
+            for label, w, u, lim in zip(core_labels, width, table["unit"], limit) if w > lim]
+
+
+def sensitivity_check(classified: pd.DataFrame, calibrations: dict, core_labels: list, agree_sd: float,
+                      width_limits: dict, descriptions: dict) -> dict:
+    """The verdict check "the answer does not hang on the model" (rule 3 of the module).
+
+    ``width_limits`` maps a unit to the widest acceptable 95 % interval (the report's
+    ``max_ci_width_<unit>``).
+    """
+    name = "the answer does not hang on the model"
+    reviewed = reviewed_model(classified)
+    members = list(classified.loc[~classified["loo_rejected"].astype(bool), "model"])
+    found = disagreements({m: calibrations[m] for m in members}, core_labels, agree_sd)
+    wide = {m: too_wide(calibrations[m], core_labels, width_limits) for m in members if m != reviewed}
+    wide = {m: w for m, w in wide.items() if w}
+    if not found and not wide:
+        why = (f"the variants LOO does not reject ({', '.join(members)}) agree on every channel-model term within "
+               f"{agree_sd} combined sd, each within the interval limits" if len(members) > 1 else
+               f"LOO rejects every variant but {', '.join(members)}")
+        return {"check": name, "passed": True, "why": why}
+    effects = {r.model: r.effects.split("+") for r in classified.itertuples()}
+    sentences = []
+    for a, b in dict.fromkeys([d["models"] for d in found] + [(reviewed, m) for m in wide]):
+        terms = [f"{d['label']} differs by {abs(d['difference']):,.1f} {d['unit']} ({d['z']:.1f} sd)"
+                 for d in found if d["models"] == (a, b)]
+        other = b if a == reviewed else a
+        if other in wide and (a == reviewed or b == reviewed):
+            terms += [f"under {other}, {w['label']} is known only within {w['width']:,.0f} {w['unit']} "
+                      f"(95 %; limit {w['limit']:g})" for w in wide.pop(other)]
+        shown = "; ".join(terms[:3]) + (f"; and {len(terms) - 3} more" if len(terms) > 3 else "")
+        sentences.append(f"the data cannot tell {a} from {b}: {shown}. What would separate them: "
+                         f"{separating_advice(effects[a], effects[b], descriptions)}")
+    return {"check": name, "passed": False, "why": ". ".join(sentences)}
+
+
+def plausibility_check(classified: pd.DataFrame) -> dict:
+    """The verdict check "a plausible model": some variant neither misfits nor is LOO-rejected."""
+    plausible = classified[classified["plausible"]]
+    if len(plausible):
+        return {"check": "a plausible model", "passed": True,
+                "why": "plausible (no misfit, not rejected by leave-one-maneuver-out LOO): "
+                       + ", ".join(plausible["model"])}
+    return {"check": "a plausible model", "passed": False,
+            "why": "every variant is rejected: " + "; ".join(f"{r.model} ({r.rejected_by})"
+                                                              for r in classified.itertuples())}

@@ -1,0 +1,122 @@
+"""Which model is reviewed, and when the answer hangs on the model (gyrocal.modelchoice)."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gyrocal import modelchoice
+
+LABELS = ["dtg2_yaw.sf_pos", "dtg2_yaw.sf_neg"]
+
+
+def comparison(rows):
+    """A comparison table from (model, effects, misfit, pointwise leave-one-maneuver-out)."""
+    table = pd.DataFrame([{"model": m, "effects": e, "misfit": f, "elpd_lomo": float(np.sum(p)),
+                           "lomo_pointwise": np.asarray(p, dtype=float)} for m, e, f, p in rows])
+    return modelchoice.classify(table, reject_se=4.0)
+
+
+def calibration(sf_pos, sf_neg, sd=10.0):
+    mean = np.array([sf_pos, sf_neg], dtype=float)
+    return pd.DataFrame({"channel": ["dtg2_yaw", "dtg2_yaw"], "parameter": ["sf_pos", "sf_neg"],
+                         "unit": ["ppm", "ppm"], "mean": mean, "sd": [sd, sd],
+                         "ci95_low": mean - 1.96 * sd, "ci95_high": mean + 1.96 * sd})
+
+
+LIMITS = {"ppm": 200.0}
+
+
+BASE = "scale_factor+misalignment+bias"
+
+
+def test_a_misfitting_variant_and_one_loo_clearly_rejects_are_not_plausible():
+    table = comparison([("baseline", BASE, True, [0, 0, 0, 0]),
+                        ("drift", BASE + "+bias_drift", False, [30, 31, 29, 30]),
+                        ("latency", BASE + "+st_latency", False, [0.5, 0.2, 0.1, -0.3])])
+    assert list(table["plausible"]) == [False, True, False]
+    assert table.loc[0, "rejected_by"].startswith("misfit; leave-one-maneuver-out: elpd -120.0 below drift")
+    assert table.loc[2, "rejected_by"].startswith("leave-one-maneuver-out: elpd -119.5 below drift")
+    assert modelchoice.reviewed_model(table) == "drift"
+
+
+def test_a_difference_within_the_paired_se_rejects_nothing():
+    """-6 nats with a paired se of about 10: not clearly worse."""
+    table = comparison([("a", BASE, False, [10, -10, 10, -10]), ("b", BASE + "+bias_drift", False, [4, -4, 4, -10])])
+    assert table["plausible"].all()
+    assert modelchoice.reviewed_model(table) == "a"
+
+
+def test_either_measure_rejects_a_variant_each_against_its_own_best():
+    """Six maneuvers give a rough se (-12 nats is 1.3 se there); a hundred blocks give a sharp one."""
+    blocks_a, blocks_b = np.zeros(100), np.full(100, -0.2) + 0.01 * np.cos(np.arange(100))
+    table = pd.DataFrame([{"model": "a", "effects": BASE, "misfit": False, "elpd_lomo": 0.0,
+                           "lomo_pointwise": np.zeros(6), "loo_pointwise": blocks_a},
+                          {"model": "b", "effects": BASE, "misfit": False, "elpd_lomo": -12.0,
+                           "lomo_pointwise": np.array([-10.0, -2.0, 0.0, 0.0, 0.0, 0.0]), "loo_pointwise": blocks_b}])
+    only_lomo = modelchoice.classify(table.drop(columns="loo_pointwise"), reject_se=4.0)
+    assert only_lomo["plausible"].all()
+    both = modelchoice.classify(table, reject_se=4.0)
+    assert list(both["plausible"]) == [True, False]
+    assert both.loc[1, "rejected_by"].startswith("block PSIS-LOO: elpd -20.0 below a")
+
+
+def test_with_no_plausible_variant_the_best_elpd_is_reviewed_and_the_check_fails():
+    table = comparison([("baseline", BASE, True, [0, 0, 0]), ("drift", BASE + "+bias_drift", True, [5, 5, 5])])
+    assert modelchoice.reviewed_model(table) == "drift"
+    check = modelchoice.plausibility_check(table)
+    assert not check["passed"] and "baseline (misfit" in check["why"] and "drift (misfit)" in check["why"]
+
+
+def test_plausible_variants_that_disagree_beyond_their_intervals_give_no_go_naming_both_and_the_term():
+    table = comparison([("drift", BASE + "+bias_drift", False, [1, 1, 1]),
+                        ("latency", BASE + "+st_latency", False, [1, 1.2, 0.9])])
+    calibrations = {"drift": calibration(-1712.0, -1000.0), "latency": calibration(-112.0, -1010.0)}
+    check = modelchoice.sensitivity_check(table, calibrations, LABELS, 3.0, LIMITS, {})
+    assert not check["passed"]
+    assert check["why"].startswith("the data cannot tell drift from latency: dtg2_yaw.sf_pos differs by 1,600.0 ppm "
+                                   "(113.1 sd). What would separate them:")
+    assert "dtg2_yaw.sf_neg" not in check["why"]
+    assert "bias_drift: longer inertial holds" in check["why"] and "st_latency: shorter, sharper ramps" in check["why"]
+
+
+def test_plausible_variants_that_agree_within_their_intervals_pass():
+    table = comparison([("a", BASE, False, [1, 1]), ("b", BASE + "+bias_drift", False, [1, 1])])
+    check = modelchoice.sensitivity_check(table, {"a": calibration(-1712, -1000), "b": calibration(-1700, -1015)},
+                                          LABELS, 3.0, LIMITS, {})
+    assert check["passed"] and "agree on every channel-model term within 3.0 combined sd" in check["why"]
+
+
+def test_a_variant_loo_rejects_cannot_block_a_go():
+    table = comparison([("a", BASE, False, [9, 9, 9]), ("b", BASE + "+bias_drift", False, [-30, -30, -30])])
+    check = modelchoice.sensitivity_check(table, {"a": calibration(0, 0), "b": calibration(5000, 5000)}, LABELS, 3.0,
+                                          LIMITS, {})
+    assert check["passed"] and "LOO rejects every variant but a" in check["why"]
+
+
+def test_a_misfitting_variant_that_predicts_as_well_and_disagrees_blocks_a_go():
+    """Its misfit says the others lack something too: the answer hangs on the model."""
+    table = comparison([("a", BASE, False, [9, 9, 9]), ("b", BASE + "+bias_drift", True, [9, 10, 9])])
+    assert list(table["plausible"]) == [True, False] and modelchoice.reviewed_model(table) == "a"
+    check = modelchoice.sensitivity_check(table, {"a": calibration(0, 0), "b": calibration(5000, 0)}, LABELS, 3.0,
+                                          LIMITS, {})
+    assert not check["passed"] and check["why"].startswith("the data cannot tell a from b: dtg2_yaw.sf_pos differs")
+
+
+def test_a_variant_the_data_cannot_rule_out_under_which_a_term_is_unknown_blocks_a_go():
+    """The means agree, but under the nonlinearity the scale factor is known only to 2000 ppm."""
+    table = comparison([("baseline", BASE, False, [9, 9, 9]), ("nonlin", BASE + "+sf_nonlinearity", False, [9, 8.8, 9])])
+    check = modelchoice.sensitivity_check(table, {"baseline": calibration(-1700, -1000),
+                                                  "nonlin": calibration(-1650, -1000, sd=510.0)}, LABELS, 3.0, LIMITS, {})
+    assert not check["passed"]
+    assert check["why"].startswith("the data cannot tell baseline from nonlin: under nonlin, dtg2_yaw.sf_pos is known "
+                                   "only within 1,999 ppm (95 %; limit 200)")
+    assert "sf_nonlinearity: a second rotation rate in each direction" in check["why"]
+
+
+def test_stacking_weights_favour_the_better_predictor_and_split_between_equals():
+    assert modelchoice.stacking_weights([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]]) == pytest.approx([0.5, 0.5], abs=1e-6)
+    w = modelchoice.stacking_weights([[-1.0, -1.0, -1.0, -1.0], [0.0, 0.0, 0.0, 0.0]])
+    assert w[1] > 0.999
+    # each model predicts half the points better: the mixture takes both
+    w = modelchoice.stacking_weights([[0.0, -5.0, 0.0, -5.0], [-5.0, 0.0, -5.0, 0.0]])
+    assert w == pytest.approx([0.5, 0.5], abs=1e-4)
