@@ -3,11 +3,14 @@
 The rule (README, "Which model is reviewed"):
 
 1. A variant is *rejected* when its residuals misfit the noise model, or when LOO rejects
-   it: its exact leave-one-maneuver-out elpd, or its PSIS-LOO elpd over 60-s blocks, falls
-   more than ``reject_se`` paired standard errors (of at least one nat) below the best
-   variant's by the same measure. The two see different things: a maneuver left out shows a
-   smooth effect, which a block's neighbours would interpolate, but six maneuvers give a
-   rough standard error; hundreds of blocks give a sharp one.
+   it: its exact leave-one-maneuver-out elpd falls more than ``reject_se`` paired standard
+   errors (of at least one nat) below the best variant's; or it misfits and its PSIS-LOO
+   elpd over 60-s blocks falls that far below the best by that measure. A maneuver left
+   out shows a smooth effect that a block's neighbours would interpolate, but six
+   maneuvers give a rough standard error; hundreds of blocks give a sharp one, so sharp
+   that the few nats a variant loses for parameters the data cannot inform (its prior
+   volume) look significant. Rejecting a variant that fits for that would hide the very
+   model uncertainty the review must show, so the blocks only confirm a misfit.
 2. The variants left are *plausible*; the one with the best elpd is reviewed. With none
    left, the best elpd is reviewed and the verdict is NO-GO.
 3. The answer must not hang on the model. Every variant LOO does not reject (a misfitting
@@ -45,8 +48,9 @@ def stacking_weights(pointwise: np.ndarray) -> np.ndarray:
     return softmax(np.append(z, 0.0))
 
 
-MEASURES = {"lomo_pointwise": "leave-one-maneuver-out", "loo_pointwise": "block PSIS-LOO"}
-"""The pointwise columns `classify` compares, and how a reason names each."""
+MEASURES = {"lomo_pointwise": ("leave-one-maneuver-out", False), "loo_pointwise": ("block PSIS-LOO", True)}
+"""The pointwise columns `classify` compares: how a reason names each, and whether it may
+reject only a variant that misfits (rule 1)."""
 
 
 def classify(table: pd.DataFrame, reject_se: float) -> pd.DataFrame:
@@ -62,8 +66,8 @@ def classify(table: pd.DataFrame, reject_se: float) -> pd.DataFrame:
     for i, row in out.iterrows():
         why = ["misfit"] if bool(row["misfit"]) else []
         rejected = False
-        for column, name in MEASURES.items():
-            if column not in out:
+        for column, (name, needs_misfit) in MEASURES.items():
+            if column not in out or (needs_misfit and not bool(row["misfit"])):
                 continue
             sums = out[column].apply(np.sum)
             best = sums.idxmax()
