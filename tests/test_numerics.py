@@ -227,3 +227,15 @@ def test_leave_one_maneuver_out_evidence_equals_dense_gaussian_refits():
     for m in range(3):
         expected = full - dense_log_marginal([k for k in range(3) if k != m])
         assert got[m] == pytest.approx(expected, rel=1e-8, abs=1e-6)
+
+
+@pytest.mark.parametrize("df", [2, 6, 12])
+@pytest.mark.parametrize("x", [200.0, 1400.0, 1600.0, 5000.0, 1e5])
+def test_chi2_log_sf_stays_finite_and_exact_where_scipy_underflows(x, df):
+    """Against the closed form for even df: P(chi2_2k > x) = exp(-x/2) sum_{i<k} (x/2)^i / i!."""
+    from scipy.special import gammaln, logsumexp
+
+    from gyrocal.diagnostics import chi2_log_sf
+    i = np.arange(df // 2)
+    exact = -x / 2 + logsumexp(i * np.log(x / 2) - gammaln(i + 1))
+    assert chi2_log_sf(x, df) == pytest.approx(exact, rel=1e-9)

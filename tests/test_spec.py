@@ -97,3 +97,38 @@ def test_a_model_with_an_arcsec_plugin_parameter_runs_end_to_end(tiny, tmp_path,
     html = (tmp_path / "report.html").read_text()
     assert "model reviewed: <b>cyclic</b>" in html and "cyclic_error" in html
     assert "class='verdict go'>GO<" in html
+
+
+def test_a_point_estimate_beyond_a_physical_bound_stops_before_sampling_naming_it_and_its_maneuvers():
+    from types import SimpleNamespace
+
+    from gyrocal.posterior import SamplingError, check_within_bounds
+    spec = spec_of(BASE)
+    theta = np.zeros(len(spec))
+    theta[spec.index("dtg2_yaw.sf_neg")] = 1.145252       # 1,145,252 ppm: a gap or a unit error
+    theta[spec.index("dtg1_roll.mis_yaw")] = 2e-3          # 413 arcsec: inside the 3600 arcsec bound
+    maneuvers = [SimpleNamespace(id=f"{a}_{s}", axis=a, direction=d)
+                 for a in ("yaw", "roll", "pitch") for s, d in (("pos", "+"), ("neg", "-"))]
+    with pytest.raises(SamplingError, match=r"dtg2_yaw\.sf_neg = 1,145,252 ppm \(bound 30,000\), from maneuver\(s\) "
+                                            r"yaw_neg$"):
+        check_within_bounds(SimpleNamespace(spec=spec, theta=theta), spec.bound_si, maneuvers)
+    theta[spec.index("dtg2_yaw.sf_neg")] = 0.0
+    theta[spec.index("dtg1_roll.mis_yaw")] = 0.02           # 4125 arcsec, toward yaw: the yaw rotations show it
+    with pytest.raises(SamplingError, match=r"dtg1_roll\.mis_yaw = 4,125 arcsec \(bound 3,600\), from maneuver\(s\) "
+                                            r"yaw_pos, yaw_neg$"):
+        check_within_bounds(SimpleNamespace(spec=spec, theta=theta), spec.bound_si, maneuvers)
+
+
+def test_start_points_with_zero_density_are_redrawn_a_bounded_number_of_times_then_refused():
+    from gyrocal.posterior import START_REDRAWS, SamplingError, run_ensembles
+    calls = []
+
+    def nowhere(x):
+        calls.append(len(x))
+        return np.full(len(x), -np.inf)
+
+    cfg = {"walkers": 8, "ensembles": 1, "burn_steps": 10, "chunk_steps": 10, "min_tau_multiple": 1,
+           "max_steps": 20, "initial_steps": 10}
+    with pytest.raises(SamplingError, match=r"after 100 redraws, 8 of 8 start points of ensemble 0 still have zero"):
+        run_ensembles(nowhere, np.zeros(3), np.eye(3), cfg, seed=1)
+    assert len(calls) == START_REDRAWS + 1

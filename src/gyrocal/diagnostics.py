@@ -12,6 +12,7 @@ test's p-value: near 1 for structure the noise cannot explain.
 import numpy as np
 import pandas as pd
 from scipy import stats as sps
+from scipy.special import gammaln
 
 from . import effects, errormodel, noise
 from .estimate import PointEstimate, linearize_all
@@ -136,15 +137,27 @@ def _encompass(ranking, groups, stats, n_model):
             if other is r:
                 continue
             drop = conditional_drop(stats, base, [n_model + i for i in columns[other["name"]]])
-            worst = min(worst, float(sps.chi2.logsf(drop, len(columns[other["name"]]))) / np.log(10))
+            worst = min(worst, chi2_log_sf(drop, len(columns[other["name"]])) / np.log(10))
         r["leftover_log10_p"] = round(worst, 2)
     positions = sorted(ranking.index(r) for r in leaders)
     for position, r in zip(positions, sorted(leaders, key=lambda r: (-r["leftover_log10_p"], r["log10_p"]))):
         ranking[position] = r
 
 
+def chi2_log_sf(x: float, df: int) -> float:
+    """``log P(chi2_df > x)``, finite however large x: scipy's where it does not underflow
+    (x up to about 1400), else the asymptotic series of the upper incomplete gamma function,
+    ``Q(a, z) ~ z^(a-1) e^-z / Gamma(a) (1 + (a-1)/z + (a-1)(a-2)/z^2 + ...)``, a = df/2, z = x/2."""
+    value = float(sps.chi2.logsf(x, df))
+    if np.isfinite(value):
+        return value
+    a, z = df / 2.0, x / 2.0
+    terms = np.cumprod([(a - k) / z for k in range(1, 6)])
+    return float((a - 1) * np.log(z) - z - gammaln(a) + np.log1p(terms.sum()))
+
+
 def _entry(name, kind, drop, df, description, signature=""):
-    log_p = float(sps.chi2.logsf(drop, df))
+    log_p = chi2_log_sf(drop, df)
     entry = {"name": name, "kind": kind, "score": round(-float(np.expm1(log_p)), 4), "chi2_drop": round(drop, 2),
              "df": df, "log10_p": round(log_p / np.log(10), 2), "description": description}
     return {**entry, "signature": signature} if signature else entry
