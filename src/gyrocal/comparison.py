@@ -14,7 +14,7 @@ import numpy as np
 import pandas as pd
 
 from .inferencedata import NOISE_LABELS
-from .modelchoice import classify, reviewed_model, stacking_weights
+from .modelchoice import classify, paired_se, reviewed_model, stacking_weights
 
 log = logging.getLogger("gyrocal")
 
@@ -45,11 +45,6 @@ def moved(reference: pd.DataFrame, current: pd.DataFrame) -> list:
         if abs(current.loc[label, "mean"] - reference.loc[label, "mean"]) > 2 * sd:
             out.append(label)
     return out
-
-
-def paired_se(diff) -> float:
-    """Standard error of a sum of pointwise differences."""
-    return float(np.sqrt(len(diff) * np.var(diff)))
 
 
 def compare(models, idatas, diagnostics, summaries, lomo, reject_se: float) -> pd.DataFrame:

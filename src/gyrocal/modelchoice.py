@@ -36,6 +36,12 @@ SEPARATED_BY = {
 """For each library effect, the change to the maneuver plan that shows it apart."""
 
 
+def paired_se(diff) -> float:
+    """Standard error of a sum of pointwise differences (Vehtari et al. 2017, eq. 24)."""
+    diff = np.asarray(diff, dtype=float)
+    return float(np.sqrt(len(diff) * np.var(diff)))
+
+
 def stacking_weights(pointwise: np.ndarray) -> np.ndarray:
     """Stacking weights (Yao et al. 2018) of models from their pointwise log predictive
     densities, (n_models, n_points): the mixture maximising the summed log score."""
@@ -72,7 +78,7 @@ def classify(table: pd.DataFrame, reject_se: float) -> pd.DataFrame:
             sums = out[column].apply(np.sum)
             best = sums.idxmax()
             diff = np.asarray(row[column]) - np.asarray(out.loc[best, column])
-            se = max(float(np.sqrt(len(diff) * np.var(diff))), 1.0)
+            se = max(paired_se(diff), 1.0)
             if i != best and diff.sum() < -reject_se * se:
                 rejected = True
                 why.append(f"{name}: elpd {diff.sum():.1f} below {out.loc[best, 'model']} ({-diff.sum() / se:.1f} se)")
