@@ -99,26 +99,6 @@ def test_a_model_with_an_arcsec_plugin_parameter_runs_end_to_end(tiny, tmp_path,
     assert "class='verdict go'>GO<" in html
 
 
-def test_a_point_estimate_beyond_a_physical_bound_stops_before_sampling_naming_it_and_its_maneuvers():
-    from types import SimpleNamespace
-
-    from gyrocal.posterior import SamplingError, check_within_bounds
-    spec = spec_of(BASE)
-    theta = np.zeros(len(spec))
-    theta[spec.index("dtg2_yaw.sf_neg")] = 1.145252       # 1,145,252 ppm: a gap or a unit error
-    theta[spec.index("dtg1_roll.mis_yaw")] = 2e-3          # 413 arcsec: inside the 3600 arcsec bound
-    maneuvers = [SimpleNamespace(id=f"{a}_{s}", axis=a, direction=d)
-                 for a in ("yaw", "roll", "pitch") for s, d in (("pos", "+"), ("neg", "-"))]
-    with pytest.raises(SamplingError, match=r"dtg2_yaw\.sf_neg = 1,145,252 ppm \(bound 30,000\), from maneuver\(s\) "
-                                            r"yaw_neg$"):
-        check_within_bounds(SimpleNamespace(spec=spec, theta=theta), spec.bound_si, maneuvers)
-    theta[spec.index("dtg2_yaw.sf_neg")] = 0.0
-    theta[spec.index("dtg1_roll.mis_yaw")] = 0.02           # 4125 arcsec, toward yaw: the yaw rotations show it
-    with pytest.raises(SamplingError, match=r"dtg1_roll\.mis_yaw = 4,125 arcsec \(bound 3,600\), from maneuver\(s\) "
-                                            r"yaw_pos, yaw_neg$"):
-        check_within_bounds(SimpleNamespace(spec=spec, theta=theta), spec.bound_si, maneuvers)
-
-
 def test_start_points_with_zero_density_are_redrawn_a_bounded_number_of_times_then_refused():
     from gyrocal.posterior import START_REDRAWS, SamplingError, run_ensembles
     calls = []

@@ -53,16 +53,6 @@ SYMBOLS = {"sf_pos": ("sf_pos", None), "sf_neg": ("sf_neg", None),
 """Eq. 3's terms by their contract names: ``mis_<b>`` is the misalignment toward axis b."""
 
 
-def exciting_rotation(channel: Channel, name: str) -> tuple:
-    """The single-axis rotation that shows a term of eq. 3 (the paper's maneuver design):
-    ``(axis, direction)``; a scale factor needs its own axis turning its way, a misalignment
-    toward b a rotation about b either way (direction None)."""
-    _, toward = SYMBOLS[name]
-    if toward is not None:
-        return AXES[toward], None
-    return channel.axis, "+" if name == "sf_pos" else "-"
-
-
 @dataclass
 class ChannelParams:
     """Residual scale factors, misalignments and biases of a list of channels (SI)."""

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 import emcee
 import numpy as np
 
-from . import channels as ch
 from .estimate import linearize_all, profile_reml
 from .likelihood import LOG_2PI, campaign_stats, conditional_posterior, leave_one_out_log_evidence, maneuver_stats
 from .noise import log_sigma_of, variances
@@ -195,37 +194,6 @@ class SamplingError(RuntimeError):
     """The posterior cannot be sampled from this point estimate; the message says why."""
 
 
-def check_within_bounds(estimate, bound_si, maneuvers):
-    """Stop before sampling where the point estimate lies beyond a physical bound: then the data
-    (a gap, a unit error, a direction never flown) do not support the model, and sampling from
-    there would only wander. Names each parameter and the maneuvers that inform it."""
-    spec = estimate.spec
-    outside = np.flatnonzero(np.abs(estimate.theta) > bound_si)
-    if not len(outside):
-        return
-    lines = []
-    for i in outside:
-        p = spec.parameters[i]
-        value, bound = spec.to_unit(estimate.theta)[i], bound_si[i] / p.si_per_unit
-        lines.append(f"{p.label} = {_readable(value)} {p.unit} (bound {_readable(bound)}), from maneuver(s) "
-                     f"{', '.join(informing_maneuvers(spec, p, maneuvers)) or 'none'}")
-    raise SamplingError("point estimate beyond the physical bounds, so the posterior is not sampled: "
-                        + "; ".join(lines))
-
-
-def _readable(value: float) -> str:
-    return f"{value:,.0f}" if abs(value) >= 100 else f"{value:.4g}"
-
-
-def informing_maneuvers(spec, parameter, maneuvers) -> list:
-    """The maneuvers that inform a parameter: for a channel-model term those whose rotation
-    shows it (`channels.exciting_rotation`), for an effect's parameter all of them."""
-    if not parameter.core:
-        return [d.id for d in maneuvers]
-    axis, direction = ch.exciting_rotation(spec.channels[parameter.channel], parameter.name)
-    return [d.id for d in maneuvers if d.axis == axis and direction in (None, d.direction)]
-
-
 def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict, seed: int) -> SamplerResult:
     """Independent emcee ensembles, run until every chain is at least k autocorrelation times.
 
@@ -336,7 +304,6 @@ def leave_one_maneuver_out(post: Posterior, priors: Priors) -> np.ndarray:
 
 def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dict, seed: int) -> Posterior:
     """Linearise about the point estimate, tabulate the noise ratios and run the ensembles."""
-    check_within_bounds(estimate, priors.bound, maneuvers)
     lins, noises = linearize_all(maneuvers, estimate)
     ratios = estimate.log_sigma[1:] - estimate.log_sigma[0]
     ratio_sd = ratio_curvature(noises, ratios)
