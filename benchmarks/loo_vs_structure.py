@@ -34,7 +34,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from gyrocal import comparison, noise, predictive, simulate, steps
 from gyrocal.estimate import PointEstimate, linearize_all
-from gyrocal.likelihood import Stats, leave_one_out_log_evidence, log_evidence, maneuver_stats
+from gyrocal.likelihood import Stats, leave_one_out_log_evidence, log_evidence, maneuver_stats, total
 
 from conftest import DATA, config_with, run_campaign
 from test_criticism import BASE
@@ -108,10 +108,9 @@ def study(scenario: Path, effect: str, tmp: Path):
         lins, noises = linearize_all(maneuvers, est)
         parts = [maneuver_stats(nz, var) for nz in noises]
         lomo[model] = leave_one_out_log_evidence(parts, prior_mean, prior_sd)
-        total = Stats(sum(s.A for s in parts), sum(s.b for s in parts), sum(s.c for s in parts),
-                      sum(s.logdet for s in parts), sum(s.n for s in parts))
-        full = log_evidence(total, prior_mean, prior_sd)
-        cov_post = np.linalg.inv(total.A + np.diag(1 / prior_sd**2))
+        whole = total(parts)
+        full = log_evidence(whole, prior_mean, prior_sd)
+        cov_post = np.linalg.inv(whole.A + np.diag(1 / prior_sd**2))
         loo = comparison.loo(az.from_netcdf(tmp / "out" / model / "posterior.nc"), model)[0]
         psis = loo.loo_i.values
         m = 1
@@ -123,9 +122,7 @@ def study(scenario: Path, effect: str, tmp: Path):
         for b in range(min(4, blocks.max() + 1)):
             keep = blocks != b
             without = dense_stats(y[keep], x[keep], g[keep], cov[np.ix_(keep, keep)])
-            rest = Stats(total.A - parts[m].A + without.A, total.b - parts[m].b + without.b,
-                         total.c - parts[m].c + without.c, total.logdet - parts[m].logdet + without.logdet,
-                         total.n - parts[m].n + without.n)
+            rest = total([s for k, s in enumerate(parts) if k != m] + [without])
             exact = full - log_evidence(rest, prior_mean, prior_sd)
             rows_out.append(f"block {b}: exact {exact:9.2f}, PSIS {psis[offset + b]:9.2f}")
         print(f"3. {model}, maneuver {maneuvers[m].id}: " + "; ".join(rows_out))

@@ -52,11 +52,15 @@ def maneuver_stats(noise: ManeuverNoise, variances: dict) -> Stats:
     return Stats(A, b, c, logdet_c + _logdet_chol(factor), noise.n - g)
 
 
-def campaign_stats(noises, variances: dict) -> Stats:
-    """Sum of `maneuver_stats` over the maneuvers (their noises are independent)."""
-    parts = [maneuver_stats(n, variances) for n in noises]
+def total(parts) -> Stats:
+    """The `Stats` of independent parts of the data (maneuvers): their sum."""
     return Stats(sum(s.A for s in parts), sum(s.b for s in parts), sum(s.c for s in parts),
                  sum(s.logdet for s in parts), sum(s.n for s in parts))
+
+
+def campaign_stats(noises, variances: dict) -> Stats:
+    """Sum of `maneuver_stats` over the maneuvers (their noises are independent)."""
+    return total([maneuver_stats(n, variances) for n in noises])
 
 
 def conditional_posterior(stats: Stats, prior_mean, prior_sd):
@@ -83,9 +87,8 @@ def leave_one_out_log_evidence(parts, prior_mean, prior_sd) -> np.ndarray:
     """``log p(y_m | y_-m)`` for each part m (e.g. a maneuver) of data that are independent given
     the parameters: the exact predictive density after refitting without m, as the ratio of
     two evidences. ``parts`` are each part's `Stats` at the same noise variances."""
-    total = Stats(sum(s.A for s in parts), sum(s.b for s in parts), sum(s.c for s in parts),
-                  sum(s.logdet for s in parts), sum(s.n for s in parts))
-    full = log_evidence(total, prior_mean, prior_sd)
-    return np.array([full - log_evidence(Stats(total.A - s.A, total.b - s.b, total.c - s.c,
-                                                total.logdet - s.logdet, total.n - s.n), prior_mean, prior_sd)
+    whole = total(parts)
+    full = log_evidence(whole, prior_mean, prior_sd)
+    return np.array([full - log_evidence(Stats(whole.A - s.A, whole.b - s.b, whole.c - s.c,
+                                                whole.logdet - s.logdet, whole.n - s.n), prior_mean, prior_sd)
                      for s in parts])

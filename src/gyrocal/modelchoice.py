@@ -118,11 +118,11 @@ def disagreements(calibrations: dict, core_labels: list, agree_sd: float) -> lis
     return sorted(out, key=lambda d: -d["z"])
 
 
-def separating_advice(effects_a, effects_b, descriptions: dict) -> str:
+def separating_advice(effects_a, effects_b) -> str:
     """What would tell two variants apart: the plan change for each effect one has and the
-    other lacks (a plugin's effect is named with its description)."""
+    other lacks (for a plugin's effect, maneuvers that excite it)."""
     differing = sorted(set(effects_a) ^ set(effects_b))
-    advice = [f"{e}: {SEPARATED_BY.get(e, 'maneuvers that excite ' + descriptions.get(e, e))}" for e in differing]
+    advice = [f"{e}: {SEPARATED_BY.get(e, 'maneuvers that excite ' + e)}" for e in differing]
     return "; ".join(advice) or "the variants hold the same effects"
 
 
@@ -137,7 +137,7 @@ def too_wide(calibration: pd.DataFrame, core_labels: list, width_limits: dict) -
 
 
 def sensitivity_check(classified: pd.DataFrame, calibrations: dict, core_labels: list, agree_sd: float,
-                      width_limits: dict, descriptions: dict) -> dict:
+                      width_limits: dict) -> dict:
     """The verdict check "the answer does not hang on the model" (rule 3 of the module).
 
     ``width_limits`` maps a unit to the widest acceptable 95 % interval (the report's
@@ -165,7 +165,7 @@ def sensitivity_check(classified: pd.DataFrame, calibrations: dict, core_labels:
                       f"(95 %; limit {w['limit']:g})" for w in wide.pop(other)]
         shown = "; ".join(terms[:3]) + (f"; and {len(terms) - 3} more" if len(terms) > 3 else "")
         sentences.append(f"the data cannot tell {a} from {b}: {shown}. What would separate them: "
-                         f"{separating_advice(effects[a], effects[b], descriptions)}")
+                         f"{separating_advice(effects[a], effects[b])}")
     return {"check": name, "passed": False, "why": ". ".join(sentences)}
 
 

@@ -16,7 +16,7 @@ import emcee
 import numpy as np
 
 from .estimate import linearize_all, profile_reml
-from .likelihood import LOG_2PI, campaign_stats, conditional_posterior, leave_one_out_log_evidence, maneuver_stats
+from .likelihood import LOG_2PI, campaign_stats, conditional_posterior, leave_one_out_log_evidence, maneuver_stats, total
 from .noise import log_sigma_of, variances
 
 NOISE_NAMES = ("sigma_cross", "sigma_about", "arw")
@@ -272,6 +272,8 @@ class Posterior:
     grid: RatioGrid
     result: SamplerResult
     labels: list
+    parts: list
+    """Each maneuver's `likelihood.Stats` at the point estimate's noise scales."""
 
     @property
     def n_params(self):
@@ -297,9 +299,7 @@ def leave_one_maneuver_out(post: Posterior, priors: Priors) -> np.ndarray:
     linearised model is Gaussian given the noise scales (held at the point estimate's), so
     each refit is a ratio of two closed-form evidences: no importance sampling.
     """
-    var = variances(post.estimate.log_sigma)
-    return leave_one_out_log_evidence([maneuver_stats(nz, var) for nz in post.noises],
-                                      priors.mean - post.estimate.theta, priors.sd)
+    return leave_one_out_log_evidence(post.parts, priors.mean - post.estimate.theta, priors.sd)
 
 
 def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dict, seed: int) -> Posterior:
@@ -309,8 +309,9 @@ def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dic
     ratio_sd = ratio_curvature(noises, ratios)
     grid = RatioGrid(noises, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"])
     logpost = LogPosterior(grid, estimate.theta, priors)
-    stats = campaign_stats(noises, variances(estimate.log_sigma))
+    parts = [maneuver_stats(nz, variances(estimate.log_sigma)) for nz in noises]
+    stats = total(parts)
     mean, cov = conditional_posterior(stats, priors.mean - estimate.theta, priors.sd)
     start_mean = np.concatenate([mean, estimate.log_sigma])
     result = run_ensembles(logpost, start_mean, start_covariance(cov, stats.n, ratio_sd), sampler_cfg, seed)
-    return Posterior(estimate, lins, noises, grid, result, list(estimate.spec.labels))
+    return Posterior(estimate, lins, noises, grid, result, list(estimate.spec.labels), parts)

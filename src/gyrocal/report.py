@@ -100,6 +100,11 @@ def correction_effect(maneuvers, params_by_maneuver, nominal_by_maneuver) -> pd.
     return pd.DataFrame(rows)
 
 
+def width_limits(rcfg: dict, spec) -> dict:
+    """The widest acceptable 95 % interval of each channel-model unit (``max_ci_width_<unit>``)."""
+    return {unit: rcfg[f"max_ci_width_{unit}"] for unit in set(spec.units[spec.core])}
+
+
 def verdict_checks(calibration, spec, sampler, diagnostics, effect_table, rcfg, conv) -> list:
     """The GO/NO-GO checks; each names what failed it and why. The interval and bound
     checks apply to the channel model's terms, with the thresholds of their unit
@@ -117,13 +122,11 @@ def verdict_checks(calibration, spec, sampler, diagnostics, effect_table, rcfg, 
                    "the residuals are consistent with the noise model" if not failed else
                    "misfit: " + "; ".join(f"{c['check']}: {c['why']}" for c in failed)
                    + f". Best explanation: {diagnostics['ranking'][0]['kind']} {diagnostics['ranking'][0]['name']}"))
-    width = base["ci95_high"] - base["ci95_low"]
-    limit = np.array([rcfg[f"max_ci_width_{unit}"] for unit in base["unit"]])
-    wide = base[width.to_numpy() > limit]
-    checks.append(("intervals narrow enough", wide.empty,
+    wide = modelchoice.too_wide(calibration, spec.labels[spec.core], width_limits(rcfg, spec))
+    checks.append(("intervals narrow enough", not wide,
                    f"every 95 % interval is narrower than {rcfg['max_ci_width_ppm']} ppm / {rcfg['max_ci_width_arcsec']} arcsec"
-                   if wide.empty else "too wide: " + ", ".join(
-                       f"{r.channel}.{r.parameter} ({r.ci95_high - r.ci95_low:.1f} {r.unit})" for r in wide.itertuples())))
+                   if not wide else "too wide: " + ", ".join(f"{w['label']} ({w['width']:.1f} {w['unit']})"
+                                                             for w in wide)))
     bound = np.array([rcfg[f"physical_bound_{unit}"] for unit in base["unit"]])
     out = base[np.abs(base["mean"].to_numpy()) > bound]
     checks.append(("within physical bounds", out.empty,
@@ -139,12 +142,13 @@ def verdict_checks(calibration, spec, sampler, diagnostics, effect_table, rcfg, 
     return [{"check": n, "passed": bool(p), "why": w} for n, p, w in checks]
 
 
-def build_context(campaign, model, effects, maneuvers, tables, est, calibration, diagnostics, sampler,
-                  correction_doc, correction_path, fit, idata, comparison, info, truth, cfg, calibrations) -> dict:
+def build_context(model, maneuvers, tables, est, diagnostics, sampler, correction_doc, correction_path, fit, idata,
+                  comparison, info, truth, cfg, calibrations) -> dict:
     """Everything `render` shows, from what the report step read: the reviewed model's
     files, the campaign's maneuvers and preprocess tables (same order), ``input.json``
     (``info``), the simulation's truth (or None), the whole config and every model's
-    ``calibration.csv`` (for the model-sensitivity check)."""
+    ``calibration.csv`` (the reviewed one's, and the others' for the model-sensitivity check)."""
+    calibration = calibrations[model]
     spec, channels = est.spec, est.spec.channels
     params = [posterior_mean_params(spec, calibration, est.biases[m]) for m in range(len(maneuvers))]
     nominal = [spec.channel_params(np.zeros(len(spec)), est.biases[m]) for m in range(len(maneuvers))]
@@ -156,8 +160,7 @@ def build_context(campaign, model, effects, maneuvers, tables, est, calibration,
     core_labels = spec.labels[spec.core]
     checks += [modelchoice.plausibility_check(classified),
                modelchoice.sensitivity_check(classified, calibrations, core_labels, cfg["model_choice"]["agree_sd"],
-                                             {u: cfg["report"][f"max_ci_width_{u}"] for u in set(spec.units[spec.core])},
-                                             {})]
+                                             width_limits(cfg["report"], spec))]
     figures = {}
     for data, table in zip(maneuvers, tables):
         own = fit[(fit["maneuver"] == data.id) & (fit["set"] == 0)]
@@ -172,7 +175,7 @@ def build_context(campaign, model, effects, maneuvers, tables, est, calibration,
                                        "st_invalid": info["rows"]["star_tracker_invalid"],
                                        "gyro_read": info["rows"]["gyro"]}
     return {
-        "campaign": campaign, "model": model, "effects": effects, "checks": checks,
+        "campaign": info["campaign"], "model": model, "effects": list(spec.effect_names), "checks": checks,
         "simulated": truth is not None,
         "tables": paper_tables(calibration, channels, maneuvers[0].sets[0], truth),
         "maneuver_figures": figures, "posterior_figures": posterior_figs, "convergence": convergence,

@@ -198,10 +198,9 @@ def run_report(models, model_files, npz_paths, table_paths, input_json, comparis
     maneuvers = load_maneuvers(npz_paths)
     est = PointEstimate.load(files["point"])
     ctx = review.build_context(
-        read_json(input_json)["campaign"], model, list(est.spec.effect_names), maneuvers,
-        [pd.read_csv(p) for p in table_paths], est, pd.read_csv(files["calibration"]),
-        read_json(files["diagnostics"]), read_json(files["sampler"]), read_json(files["correction"]),
-        files["correction"], pd.read_csv(files["fit"]), az.from_netcdf(str(files["posterior"])), table,
-        read_json(input_json), read_json(truth_json)["parameters"] if truth_json else None, cfg, calibrations)
+        model, maneuvers, [pd.read_csv(p) for p in table_paths], est, read_json(files["diagnostics"]),
+        read_json(files["sampler"]), read_json(files["correction"]), files["correction"], pd.read_csv(files["fit"]),
+        az.from_netcdf(str(files["posterior"])), table, read_json(input_json),
+        read_json(truth_json)["parameters"] if truth_json else None, cfg, calibrations)
     write_text(review.render(ctx), out_html)
 
