@@ -24,3 +24,9 @@ rule all:
     input:
         all_outputs(),
     default_target: True
+
+
+onerror:
+    refusals = refusal_messages()
+    if refusals:
+        print("\n".join(refusals), file=sys.stderr)

@@ -51,7 +51,7 @@ def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
     ids = [m.id for m in telemetry.read_meta(campaign_dir)["maneuvers"]]
     steps.validate(campaign_dir, out / "input.json")
     for m in ids:
-        steps.run_preprocess(campaign_dir, m, out / f"preprocess/{m}.npz", out / f"preprocess/{m}.csv",
+        steps.run_preprocess(campaign_dir, out / "input.json", m, out / f"preprocess/{m}.npz", out / f"preprocess/{m}.csv",
                              out / f"preprocess/{m}.png")
     npz = [out / f"preprocess/{m}.npz" for m in ids]
     steps.run_classic(npz, out / "classic.csv")

@@ -54,7 +54,7 @@ def test_preprocess_step_writes_table_figure_and_counts(tiny_run):
 def test_calibration_csv_follows_the_contract(tiny_run):
     table = pd.read_csv(tiny_run[0] / "baseline/calibration.csv")
     assert list(table.columns) == ["channel", "parameter", "unit", "point", "mean", "sd", "ci95_low",
-                                   "ci95_high", "r_hat", "ess_bulk"]
+                                   "ci95_high", "r_hat", "ess_bulk", "prior_only"]
     assert len(table) == 24 and table["channel"].nunique() == 6
     assert set(table["unit"]) == {"ppm", "arcsec"}
     assert (table["ci95_low"] < table["mean"]).all() and (table["mean"] < table["ci95_high"]).all()

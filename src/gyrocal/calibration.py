@@ -10,18 +10,20 @@ import pandas as pd
 from . import channels as ch
 from .spec import ModelSpec
 
-COLUMNS = ["channel", "parameter", "unit", "point", "mean", "sd", "ci95_low", "ci95_high", "r_hat", "ess_bulk"]
+COLUMNS = ["channel", "parameter", "unit", "point", "mean", "sd", "ci95_low", "ci95_high", "r_hat", "ess_bulk",
+           "prior_only"]
 
 
 def calibration_table(spec: ModelSpec, point_theta, summary: pd.DataFrame) -> pd.DataFrame:
     """The contract's table from the point estimate (SI) and the posterior summary (indexed
-    by label, already in the parameters' units)."""
+    by label, already in the parameters' units). A prior-only parameter's point is its
+    prior mean and its posterior is its prior (`identification`)."""
     point = spec.to_unit(point_theta)
     rows = []
     for i, p in enumerate(spec.parameters):
         s = summary.loc[p.label]
         rows.append({"channel": p.owner, "parameter": p.name, "unit": p.unit, "point": point[i],
-                     **{k: s[k] for k in COLUMNS[4:]}})
+                     **{k: s[k] for k in COLUMNS[4:-1]}, "prior_only": bool(p.prior_only)})
     return pd.DataFrame(rows, columns=COLUMNS)
 
 

@@ -26,6 +26,16 @@ def hold_windows(data: ManeuverData, channel_set=None):
     return data.st_time < t_first, data.st_time > t_last
 
 
+MIN_HOLD_SAMPLES = 3
+"""Star-tracker samples a hold needs for the classic method to average over it."""
+
+
+def missing_holds(data: ManeuverData) -> list:
+    """Which holds (``"before"``, ``"after"``) a maneuver lacks for the classic method."""
+    before, after = hold_windows(data)
+    return [name for name, mask in (("before", before), ("after", after)) if mask.sum() < MIN_HOLD_SAMPLES]
+
+
 def classic(data: ManeuverData) -> pd.DataFrame:
     """The paper's method on one maneuver, every channel set (values SI).
 
@@ -36,7 +46,10 @@ def classic(data: ManeuverData) -> pd.DataFrame:
     divide by the kinematic matrix of the actual trajectory, which is the angle for
     the scale factor and reduces to it for small rotations. The hold averages are
     differenced in the inertial frame, where the initial attitude offset stays put.
+    A maneuver without both holds gets no row: the method does not apply to it.
     """
+    if missing_holds(data):
+        return pd.DataFrame(columns=["maneuver", "set", "channel", "parameter", "value", "angle_rad"])
     before, after = hold_windows(data)
     a = AXIS_INDEX[data.axis]
     others = [b for b in range(3) if b != a]
@@ -71,7 +84,10 @@ def classic(data: ManeuverData) -> pd.DataFrame:
 def classic_table(maneuvers, spec: ModelSpec) -> pd.DataFrame:
     """`classic` over every maneuver in the parameters' units; a parameter seen twice is
     averaged. Columns: channel, parameter, unit, value, n."""
-    table = pd.concat([classic(d) for d in maneuvers], ignore_index=True)
+    parts = [part for part in (classic(d) for d in maneuvers) if len(part)]
+    if not parts:
+        return pd.DataFrame(columns=["channel", "parameter", "unit", "value", "n"])
+    table = pd.concat(parts, ignore_index=True)
     table = (table.groupby(["channel", "parameter"], sort=False)
              .agg(value=("value", "mean"), n=("value", "size")).reset_index())
     columns = [spec.index(f"{r.channel}.{r.parameter}") for r in table.itertuples()]

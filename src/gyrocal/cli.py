@@ -18,7 +18,7 @@ def main(argv=None):
     val.add_argument("directory")
     args = parser.parse_args(argv)
 
-    from .telemetry import TelemetryError, read_campaign, summary
+    from .telemetry import TelemetryError
     try:
         if args.command == "simulate":
             from .simulate import run
@@ -26,7 +26,8 @@ def main(argv=None):
             print(f"wrote {args.outdir}/campaign ({len(campaign.maneuvers)} maneuvers, seed {truth['seed']}) "
                   f"and {args.outdir}/truth.json")
         elif args.command == "validate":
-            print(summary(read_campaign(args.directory)))
+            from .consistency import read_checked, summary
+            print(summary(*read_checked(args.directory)))
     except (TelemetryError, ValueError, FileNotFoundError) as exc:
         print(f"gyrocal {args.command}: error: {exc}", file=sys.stderr)
         return 2

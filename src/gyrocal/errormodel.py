@@ -116,7 +116,8 @@ def _channel_derivatives(sub: ch.ChannelParams, u, phi, dt):
 
 def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Linearization:
     """Residuals and Jacobian of one maneuver about the parameters ``theta`` (SI, in the
-    spec's column order) and this maneuver's channel biases."""
+    spec's column order) and this maneuver's channel biases; prior-only parameters
+    (`identification`) get no column."""
     params = spec.channel_params(theta, bias_rad_s)
     extra_values = np.asarray(theta, dtype=float)[spec.extra]
     sets = data.sets
@@ -155,6 +156,7 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
         design[:, s, :, spec.extra] = at_st_jac[:, :, n + 3:] + st_columns
         if s == 0:
             st_matrix = at_st.as_matrix()
+    design[..., ~spec.free] = 0.0
     st_dt = np.diff(np.concatenate([[data.gyro_time[0]], data.st_time]))
     shared = _shared_walk(len(sets), st_dt)
     return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, shared, body)

@@ -11,8 +11,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares, minimize
 
-from . import errormodel, noise
-from .likelihood import campaign_stats
+from . import errormodel, identification, noise
+from .likelihood import campaign_stats, maneuver_stats
 from .noise import variances
 from .spec import ModelSpec
 
@@ -64,9 +64,12 @@ class PointEstimate:
                    float(z["correlation_time_s"]), json.loads(str(z["stated_noise"])))
 
 
-def _unpack(x, n_par, n_man, n_ch):
-    theta = x[:n_par]
-    nuis = x[n_par:].reshape(n_man, 3 + n_ch)
+def _unpack(x, theta0, free, n_man, n_ch):
+    """The full parameter vector (prior-only entries held at ``theta0``), initial errors and biases."""
+    n_free = int(free.sum())
+    theta = theta0.copy()
+    theta[free] = x[:n_free]
+    nuis = x[n_free:].reshape(n_man, 3 + n_ch)
     return theta, nuis[:, :3], nuis[:, 3:]
 
 
@@ -77,14 +80,17 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
     Unknowns: the model's parameters, and per maneuver the initial attitude error and
     the bias of each channel. The exact nonlinear model is re-propagated at every step;
     weights come from the banded noise covariance (star tracker across and about its
-    boresight, gyro random walk).
+    boresight, gyro random walk). Prior-only parameters stay at ``theta0``; their rows of
+    the covariance are NaN.
     """
-    n_ch, n_man, n_par = len(spec.channels), len(maneuvers), len(spec)
+    n_ch, n_man = len(spec.channels), len(maneuvers)
+    free = spec.free
+    n_par = int(free.sum())
     boresight = stated_noise["boresight_body"]
-    theta0 = np.zeros(n_par) if theta0 is None else theta0
+    theta0 = np.zeros(len(spec)) if theta0 is None else np.asarray(theta0, dtype=float)
     biases0 = np.zeros((n_man, n_ch)) if biases0 is None else biases0
     chi00 = np.zeros((n_man, 3)) if chi00 is None else chi00
-    x0 = np.concatenate([theta0, np.column_stack([chi00, biases0]).ravel()])
+    x0 = np.concatenate([theta0[free], np.column_stack([chi00, biases0]).ravel()])
     var = variances(log_sigma)
     first = [errormodel.linearize(d, spec, theta0, biases0[m]) for m, d in enumerate(maneuvers)]
     noises = [noise.build(lin, boresight, correlation_time_s) for lin in first]
@@ -95,14 +101,14 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
         key = x.tobytes()
         if key in cache:
             return cache[key]
-        theta, chi0, biases = _unpack(x, n_par, n_man, n_ch)
+        theta, chi0, biases = _unpack(x, theta0, free, n_man, n_ch)
         res, jac_rows = [], []
         for m, d in enumerate(maneuvers):
             lin = errormodel.linearize(d, spec, theta, biases[m])
             nz = noises[m]
             r = noise.difference(lin.z - chi0[m]).reshape(-1)
             nuis = noise.difference(noise.nuisance_design(lin)).reshape(nz.n, -1)
-            j_theta = -noise.difference(lin.design).reshape(nz.n, -1)
+            j_theta = -noise.difference(lin.design[..., free]).reshape(nz.n, -1)
             res.append(nz.whiten(chols[m], r))
             block = np.zeros((nz.n, len(x)))
             block[:, :n_par] = nz.whiten(chols[m], j_theta)
@@ -116,11 +122,40 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
     result = least_squares(lambda x: evaluate(x)[0], x0, jac=lambda x: evaluate(x)[1],
                            method="trf", x_scale="jac", ftol=1e-10, xtol=1e-8, gtol=1e-10, max_nfev=30)
     jac = evaluate(result.x)[1]
-    cov_full = np.linalg.inv(jac.T @ jac)
-    theta, chi0, biases = _unpack(result.x, n_par, n_man, n_ch)
-    return PointEstimate(spec, theta, cov_full[:n_par, :n_par], biases, chi0,
+    cov_free = np.linalg.inv(jac.T @ jac)[:n_par, :n_par]
+    cov = np.full((len(spec), len(spec)), np.nan)
+    cov[np.ix_(free, free)] = cov_free
+    theta, chi0, biases = _unpack(result.x, theta0, free, n_man, n_ch)
+    return PointEstimate(spec, theta, cov, biases, chi0,
                          np.asarray(log_sigma, dtype=float), float(2 * result.cost), int(result.nfev),
                          str(result.message), float(correlation_time_s), dict(stated_noise))
+
+
+class EstimateError(RuntimeError):
+    """The point estimate is not physical; the message names the parameter and the maneuver."""
+
+
+def check_physical(maneuvers, est: PointEstimate, bound_si):
+    """Stop before sampling when the WLS puts a parameter beyond its physical bound by more than
+    `identification.DETECTION_SD` of its own standard error: the data then say it is out (a
+    unit slip, a gap, a wrong label), not the confounding of two parameters that only the prior
+    holds apart. Names the parameter and the maneuver the model fits worst."""
+    sd = np.sqrt(np.diag(est.cov))
+    beyond = est.spec.free & (np.abs(est.theta) - bound_si > identification.DETECTION_SD * sd)
+    if not beyond.any():
+        return
+    _, noises = linearize_all(maneuvers, est)
+    stats = [maneuver_stats(nz, variances(est.log_sigma)) for nz in noises]
+    misfit = np.array([s.c / s.n for s in stats])
+    worst = int(np.argmax(misfit))
+    spec = est.spec
+    values = spec.to_unit(est.theta)
+    listed = "; ".join(f"{spec.labels[i]} = {values[i]:.6g} {spec.units[i]} (bound {spec.to_unit(bound_si)[i]:g}, "
+                       f"WLS sd {sd[i] / spec.si_per_unit[i]:.3g})" for i in np.flatnonzero(beyond))
+    raise EstimateError(
+        f"point estimate of model {spec.model}: beyond the physical bounds, so sampling would not start: {listed}. "
+        f"The model fits maneuver {maneuvers[worst].id} worst (weighted residual {misfit[worst]:.3g} per sample, "
+        f"1 expected): check its data and labels (gyrocal validate) and the noise knowledge")
 
 
 def linearize_all(maneuvers, estimate: PointEstimate):
@@ -155,11 +190,13 @@ def profile_reml(noises, ratios):
     ``ratios`` are ``log(sigma_about / sigma_cross)`` and ``log(arw / sigma_cross)``
     (arw per sqrt(s)); the covariance is ``sigma_cross^2`` times one built from them.
     Returns the negative log-likelihood (up to a constant) and ``log sigma_cross``.
+    Prior-only parameters have no column, so they are left out.
     """
     stats = campaign_stats(noises, variances([0.0, ratios[0], ratios[1]]))
-    factor = np.linalg.cholesky(stats.A)
-    explained = np.linalg.solve(factor, stats.b)
-    n = stats.n - len(stats.b)
+    informed = np.diag(stats.A) > 0
+    factor = np.linalg.cholesky(stats.A[np.ix_(informed, informed)])
+    explained = np.linalg.solve(factor, stats.b[informed])
+    n = stats.n - int(informed.sum())
     scale = (stats.c - explained @ explained) / n
     negative = 0.5 * (n * np.log(scale) + stats.logdet + 2 * np.sum(np.log(np.diag(factor))))
     return negative, 0.5 * np.log(scale)
@@ -181,20 +218,31 @@ def estimate_noise(noises, log_sigma0) -> np.ndarray:
 def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estimate_scales=True) -> PointEstimate:
     """REML noise scales about a starting point (the classic estimate), then WLS from it.
 
-    The classic estimate is within a few tens of ppm of the optimum, so the model is
-    linear enough about it for the noise scales; the WLS then needs a few steps. A model
-    with correlated star-tracker noise first estimates its correlation time there.
+    Parameters the maneuvers cannot inform are marked prior-only first and held at their
+    prior mean (`identification`). The classic estimate is within a few tens of ppm of the
+    optimum, so the model is linear enough about it for the noise scales; the WLS then
+    needs a few steps. A model with correlated star-tracker noise first estimates its
+    correlation time there.
     """
+    spec = spec.with_prior_only(identification.unflown(maneuvers, spec))
     log_sigma = noise.log_sigma_of(stated_noise)
     n_man, n_ch = len(maneuvers), len(spec.channels)
-    start = PointEstimate(spec, theta0, None, np.zeros((n_man, n_ch)), None, log_sigma, np.nan, 0, "classic",
-                          0.0, stated_noise)
-    tau = 0.0
-    if estimate_scales or spec.correlated_noise:
+
+    def start_at(spec):
+        theta = np.where(spec.free, theta0, spec.prior_mean_si)
+        return PointEstimate(spec, theta, None, np.zeros((n_man, n_ch)), None, log_sigma, np.nan, 0, "classic",
+                             0.0, stated_noise)
+
+    start = start_at(spec)
+    lins, noises = linearize_all(maneuvers, start)
+    weak = identification.uninformed(campaign_stats(noises, variances(log_sigma)), spec)
+    if weak:
+        start = start_at(spec.with_prior_only(weak))
         lins, noises = linearize_all(maneuvers, start)
-        if spec.correlated_noise:
-            tau = correlation_time(lins)
-            noises = [noise.build(lin, start.boresight, tau) for lin in lins]
-        if estimate_scales:
-            log_sigma = estimate_noise(noises, log_sigma)
-    return wls(maneuvers, spec, stated_noise, log_sigma, theta0, correlation_time_s=tau)
+    tau = 0.0
+    if spec.correlated_noise:
+        tau = correlation_time(lins)
+        noises = [noise.build(lin, start.boresight, tau) for lin in lins]
+    if estimate_scales:
+        log_sigma = estimate_noise(noises, log_sigma)
+    return wls(maneuvers, start.spec, stated_noise, log_sigma, start.theta, correlation_time_s=tau)

@@ -160,5 +160,8 @@ def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
     idata = posterior_dataset(kept, theta_hat, spec)
     idata.add_groups(**groups)
     units = ", ".join(f"{label} {unit}" for label, unit in zip(spec.labels, spec.units))
-    idata.posterior.attrs.update({"gyrocal_version": __version__, "seed": seed, "units": units})
+    idata.posterior.attrs.update({"gyrocal_version": __version__, "seed": seed, "units": units,
+                                  "prior_only": ", ".join(p.label for p in spec.parameters if p.prior_only)})
+    for group in idata.groups():
+        idata[group].attrs.pop("created_at", None)  # same config and seed, same bytes
     return idata, summary, fit, record

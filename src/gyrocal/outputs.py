@@ -2,6 +2,7 @@
 temporary name and renamed into place only when complete."""
 
 import json
+import math
 import os
 from contextlib import contextmanager
 from pathlib import Path
@@ -21,9 +22,24 @@ def atomic(path):
             tmp.unlink()
 
 
+def strict(obj):
+    """``obj`` with every non-finite number as ``None``: JSON has no NaN or Infinity, and a strict
+    parser (jq, a browser) refuses them; ``null`` says "no value" in JSON's own terms."""
+    if isinstance(obj, dict):
+        return {k: strict(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [strict(v) for v in obj]
+    if hasattr(obj, "tolist"):
+        return strict(obj.tolist())
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
 def write_json(obj, path):
+    """Strict JSON (`strict`), written whole or not at all."""
     with atomic(path) as tmp:
-        tmp.write_text(json.dumps(obj, indent=2, sort_keys=False, default=float))
+        tmp.write_text(json.dumps(strict(obj), indent=2, sort_keys=False, default=float, allow_nan=False))
 
 
 def write_csv(frame, path):

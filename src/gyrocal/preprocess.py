@@ -76,8 +76,9 @@ class ManeuverData:
                    {str(n): int(v) for n, v in zip(z["count_names"], z["count_values"])})
 
 
-def slice_maneuver(campaign: Campaign, maneuver_id: str) -> ManeuverData:
-    """Cut one maneuver out of a campaign; invalid star-tracker samples are counted, not used."""
+def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=()) -> ManeuverData:
+    """Cut one maneuver out of a campaign; invalid star-tracker samples and the outliers
+    (at ``outlier_times_s``, as `consistency` lists them) are counted, not used."""
     m = campaign.maneuver(maneuver_id)
     g = campaign.gyro_time
     i0 = int(np.searchsorted(g, m.t_start, side="left"))
@@ -85,7 +86,8 @@ def slice_maneuver(campaign: Campaign, maneuver_id: str) -> ManeuverData:
     if i1 - i0 < 2:
         raise TelemetryError(f"{campaign.source}/gyro.csv: maneuver {m.id} holds fewer than two gyro samples")
     in_window = (campaign.st_time >= m.t_start) & (campaign.st_time <= m.t_end)
-    valid = campaign.st_valid == 1
+    outlier = np.isin(campaign.st_time, np.asarray(outlier_times_s, dtype=float))
+    valid = (campaign.st_valid == 1) & ~outlier
     usable = valid & (campaign.st_time > g[i0]) & (campaign.st_time <= g[i1])
     st_idx = np.flatnonzero(valid)
     if g[i0] < campaign.st_time[st_idx[0]] or g[i0] > campaign.st_time[st_idx[-1]]:
@@ -99,7 +101,8 @@ def slice_maneuver(campaign: Campaign, maneuver_id: str) -> ManeuverData:
         raise TelemetryError(f"{campaign.source}/star_tracker.csv: maneuver {m.id} has only "
                              f"{len(st_time)} valid samples")
     extras = {k: v[i0 + 1:i1 + 1] for k, v in campaign.extras().items()}
-    counts = {"st_read": int(in_window.sum()), "st_invalid": int((in_window & ~valid).sum()),
+    counts = {"st_read": int(in_window.sum()), "st_invalid": int((in_window & (campaign.st_valid == 0)).sum()),
+              "st_outliers": int((in_window & outlier).sum()),
               "st_used": int(usable.sum()), "gyro_read": int(i1 - i0 + 1), "gyro_used": int(i1 - i0)}
     return ManeuverData(m.id, m.axis, m.direction, campaign.channels, m.in_loop, g[i0:i1 + 1].copy(),
                         campaign.increments()[i0 + 1:i1 + 1], st_time, quat, attitude0.as_quat(),

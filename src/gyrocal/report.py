@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from . import __version__, modelchoice, plots, preprocess
+from . import __version__, modelchoice, plots, preprocess, telemetry
 from .calibration import core_rows, posterior_mean_params
 from .classic import hold_windows
 from .units import AXES, PAPER_AXES, paper_term, rad_to_arcsec
@@ -105,6 +105,11 @@ def width_limits(rcfg: dict, spec) -> dict:
     return {unit: rcfg[f"max_ci_width_{unit}"] for unit in set(spec.units[spec.core])}
 
 
+def informed_core(spec) -> list:
+    """Labels of the channel-model terms the data inform (prior-only ones have their own check)."""
+    return [p.label for p in spec.parameters[spec.core] if not p.prior_only]
+
+
 def verdict_checks(calibration, spec, sampler, diagnostics, effect_table, rcfg, conv) -> list:
     """The GO/NO-GO checks; each names what failed it and why. The interval and bound
     checks apply to the channel model's terms, with the thresholds of their unit
@@ -122,7 +127,14 @@ def verdict_checks(calibration, spec, sampler, diagnostics, effect_table, rcfg, 
                    "the residuals are consistent with the noise model" if not failed else
                    "misfit: " + "; ".join(f"{c['check']}: {c['why']}" for c in failed)
                    + f". Best explanation: {diagnostics['ranking'][0]['kind']} {diagnostics['ranking'][0]['name']}"))
-    wide = modelchoice.too_wide(calibration, spec.labels[spec.core], width_limits(rcfg, spec))
+    uninformed = [p for p in spec.parameters if p.prior_only]
+    channels = sorted({p.owner for p in uninformed if p.core})
+    checks.append(("every parameter informed by the data", not uninformed,
+                   "every parameter has a maneuver that informs it" if not uninformed else
+                   "prior-only (the posterior is the prior): " + "; ".join(
+                       f"{p.label} ({p.prior_only})" for p in uninformed)
+                   + (f". No correction for {', '.join(channels)}" if channels else "")))
+    wide = modelchoice.too_wide(calibration, informed_core(spec), width_limits(rcfg, spec))
     checks.append(("intervals narrow enough", not wide,
                    f"every 95 % interval is narrower than {rcfg['max_ci_width_ppm']} ppm / {rcfg['max_ci_width_arcsec']} arcsec"
                    if not wide else "too wide: " + ", ".join(f"{w['label']} ({w['width']:.1f} {w['unit']})"
@@ -157,7 +169,7 @@ def build_context(model, maneuvers, tables, est, diagnostics, sampler, correctio
     classified = comparison.assign(plausible=comparison["plausible"].astype(bool),
                                    loo_rejected=comparison["loo_rejected"].astype(bool),
                                    rejected_by=comparison["rejected_by"].astype("string").fillna(""))
-    core_labels = spec.labels[spec.core]
+    core_labels = informed_core(spec)
     checks += [modelchoice.plausibility_check(classified),
                modelchoice.sensitivity_check(classified, calibrations, core_labels, cfg["model_choice"]["agree_sd"],
                                              width_limits(cfg["report"], spec))]
@@ -173,6 +185,7 @@ def build_context(model, maneuvers, tables, est, diagnostics, sampler, correctio
     accounting = pd.DataFrame([{"maneuver": d.id, **d.counts} for d in maneuvers])
     accounting.loc[len(accounting)] = {"maneuver": "campaign files", "st_read": info["rows"]["star_tracker"],
                                        "st_invalid": info["rows"]["star_tracker_invalid"],
+                                       "st_outliers": info["rows"]["star_tracker_outliers"],
                                        "gyro_read": info["rows"]["gyro"]}
     return {
         "campaign": info["campaign"], "model": model, "effects": list(spec.effect_names), "checks": checks,
@@ -185,7 +198,10 @@ def build_context(model, maneuvers, tables, est, diagnostics, sampler, correctio
         "effect_table": effect_table.drop(columns=["before norm", "after norm"]).assign(
             **{"before norm (arcsec)": effect_table["before norm"].round(1),
                "after norm (arcsec)": effect_table["after norm"].round(1)}),
-        "accounting": accounting, "checksums": info["checksums_sha256"], "sampler": sampler,
+        "accounting": accounting, "warnings": info["warnings"],
+        "outliers": pd.DataFrame(info["star_tracker_outliers"],
+                                 columns=["maneuver", "time_s", "line", "size_arcsec", "mahalanobis"]).round(2),
+        "renormalised": info["rows"]["star_tracker_renormalised"], "checksums": info["checksums_sha256"], "sampler": sampler,
         "config": yaml.safe_dump(cfg, sort_keys=False),
     }
 
@@ -258,6 +274,14 @@ def render(ctx: dict) -> str:
     parts.append(_table(ctx["effect_table"].round(1), "before-after"))
     parts.append("<h2>Data accounting</h2>")
     parts.append(_table(ctx["accounting"], "accounting"))
+    parts.append(f"<h3>Star-tracker outliers left out of the fit ({len(ctx['outliers'])})</h3><p class='small'>"
+                 "Samples whose departure from their neighbours the motion cannot explain, beyond what the data's "
+                 "own noise allows (gyrocal.consistency); line is the line of star_tracker.csv.</p>")
+    parts.append(_table(ctx["outliers"], "outliers"))
+    parts.append(f"<h3>Warnings from validation ({len(ctx['warnings'])})</h3>")
+    parts.append("<ul id='warnings'>" + "".join(f"<li>{html.escape(w)}</li>" for w in ctx["warnings"]) + "</ul>")
+    parts.append(f"<p class='small'>Star-tracker quaternions renormalised (written norm off 1 by more than "
+                 f"{telemetry.UNIT_NORM_TOL:g}): {ctx['renormalised']}.</p>")
     parts.append(f"<p>Input files (SHA-256):</p><pre>{html.escape(json.dumps(ctx['checksums'], indent=1))}</pre>")
     parts.append(f"<p>Sampler: seed {ctx['sampler']['seed']}, {ctx['sampler']['ensembles']} ensembles x "
                  f"{ctx['sampler']['walkers']} walkers, {ctx['sampler']['steps']} steps after {ctx['sampler']['burn_steps']} "

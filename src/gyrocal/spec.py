@@ -37,6 +37,9 @@ class ParameterSpec:
     """Index of the channel a per-channel copy belongs to."""
     core: bool = False
     """A term of the channel model (eq. 3): part of the uplinked correction."""
+    prior_only: str = ""
+    """Why the data cannot inform this parameter (e.g. "no -pitch maneuver"); empty when they can.
+    A prior-only parameter is kept out of the fit: its column is zero, its posterior its prior."""
 
 
 CONFIG_PRIOR_KEYS = {"sf_sd_ppm": ("scale_factor", "prior_sd"), "sf_bound_ppm": ("scale_factor", "bound"),
@@ -108,6 +111,17 @@ class ModelSpec:
     def extras(self) -> tuple:
         """The parameters the effects beyond the channel model add, in column order."""
         return self.parameters[self.n_core:]
+
+    @property
+    def free(self) -> np.ndarray:
+        """Mask of the parameters the data inform (not `ParameterSpec.prior_only`)."""
+        return np.array([not p.prior_only for p in self.parameters], dtype=bool)
+
+    def with_prior_only(self, reasons: dict) -> "ModelSpec":
+        """This model with the parameters named in ``reasons`` (label: why) marked prior-only."""
+        parameters = [replace(p, prior_only=reasons.get(p.label, p.prior_only)) for p in self.parameters]
+        return ModelSpec(self.model, self.channels, parameters, self.effect_names, self.correlated_noise,
+                         self._effects)
 
     def effect(self, name: str):
         """The effect object behind a parameter (needs a spec built or loaded with its effects)."""

@@ -7,7 +7,10 @@ sections it uses, so a change elsewhere in the config does not rerun it.
 
 import json
 import logging
+import sys
 import warnings
+from contextlib import contextmanager
+from dataclasses import asdict
 
 import arviz as az
 import pandas as pd
@@ -16,6 +19,7 @@ from . import (
     __version__,
     classic,
     comparison,
+    consistency,
     diagnostics,
     effects,
     inferencedata,
@@ -28,7 +32,7 @@ from . import (
 from . import report as review
 from .calibration import calibration_table, posterior_mean_params
 from .correction import campaign_correction
-from .estimate import PointEstimate, point_estimate
+from .estimate import EstimateError, PointEstimate, check_physical, point_estimate
 from .noise import stated_scales
 from .outputs import atomic, write_csv, write_json, write_text, write_with
 from .spec import ModelSpec
@@ -46,6 +50,21 @@ def start(log_path):
     logging.captureWarnings(True)
     # arviz 0.23's matplotlib backend calls an API matplotlib 3.11 deprecates; not ours to fix.
     warnings.filterwarnings("ignore", message="Passing a dict or None as alias_mapping", category=DeprecationWarning)
+
+
+REFUSED = "gyrocal: the campaign was refused:"
+"""How a step's message about bad input begins, in its log and on the console."""
+
+
+@contextmanager
+def refusal():
+    """Turn bad input (`telemetry.TelemetryError`, `estimate.EstimateError`) into its message on
+    stderr and in the step's log, and exit 1: a user reads what is wrong, not a traceback."""
+    try:
+        yield
+    except (telemetry.TelemetryError, EstimateError) as exc:
+        log.error("%s\n%s", REFUSED, exc)
+        sys.exit(f"{REFUSED}\n{exc}")
 
 
 def known_effects(plugin_paths) -> dict:
@@ -71,10 +90,11 @@ def read_json(path):
 
 
 def validate(campaign_dir, out_json):
-    """Read and check the campaign; record what was read, its noise knowledge and the
-    files' checksums."""
-    campaign = telemetry.read_campaign(campaign_dir)
-    log.info("%s", telemetry.summary(campaign))
+    """Read the campaign and check its format and physics (`consistency`); record what was
+    read, the warnings, the star-tracker outliers to leave out, its noise knowledge and
+    the files' checksums."""
+    campaign, findings = consistency.read_checked(campaign_dir)
+    log.info("%s", consistency.summary(campaign, findings))
     write_json({
         "campaign": campaign.name,
         "gyrocal_version": __version__,
@@ -82,17 +102,23 @@ def validate(campaign_dir, out_json):
         "extras": list(campaign.extras()),
         "maneuvers": [m.id for m in campaign.maneuvers],
         "rows": {"gyro": len(campaign.gyro_time), "star_tracker": len(campaign.st_time),
-                 "star_tracker_invalid": int((campaign.st_valid == 0).sum())},
+                 "star_tracker_invalid": int((campaign.st_valid == 0).sum()),
+                 "star_tracker_outliers": len(findings.outliers),
+                 "star_tracker_renormalised": campaign.st_renormalised},
+        "warnings": findings.warnings,
+        "star_tracker_outliers": [asdict(o) for o in findings.outliers],
         "star_tracker": campaign.star_tracker,
         "gyro": campaign.gyro,
         "checksums_sha256": telemetry.checksums(campaign_dir),
     }, out_json)
 
 
-def run_preprocess(campaign_dir, maneuver_id, out_npz, out_csv, out_png):
-    """Slice one maneuver, propagate every channel set nominally, save table and figure."""
+def run_preprocess(campaign_dir, input_json, maneuver_id, out_npz, out_csv, out_png):
+    """Slice one maneuver, leaving out the star-tracker outliers that validation listed;
+    propagate every channel set nominally, save table and figure."""
     campaign = telemetry.read_campaign(campaign_dir)
-    data = preprocess.slice_maneuver(campaign, maneuver_id)
+    outliers = [o["time_s"] for o in read_json(input_json)["star_tracker_outliers"]]
+    data = preprocess.slice_maneuver(campaign, maneuver_id, outliers)
     table = preprocess.error_table(data)
     write_with(data.save, out_npz)
     write_csv(table, out_csv)
@@ -117,6 +143,9 @@ def run_point_estimate(npz_paths, input_json, classic_csv, model, model_effects,
     stated = noise_knowledge(read_json(input_json), noise_cfg)
     theta0 = classic.classic_vector(pd.read_csv(classic_csv), model_spec)
     est = point_estimate(maneuvers, model_spec, stated, theta0, noise_cfg["estimate_scales"])
+    for p in est.spec.parameters:
+        if p.prior_only:
+            log.warning("%s is prior-only: %s", p.label, p.prior_only)
     if model_spec.correlated_noise:
         log.info("star-tracker noise correlation time: %.2f s", est.correlation_time_s)
     log.info("WLS: %s (%d evaluations); noise %s", est.message, est.nfev,
@@ -139,6 +168,7 @@ def run_posterior(npz_paths, point_npz, plugin_paths, priors_cfg, prior_from, sa
     maneuvers = load_maneuvers(npz_paths)
     est = PointEstimate.load(point_npz, known_effects(plugin_paths))
     priors = model_priors(est, priors_cfg, prior_from)
+    check_physical(maneuvers, est, priors.bound)
     post = posterior.sample(maneuvers, est, priors, sampler_cfg, grid_cfg, seed)
     idata, summary, fit, record = inferencedata.assemble(post, maneuvers, sampler_cfg, convergence_cfg, seed)
     with atomic(out_nc) as tmp:

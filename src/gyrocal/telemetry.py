@@ -6,6 +6,7 @@ wrong; rows are counted as in a spreadsheet: the header is line 1.
 """
 
 import hashlib
+import itertools
 import re
 import shutil
 import tempfile
@@ -21,6 +22,10 @@ from .units import AXES
 
 QUAT_COLUMNS = ["q1", "q2", "q3", "q4"]
 UNIT_NORM_TOL = 1e-6
+"""Quaternions whose norm is further than this from 1 are renormalised and counted."""
+NORM_REFUSE_TOL = 1e-3
+"""Further than this from 1 a quaternion is refused: rounding to as few as three decimals stays
+inside, a wrong column does not."""
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9_]+$")
 CHANNEL_PATTERN = re.compile(r"^dtg(\d+)_(roll|pitch|yaw)$")
 
@@ -61,6 +66,10 @@ class Campaign:
     gyro_columns: dict = field(default_factory=dict)
     """Every non-time column of ``gyro.csv``: the channels, then any extras."""
     source: Path = None
+    lines: dict = field(default_factory=dict)
+    """Per file name, the line of each data row (the header is line 1), for messages."""
+    st_renormalised: int = 0
+    """Valid star-tracker quaternions whose written norm was off 1 by more than `UNIT_NORM_TOL`."""
 
     @property
     def channel_names(self) -> list:
@@ -143,10 +152,10 @@ def _parse_maneuvers(path, raw, channel_names) -> tuple:
             _fail(path, f"{where}.axis: must be one of {list(AXES)}, got {m['axis']!r}")
         if str(m["direction"]) not in ("+", "-"):
             _fail(path, f"{where}.direction: must be \"+\" or \"-\", got {m['direction']!r}")
-        try:
-            t0, t1 = float(m["t_start"]), float(m["t_end"])
-        except (TypeError, ValueError):
-            _fail(path, f"{where}: t_start and t_end must be numbers")
+        for key in ("t_start", "t_end"):
+            if not _is_number(m[key]):
+                _fail(path, f"{where}.{key}: must be a time in seconds, got {m[key]!r}")
+        t0, t1 = float(m["t_start"]), float(m["t_end"])
         if not t1 > t0:
             _fail(path, f"{where}: t_end ({t1}) must be after t_start ({t0})")
         in_loop = tuple(m.get("in_loop") or ())
@@ -158,16 +167,26 @@ def _parse_maneuvers(path, raw, channel_names) -> tuple:
             if axes != sorted(AXES):
                 _fail(path, f"{where}.in_loop: needs one channel per axis roll, pitch, yaw; got {list(in_loop)}")
         maneuvers.append(Maneuver(mid, m["axis"], str(m["direction"]), t0, t1, in_loop))
+    ordered = sorted(maneuvers, key=lambda m: m.t_start)
+    for first, second in itertools.pairwise(ordered):
+        if second.t_start < first.t_end:
+            _fail(path, f"maneuvers {first.id} [{first.t_start}, {first.t_end}] s and {second.id} "
+                        f"[{second.t_start}, {second.t_end}] s overlap: their samples would count twice")
     return tuple(maneuvers)
 
 
 def _read_csv(path, required) -> pd.DataFrame:
+    """Read a CSV whose every cell is a number; ``frame.attrs["lines"]`` holds each row's line in
+    the file (the header is line 1; blank lines, which pandas skips, still count)."""
     if not path.exists():
         _fail(path, "file not found")
     try:
         frame = pd.read_csv(path, **READ_CSV_EXACT)
+        text = path.read_text()
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         _fail(path, f"cannot be read as CSV: {exc}")
+    lines = np.array([i + 1 for i, line in enumerate(text.splitlines()) if line.strip()][1:])
+    frame.attrs["lines"] = lines[:len(frame)]
     missing = [c for c in required if c not in frame.columns]
     if missing:
         _fail(path, f"missing column(s) {missing}; found {list(frame.columns)}")
@@ -177,7 +196,8 @@ def _read_csv(path, required) -> pd.DataFrame:
         if not pd.api.types.is_numeric_dtype(frame[column]):
             bad = pd.to_numeric(frame[column], errors="coerce").isna() & frame[column].notna()
             row = int(np.flatnonzero(bad.to_numpy())[0])
-            _fail(path, f"line {row + 2}, column '{column}': not a number: {frame[column].iloc[row]!r}")
+            _fail(path, f"line {frame.attrs['lines'][row]}, column '{column}': not a number: "
+                        f"{frame[column].iloc[row]!r}")
     return frame
 
 
@@ -188,15 +208,17 @@ def _check_finite(path, frame, columns, rows=None):
         bad &= rows[:, None]
     if bad.any():
         row, col = np.argwhere(bad)[0]
-        _fail(path, f"line {row + 2}, column '{columns[col]}': value is NaN or infinite")
+        _fail(path, f"line {frame.attrs['lines'][row]}, column '{columns[col]}': value is NaN or infinite")
 
 
-def _check_time(path, time):
+def _check_time(path, frame):
+    time = frame["time"].to_numpy(dtype=float)
     steps = np.diff(time)
     if (steps <= 0).any():
         row = int(np.flatnonzero(steps <= 0)[0]) + 1
-        _fail(path, f"line {row + 2}, column 'time': time {time[row]} does not increase "
-                    f"(previous row has {time[row - 1]})")
+        _fail(path, f"line {frame.attrs['lines'][row]}, column 'time': time {time[row]} does not increase "
+                    f"(line {frame.attrs['lines'][row - 1]} has {time[row - 1]})")
+    return time
 
 
 def read_meta(directory) -> dict:
@@ -210,7 +232,10 @@ def read_meta(directory) -> dict:
     try:
         meta = yaml.safe_load(cpath.read_text())
     except yaml.YAMLError as exc:
-        _fail(cpath, f"not valid YAML: {exc}")
+        hint = ""
+        if "sequence entries are not allowed" in str(exc):
+            hint = ('. A bare - starts a YAML list: quote a direction, direction: "-"')
+        _fail(cpath, f"not valid YAML: {exc}{hint}")
     if not isinstance(meta, dict):
         _fail(cpath, "must be a mapping with 'channels' and 'maneuvers'")
     unknown = set(meta) - {"name", "channels", "star_tracker", "gyro", "maneuvers"}
@@ -225,12 +250,16 @@ def read_meta(directory) -> dict:
         channel_sets(channels)
     except ValueError as exc:
         _fail(cpath, f"channels: {exc}")
+    for key in ("star_tracker", "gyro"):
+        if meta.get(key) is not None and not isinstance(meta[key], dict):
+            _fail(cpath, f"{key}: must be a mapping of its noise knowledge (e.g. {key}: "
+                         f"{{{'arw_deg_sqrt_h' if key == 'gyro' else 'sigma_cross_arcsec'}: ...}}), got {meta[key]!r}")
     gyro = meta.get("gyro") or {}
     if set(gyro) - {"arw_deg_sqrt_h"}:
         _fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - {'arw_deg_sqrt_h'})}")
     if "arw_deg_sqrt_h" in gyro and not _positive_number(gyro["arw_deg_sqrt_h"]):
         _fail(cpath, "gyro.arw_deg_sqrt_h: must be a positive number")
-    name = str(meta.get("name") or directory.resolve().name)
+    name = str(meta.get("name") or default_name(directory))
     if not NAME_PATTERN.match(name):
         _fail(cpath, f"name: only letters, digits and '_' are allowed, got {name!r}")
     return {"name": name, "channels": channels,
@@ -259,18 +288,19 @@ def read_campaign(directory) -> Campaign:
         bad = ~np.isin(raw_valid, [0.0, 1.0])
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            _fail(spath, f"line {row + 2}, column 'valid': must be 0 or 1, got {st['valid'].iloc[row]!r}")
+            _fail(spath, f"line {st.attrs['lines'][row]}, column 'valid': must be 0 or 1, got {raw_valid[row]:g}")
         valid = raw_valid.astype(int)
     _check_finite(spath, st, QUAT_COLUMNS, rows=valid == 1)
-    st_time = st["time"].to_numpy(dtype=float)
-    _check_time(spath, st_time)
+    st_time = _check_time(spath, st)
     quat = st[QUAT_COLUMNS].to_numpy(dtype=float)
-    norm_error = np.abs(np.linalg.norm(quat, axis=1) - 1.0)
-    bad = (norm_error > UNIT_NORM_TOL) & (valid == 1)
+    norm = np.linalg.norm(quat, axis=1)
+    bad = (np.abs(norm - 1.0) > NORM_REFUSE_TOL) & (valid == 1)
     if bad.any():
         row = int(np.flatnonzero(bad)[0])
-        _fail(spath, f"line {row + 2}, columns q1..q4: quaternion norm is "
-                     f"{np.linalg.norm(quat[row]):.9f}, not 1 (tolerance {UNIT_NORM_TOL})")
+        _fail(spath, f"line {st.attrs['lines'][row]}, columns q1..q4: quaternion norm is {norm[row]:.9f}, "
+                     f"not 1 (tolerance {NORM_REFUSE_TOL}; an invalid sample needs valid=0)")
+    renormalised = (np.abs(norm - 1.0) > UNIT_NORM_TOL) & (valid == 1)
+    quat[renormalised] /= norm[renormalised, None]
 
     gpath = directory / "gyro.csv"
     gy = _read_csv(gpath, ["time"] + names)
@@ -279,8 +309,7 @@ def read_campaign(directory) -> Campaign:
         _fail(gpath, f"column(s) {unknown_channels} look like gyro channels but campaign.yaml "
                      f"does not declare them (channels: {names})")
     _check_finite(gpath, gy, list(gy.columns))
-    gyro_time = gy["time"].to_numpy(dtype=float)
-    _check_time(gpath, gyro_time)
+    gyro_time = _check_time(gpath, gy)
 
     for m in maneuvers:
         lo = max(st_time[0], gyro_time[0])
@@ -294,11 +323,23 @@ def read_campaign(directory) -> Campaign:
         name=meta["name"], channels=channels,
         star_tracker=meta["star_tracker"], gyro=meta["gyro"], maneuvers=maneuvers,
         st_time=st_time, st_quat=quat, st_valid=valid,
-        gyro_time=gyro_time, gyro_columns=columns, source=directory)
+        gyro_time=gyro_time, gyro_columns=columns, source=directory,
+        lines={"star_tracker.csv": st.attrs["lines"], "gyro.csv": gy.attrs["lines"]},
+        st_renormalised=int(renormalised.sum()))
+
+
+def default_name(directory) -> str:
+    """A campaign's name when ``campaign.yaml`` has none: its directory's, with every character
+    other than letters, digits and '_' made '_' (results go to ``results/<name>/``)."""
+    return re.sub(r"[^A-Za-z0-9_]", "_", Path(directory).resolve().name)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value)
 
 
 def _positive_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and value > 0
+    return _is_number(value) and value > 0
 
 
 def _parse_star_tracker(path, raw) -> dict:
@@ -310,9 +351,11 @@ def _parse_star_tracker(path, raw) -> dict:
             _fail(path, f"star_tracker.{key}: must be a positive number")
     out = dict(raw)
     if "boresight_body" in raw:
-        b = np.asarray(raw["boresight_body"], dtype=float)
-        if b.shape != (3,) or not np.isfinite(b).all() or np.linalg.norm(b) == 0:
-            _fail(path, "star_tracker.boresight_body: must be a non-zero 3-vector")
+        b = raw["boresight_body"]
+        if not isinstance(b, list) or len(b) != 3 or not all(_is_number(v) for v in b) or not any(b):
+            _fail(path, f"star_tracker.boresight_body: must be a non-zero 3-vector of numbers in body axes, "
+                        f"e.g. [0, 0, 1]; got {b!r}")
+        b = np.asarray(b, dtype=float)
         if abs(np.linalg.norm(b) - 1.0) > 1e-12:
             b = b / np.linalg.norm(b)
         out["boresight_body"] = b.tolist()

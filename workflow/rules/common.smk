@@ -1,14 +1,20 @@
 """Which campaign this run is about, and the paths every rule shares."""
 
+import sys
+import time
 from pathlib import Path
 
 from gyrocal import simulate as _simulate
+from gyrocal import steps as _steps
 from gyrocal import telemetry as _telemetry
 from gyrocal.outputs import MODEL_FILES as _MODEL_FILES
 
 if config["telemetry"]:
     CAMPAIGN_DIR = config["telemetry"]
-    _meta = _telemetry.read_meta(CAMPAIGN_DIR)
+    try:
+        _meta = _telemetry.read_meta(CAMPAIGN_DIR)
+    except _telemetry.TelemetryError as _refused:
+        sys.exit(f"gyrocal: the campaign was refused:\n{_refused}")
     CAMPAIGN = _meta["name"]
     MANEUVERS = [m.id for m in _meta["maneuvers"]]
     SIMULATED = False
@@ -29,6 +35,22 @@ PLUGINS = config["plugins"]
 wildcard_constraints:
     maneuver="|".join(MANEUVERS),
     model="|".join(MODELS),
+
+
+_STARTED = time.time()
+
+
+def refusal_messages():
+    """What the steps of this run refused (their logs from `gyrocal.steps.REFUSED` on), to repeat
+    when a run fails."""
+    found = []
+    for path in sorted(Path(LOGS).rglob("*.log")):
+        if path.stat().st_mtime < _STARTED:
+            continue
+        text = path.read_text()
+        if _steps.REFUSED in text:
+            found.append(text[text.index(_steps.REFUSED):].rstrip())
+    return found
 
 
 def campaign_input():

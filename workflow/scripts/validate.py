@@ -1,4 +1,5 @@
 from gyrocal import steps
 
 steps.start(snakemake.log[0])
-steps.validate(snakemake.params.campaign_dir, snakemake.output[0])
+with steps.refusal():
+    steps.validate(snakemake.params.campaign_dir, snakemake.output[0])

@@ -1,0 +1,437 @@
+"""Physical consistency of a campaign, before any fit: do the gyros see what the star tracker sees?
+
+Format checks (`telemetry`) cannot tell increments in degrees from increments in radians,
+or a scalar-first quaternion from a scalar-last one. Here each maneuver's gyro rotation,
+summed between star-tracker samples, is compared with the star tracker's own rotation
+over the same interval. A fault shows as a factor (57.3: degrees; the sample rate: rates),
+an axis or direction other than the label, a gap, or a clock offset. Each finding says
+what was found and its likely cause. The thresholds come from the physical bounds the
+effects declare and from the noise measured in the data themselves, not from one file.
+
+The star-tracker outlier screen lives here too: a sample far off its neighbours, beyond
+what the data's own noise allows, is listed and kept out of the fit.
+"""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+from scipy.stats import chi2
+
+from . import channels as ch
+from . import classic, preprocess
+from .errormodel import cumulative_at_st
+from .identification import DETECTION_SD
+from .spec import baseline
+from .telemetry import UNIT_NORM_TOL, Campaign, TelemetryError, read_campaign
+from .telemetry import summary as format_summary
+from .units import AXES, AXIS_INDEX, rad_to_arcsec
+
+GAP_FACTOR = 3.0
+"""A time step longer than this many median steps is a gap."""
+
+OUTLIER_FALSE_ALARMS = 0.01
+"""Expected star-tracker samples wrongly called outliers per campaign, under the data's own noise."""
+
+OUTLIER_REACH = 3
+"""The outlier screen compares a sample with the interpolations of up to this many pairs of neighbours."""
+
+MAX_CLOCK_SEARCH_S = 60.0
+"""The clock-offset search spans at most this far either way."""
+
+ALTERNATIVES = (
+    (180.0 / np.pi, "increments in degrees rather than radians?"),
+    (1e3, "increments 1000 times too large (mrad rather than rad?)"),
+    (1e-3, "increments 1000 times too small (krad? a unit slip?)"),
+)
+"""Gyro scale factors a unit slip produces, with the likely cause; rates-for-increments and
+cumulative angles are tried as well (they depend on the sample rate)."""
+
+
+@dataclass
+class Outlier:
+    maneuver: str
+    time_s: float
+    line: int
+    """Line of ``star_tracker.csv`` (the header is line 1)."""
+    size_arcsec: float
+    """Departure from the running median of its neighbours."""
+    mahalanobis: float
+
+
+@dataclass
+class Findings:
+    errors: list = field(default_factory=list)
+    warnings: list = field(default_factory=list)
+    outliers: list = field(default_factory=list)
+
+
+@dataclass
+class RotationFit:
+    """The gyro rotation per interval regressed on the star tracker's about the maneuver axis."""
+
+    axis: int
+    """The axis the star tracker rotates about most."""
+    net_rad: float
+    """Net star-tracker rotation about the labelled axis."""
+    excursion_rad: np.ndarray
+    """(3,) range of the star tracker's cumulative rotation about each axis (its noise does not
+    accumulate: the sum of the interval rotations telescopes to the attitude change)."""
+    response: np.ndarray
+    """(3,) gyro rotation per unit star-tracker rotation about the labelled axis."""
+    response_sd: np.ndarray
+
+
+def _interval_rotations(st_quat) -> np.ndarray:
+    """(M-1, 3) body-frame rotation vectors of the star tracker between consecutive samples."""
+    r = Rotation.from_quat(st_quat)
+    return (r[:-1].inv() * r[1:]).as_rotvec()
+
+
+def _gyro_at_st(data, increments) -> np.ndarray:
+    """(M-1, 3) summed body increments of the first channel set between star-tracker samples."""
+    k, frac = data.st_interval()
+    cumulative = cumulative_at_st(increments, k, frac)
+    return np.diff(cumulative, axis=0)
+
+
+def _body_increments(data, raw) -> np.ndarray:
+    first = data.sets[0]
+    index = {c.name: i for i, c in enumerate(data.channels)}
+    zeros = ch.ChannelParams.zeros(data.channels)
+    return ch.solve_body(raw[:, [index[n] for n in first]], zeros.subset(first))
+
+
+def fit_rotation(d_gyro, d_st, dt, axis: int, bias=True) -> RotationFit:
+    """Least squares of the gyro's interval rotations on the star tracker's about ``axis``
+    and (with ``bias``) a constant rate: the response is 1 + scale error on the axis and
+    the misalignments across."""
+    excursion = np.ptp(np.cumsum(d_st, axis=0), axis=0)
+    x = np.column_stack([d_st[:, axis], dt] if bias else [d_st[:, axis]])
+    coef, *_ = np.linalg.lstsq(x, d_gyro, rcond=None)
+    resid = d_gyro - x @ coef
+    sigma = 1.4826 * np.median(np.abs(resid - np.median(resid, axis=0)), axis=0) + 1e-15
+    info = np.linalg.pinv(x.T @ x)[0, 0]
+    return RotationFit(int(np.argmax(excursion)), float(d_st[:, axis].sum()), excursion, coef[0], sigma * np.sqrt(info))
+
+
+def _consistent(d_gyro, d_st, dt, axis, sf_bound, mis_bound) -> bool:
+    """Whether the gyro's rotation matches the star tracker's within the physical bounds, with
+    a bias fitted or (where a rotation at one steady rate leaves it confounded with the
+    scale) without."""
+    return any(_within(fit_rotation(d_gyro, d_st, dt, axis, bias), axis, sf_bound, mis_bound) for bias in (True, False))
+
+
+def _within(fit: RotationFit, axis: int, sf_bound, mis_bound) -> bool:
+    others = [b for b in range(3) if b != axis]
+    scale_ok = abs(fit.response[axis] - 1.0) <= sf_bound + DETECTION_SD * fit.response_sd[axis]
+    cross_ok = all(abs(fit.response[b]) <= mis_bound + DETECTION_SD * fit.response_sd[b] for b in others)
+    determined = DETECTION_SD * fit.response_sd[axis] <= sf_bound
+    return bool(scale_ok and cross_ok and determined and fit.axis == axis)
+
+
+def _limits(channels):
+    """Largest physical scale error and misalignment (SI), as the baseline effects declare them."""
+    spec = baseline(channels)
+    bounds = {p.name: b for p, b in zip(spec.parameters, spec.bound_si)}
+    sds = {p.name: s for p, s in zip(spec.parameters, spec.prior_sd_si)}
+    mis = max(v for k, v in bounds.items() if k.startswith("mis_"))
+    return bounds["sf_pos"], mis, sds["sf_pos"]
+
+
+def rotation_findings(campaign: Campaign, data, findings: Findings) -> bool:
+    """Angle, axis, direction and units of one maneuver's rotation, gyro against star tracker;
+    whether it is consistent."""
+    m = campaign.maneuver(data.id)
+    a = AXIS_INDEX[m.axis]
+    sf_bound, mis_bound, sf_sd = _limits(campaign.channels)
+    d_st = _interval_rotations(data.st_quat)
+    dt = np.diff(data.st_time)
+    d_gyro = _gyro_at_st(data, _body_increments(data, data.increments))
+    where = f"maneuver {m.id} ({m.direction}{m.axis})"
+    noise_rad = float(np.median(np.abs(d_st - np.median(d_st, axis=0))) * 1.4826 + 1e-12)
+    min_angle = noise_rad / sf_sd
+    fit = fit_rotation(d_gyro, d_st, dt, a)
+    if fit.excursion_rad.max() < min_angle and np.ptp(np.cumsum(d_gyro, axis=0), axis=0).max() < min_angle:
+        findings.errors.append(
+            f"{where}: neither the star tracker nor the gyros rotate in [{m.t_start}, {m.t_end}] s "
+            f"(at most {np.rad2deg(fit.excursion_rad.max()):.3g} deg; a scale factor needs at least "
+            f"{np.rad2deg(min_angle):.2g} deg to be told better than its prior): is the window on a hold?")
+        return False
+    if _consistent(d_gyro, d_st, dt, a, sf_bound, mis_bound):
+        n_errors = len(findings.errors)
+        if fit.excursion_rad[a] < min_angle:
+            findings.errors.append(f"{where}: the star tracker rotates only {np.rad2deg(fit.excursion_rad[a]):.3g} deg "
+                                   f"about {m.axis}; a scale factor needs {np.rad2deg(min_angle):.2g} deg")
+        elif np.sign(fit.net_rad) != m.sign:
+            findings.errors.append(
+                f"{where}: the star tracker and the gyros turn {np.rad2deg(fit.net_rad):+.1f} deg about {m.axis}, "
+                f"the opposite of the label's direction {m.direction!r}")
+        return len(findings.errors) == n_errors
+    st_axis = AXES[fit.axis]
+    gyro_excursion = np.ptp(np.cumsum(d_gyro, axis=0), axis=0)
+    if st_axis != m.axis and AXES[int(np.argmax(gyro_excursion))] != m.axis:
+        findings.errors.append(
+            f"{where}: the star tracker and the gyros both rotate mostly about {st_axis} "
+            f"({np.rad2deg(fit.excursion_rad[fit.axis]):.1f} deg), not {m.axis}: is the maneuver's axis label wrong?")
+        return False
+    hint = _diagnose(campaign, data, d_st, dt, a, sf_bound, mis_bound)
+    if hint:
+        findings.errors.append(f"{where}: {hint}")
+        return False
+    response = ", ".join(f"{AXES[b]} {fit.response[b]:+.4g}" for b in range(3))
+    findings.errors.append(
+        f"{where}: per unit of the star tracker's rotation about {m.axis} the gyros turn {response} "
+        f"(physical: {m.axis} 1 +/- {sf_bound:.2g}, the others within {rad_to_arcsec(mis_bound):.0f} arcsec); "
+        f"the star tracker rotates mostly about {st_axis}. Check the channel columns, their axes in "
+        f"campaign.yaml and the star tracker's mounting")
+    return False
+
+
+def _diagnose(campaign, data, d_st, dt, a, sf_bound, mis_bound) -> str:
+    """The likely cause of an inconsistent rotation: the first reinterpretation that makes it consistent."""
+    body = _body_increments(data, data.increments)
+    d_gyro = _gyro_at_st(data, body)
+    scale = np.ptp(np.cumsum(d_gyro[:, a])) / np.ptp(np.cumsum(d_st[:, a]))
+    dt_gyro = float(np.median(data.dt))
+    candidates = list(ALTERNATIVES) + [
+        (1.0 / dt_gyro, f"rates in rad/s rather than increments? ({1 / dt_gyro:.4g} is the gyro's sample rate)"),
+        (180.0 / np.pi / dt_gyro, "rates in deg/s rather than increments in rad?")]
+    for factor, cause in candidates:
+        if _consistent(d_gyro / factor, d_st, dt, a, sf_bound, mis_bound):
+            return f"the gyro rotation is {scale:.4g} times the star tracker's: {cause}"
+    i0 = int(np.searchsorted(campaign.gyro_time, data.gyro_time[0]))
+    raw = campaign.increments()[i0:i0 + len(data.gyro_time)]
+    differenced = _gyro_at_st(data, _body_increments(data, np.diff(raw, axis=0)))
+    if _consistent(differenced, d_st, dt, a, sf_bound, mis_bound):
+        return ("the gyro columns hold a cumulative angle, not the increment since the previous row: "
+                "their differences match the star tracker")
+    for order, cause in (([1, 2, 3, 0], "scalar first (q0, q1, q2, q3)"), ([3, 0, 1, 2], "in another order")):
+        d_reordered = _interval_rotations(data.st_quat[:, order])
+        if _consistent(d_gyro, d_reordered, dt, a, sf_bound, mis_bound):
+            return (f"the star-tracker quaternions look {cause}: read in that order they match the gyros; "
+                    "the contract's q1..q4 are scalar last (docs/interface.md section 1)")
+    return ""
+
+
+def gap_findings(campaign: Campaign, findings: Findings):
+    """Steps longer than `GAP_FACTOR` median steps: an error inside a maneuver's gyro data, a
+    warning otherwise. A shorter gap in a rotation is an error only if its increment holds
+    the rotation of one step rather than of the whole gap (`lost_increments`)."""
+    for name, time in (("gyro.csv", campaign.gyro_time), ("star_tracker.csv", campaign.st_time)):
+        lines = campaign.lines[name]
+        steps = np.diff(time)
+        median = float(np.median(steps))
+        for i in np.flatnonzero(steps > GAP_FACTOR * median):
+            t0, t1 = time[i], time[i + 1]
+            inside = [m.id for m in campaign.maneuvers if t0 < m.t_end and t1 > m.t_start]
+            text = (f"{name}: lines {lines[i]}-{lines[i + 1]}: {t1 - t0:.4g} s between samples "
+                    f"(median step {median:.4g} s)")
+            if inside and name == "gyro.csv":
+                findings.errors.append(f"{text} inside maneuver {', '.join(inside)}: the rotation in the gap is "
+                                       "lost, so no attitude can be propagated across it. Cut the maneuver at "
+                                       "the gap or recover the samples")
+            elif inside:
+                findings.warnings.append(f"{text} inside maneuver {', '.join(inside)}: fewer star-tracker "
+                                         "samples there")
+            else:
+                findings.warnings.append(f"{text}, outside every maneuver")
+    lost_increments(campaign, findings)
+
+
+SHORT_GAP_FACTOR = 1.5
+"""A gyro step this many median steps long is checked for a lost increment."""
+
+
+def lost_increments(campaign: Campaign, findings: Findings):
+    """Gyro rows missing in a rotation. The contract's increment covers the whole step since
+    the previous row, so after a missed row it holds the rotation of the longer step; if it
+    holds only one median step's worth, the rows' increments were lost, not accumulated."""
+    time, inc = campaign.gyro_time, campaign.increments()
+    steps = np.diff(time)
+    median = float(np.median(steps))
+    noise = 1.4826 * np.median(np.abs(np.diff(inc, axis=0)), axis=0) + 1e-15
+    for i in np.flatnonzero((steps > SHORT_GAP_FACTOR * median) & (steps <= GAP_FACTOR * median)):
+        row = i + 1
+        around = [r for r in (row - 2, row - 1, row + 1, row + 2) if 1 <= r < len(time)]
+        rate = np.mean(inc[around] / np.diff(time)[np.array(around) - 1, None], axis=0)
+        expected = rate * steps[i]
+        c = int(np.argmax(np.abs(expected) / noise))
+        if abs(expected[c] - inc[row, c]) < DETECTION_SD * noise[c] * np.sqrt(steps[i] / median):
+            continue
+        if abs(inc[row, c]) < 0.5 * (1 + median / steps[i]) * abs(expected[c]):
+            inside = [m.id for m in campaign.maneuvers if time[i] < m.t_end and time[row] > m.t_start]
+            findings.errors.append(
+                f"gyro.csv: line {campaign.lines['gyro.csv'][row]}: its increment covers {steps[i]:.4g} s but "
+                f"holds {inc[row, c] / expected[c] * steps[i]:.3g} s of the rotation its neighbours show "
+                f"(channel {campaign.channel_names[c]}"
+                + (f", maneuver {', '.join(inside)}" if inside else "")
+                + "): rows were dropped and their increments lost")
+
+
+def clock_offset_s(data) -> float:
+    """Time shift of the gyro clock against the star tracker's that best lines up their rotation
+    about the maneuver axis (a positive shift: the gyro's time stamps are late)."""
+    a = AXIS_INDEX[data.axis]
+    body = _body_increments(data, data.increments)
+    theta_gyro = np.concatenate([[0.0], np.cumsum(body[:, a])])
+    theta_st = np.concatenate([[0.0], np.cumsum(_interval_rotations(data.st_quat)[:, a])])
+    t = data.st_time
+    span = min(MAX_CLOCK_SEARCH_S, 0.25 * (t[-1] - t[0]))
+    step = 0.25 * float(np.median(np.diff(t)))
+    shifts = np.arange(-span, span + step, step)
+
+    def misfit(shift):
+        g = np.interp(t + shift, data.gyro_time, theta_gyro)
+        x = np.column_stack([g, t - t[0], np.ones_like(t)])
+        coef, *_ = np.linalg.lstsq(x, theta_st, rcond=None)
+        return float(np.sum((theta_st - x @ coef) ** 2))
+
+    costs = np.array([misfit(s) for s in shifts])
+    i = int(np.clip(np.argmin(costs), 1, len(shifts) - 2))
+    c0, c1, c2 = costs[i - 1:i + 2]
+    curvature = c0 - 2 * c1 + c2
+    offset = 0.5 * (c0 - c2) / curvature if curvature > 0 else 0.0
+    return float(shifts[i] + step * np.clip(offset, -1, 1))
+
+
+def clock_findings(data, findings: Findings):
+    """A clock offset of more than two samples (of the slower sensor) is an error. A shorter
+    one whose error at the peak rate exceeds `DETECTION_SD` star-tracker sd is a warning:
+    a latency the criticism loop should find (effect ``st_latency``)."""
+    offset = clock_offset_s(data)
+    limit = 2.0 * max(float(np.median(np.diff(data.st_time))), float(np.median(data.dt)))
+    where = f"maneuver {data.id}: the gyro and star-tracker rotations line up best when the gyro clock is shifted by"
+    if abs(offset) > limit:
+        findings.errors.append(
+            f"{where} {offset:+.3g} s (more than two samples, {limit:.3g} s): are the two clocks "
+            "synchronised, and is each time the end of its sample?")
+        return
+    d_st = _interval_rotations(data.st_quat)
+    noise_rad = 1.4826 * np.median(np.abs(np.diff(d_st, axis=0))) / np.sqrt(2) + 1e-15
+    peak_rate = np.max(np.abs(d_st[:, AXIS_INDEX[data.axis]]) / np.diff(data.st_time))
+    if abs(offset) * peak_rate > DETECTION_SD * noise_rad:
+        findings.warnings.append(
+            f"{where} {offset:+.3g} s, {rad_to_arcsec(abs(offset) * peak_rate):.0f} arcsec at the peak rate: "
+            "a latency or clock offset the baseline model lacks (the library effect st_latency has it)")
+
+
+def neighbour_residual(x, reach=OUTLIER_REACH) -> np.ndarray:
+    """Each row of ``x`` (M, p) minus the median of its neighbours' linear interpolations
+    ``(x[k-j] + x[k+j]) / 2``, j = 1..reach: zero on any straight line, and a kink leaves only
+    its change of slope. A single outlier moves one interpolation of its neighbours, which the
+    median ignores. The first and last rows have no pair: they are returned as zero."""
+    m = len(x)
+    padded = np.concatenate([np.full((reach,) + x.shape[1:], np.nan), x, np.full((reach,) + x.shape[1:], np.nan)])
+    pairs = np.stack([0.5 * (padded[reach - j:reach - j + m] + padded[reach + j:reach + j + m])
+                      for j in range(1, reach + 1)])
+    resid = np.zeros_like(x)
+    resid[1:-1] = x[1:-1] - np.nanmedian(pairs[:, 1:-1], axis=0)
+    return resid
+
+
+def outlier_distances(data):
+    """Each star-tracker sample's departure from its neighbours (`neighbour_residual` of the error
+    of eq. 4, rad, body axes), less what the motion explains, and its squared Mahalanobis
+    distance under the robust covariance of those departures: the data's own noise.
+
+    The error between the sensors bends only where the motion does. An error linear in the
+    rotation (scale, misalignment), in the rate (a latency or time offset) or in the rate's
+    signed square (a nonlinearity) leaves, where the motion bends, a departure proportional to
+    the same departure of the cumulative angle, the rate or the square-rate integral; these
+    nine regressors are fitted on the inliers and taken out, so only what the motion cannot
+    explain remains.
+    """
+    zeros = ch.ChannelParams.zeros(data.channels)
+    err = neighbour_residual(preprocess.error_angles(data, data.sets[0], zeros))
+    body = _body_increments(data, data.increments)
+    rate = body / data.dt[:, None]
+    k, frac = data.st_interval()
+    motion = neighbour_residual(np.concatenate([cumulative_at_st(body, k, frac), rate[k],
+                                                cumulative_at_st(body * np.abs(rate), k, frac)], axis=1))
+    inside = np.ones(len(err), dtype=bool)
+    inside[[0, -1]] = False
+    cut = chi2.ppf(0.999, 3)
+    for _ in range(3):
+        coef, *_ = np.linalg.lstsq(motion[inside], err[inside], rcond=None)
+        resid = err - motion @ coef
+        cov = robust_covariance(resid[inside])
+        d2 = np.einsum("mi,ij,mj->m", resid, np.linalg.pinv(cov), resid)
+        inside = (d2 < cut) & inside
+    return resid, d2
+
+
+def robust_covariance(x, iterations=5, quantile=0.99) -> np.ndarray:
+    """Covariance of the bulk of ``x`` (N, p): refit on the points inside the ``quantile`` ellipsoid,
+    corrected for the truncation (a normal's tails are cut, not outliers')."""
+    p = x.shape[1]
+    scale = 1.4826 * np.median(np.abs(x - np.median(x, axis=0)), axis=0) + 1e-15
+    cov = np.diag(scale**2)
+    cut = chi2.ppf(quantile, p)
+    factor = chi2.cdf(cut, p + 2) / chi2.cdf(cut, p)
+    for _ in range(iterations):
+        d2 = np.einsum("mi,ij,mj->m", x, np.linalg.pinv(cov), x)
+        inside = x[d2 < cut]
+        cov = inside.T @ inside / len(inside) / factor
+    return cov
+
+
+def check(campaign: Campaign) -> Findings:
+    """Every physical check of a campaign. Outliers are screened with a threshold that keeps
+    the expected false alarms per campaign at `OUTLIER_FALSE_ALARMS`; they are listed here
+    and left out by `preprocess`."""
+    findings = Findings()
+    gap_findings(campaign, findings)
+    screened = []
+    for m in campaign.maneuvers:
+        try:
+            data = preprocess.slice_maneuver(campaign, m.id)
+        except TelemetryError as exc:
+            findings.errors.append(str(exc))
+            continue
+        if not rotation_findings(campaign, data, findings):
+            continue
+        clock_findings(data, findings)
+        missing = classic.missing_holds(data)
+        if missing:
+            findings.warnings.append(f"maneuver {m.id}: no inertial hold {' or '.join(missing)} the rotation: "
+                                     "the paper's classic method does not apply to it (the full-trajectory "
+                                     "fit does)")
+        screened.append((data, *outlier_distances(data)))
+    n_total = sum(len(d2) for _, _, d2 in screened)
+    threshold = chi2.isf(OUTLIER_FALSE_ALARMS / max(n_total, 1), 3)
+    for data, resid, d2 in screened:
+        lines = campaign.lines["star_tracker.csv"][np.searchsorted(campaign.st_time, data.st_time)]
+        for j in np.flatnonzero(d2 > threshold):
+            findings.outliers.append(Outlier(data.id, float(data.st_time[j]), int(lines[j]),
+                                             float(rad_to_arcsec(np.linalg.norm(resid[j]))),
+                                             float(np.sqrt(d2[j]))))
+    return findings
+
+
+def read_checked(directory):
+    """Read a campaign (format, `telemetry.read_campaign`) and check its physics; every error found
+    is raised at once in one `TelemetryError`. Returns the campaign and its `Findings`."""
+    campaign = read_campaign(directory)
+    findings = check(campaign)
+    if findings.errors:
+        listed = "\n".join(f"  - {e}" for e in findings.errors)
+        raise TelemetryError(f"{directory}: the data are not physically consistent "
+                             f"({len(findings.errors)} finding(s)):\n{listed}")
+    return campaign, findings
+
+
+def summary(campaign: Campaign, findings: Findings) -> str:
+    """What ``gyrocal validate`` prints: the campaign, then the warnings and outliers."""
+    lines = [format_summary(campaign)]
+    if campaign.st_renormalised:
+        lines.append(f"  renormalised {campaign.st_renormalised} star-tracker quaternions (norm off 1 by more "
+                     f"than {UNIT_NORM_TOL:g}, as rounding leaves them)")
+    for w in findings.warnings:
+        lines.append(f"  warning: {w}")
+    if findings.outliers:
+        lines.append(f"  star-tracker outliers, left out of the fit: {len(findings.outliers)}")
+        for o in findings.outliers:
+            lines.append(f"    {o.maneuver:<12} line {o.line:>7}  t = {o.time_s:.2f} s  {o.size_arcsec:8.1f} arcsec "
+                         f"({o.mahalanobis:.1f} sd)")
+    return "\n".join(lines)

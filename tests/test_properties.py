@@ -1,0 +1,136 @@
+"""Property: whatever happens to a valid campaign ends in a clear error or in estimates that
+still cover the truth; never a traceback, never a hang.
+
+Hypothesis mutates the tiny campaign: it deletes rows, inserts NaNs, shuffles times, scales
+columns, drops columns, offsets clocks, cuts gaps and flips the quaternion order, one to
+three at a time. Each case runs under a time bound.
+"""
+
+import shutil
+import signal
+from contextlib import contextmanager
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import HealthCheck, event, given, settings
+from hypothesis import strategies as st
+
+from gyrocal import classic, consistency, preprocess
+from gyrocal.estimate import EstimateError, check_physical, point_estimate
+from gyrocal.posterior import Priors
+from gyrocal.spec import baseline
+from gyrocal.telemetry import TelemetryError
+
+from conftest import truth_vector
+
+CASE_SECONDS = 120
+COVER_SD = 4.5
+"""Every informed parameter must lie within this many WLS standard errors of the truth
+(4.5 sd: a false alarm once in about 4 000 campaigns of 20 parameters)."""
+
+FILES = st.sampled_from(["gyro.csv", "star_tracker.csv"])
+SEEDS = st.integers(0, 2**31 - 1)
+OPERATIONS = st.one_of(
+    st.tuples(st.just("delete_rows"), FILES, SEEDS, st.integers(1, 20)),
+    st.tuples(st.just("nan"), FILES, SEEDS),
+    st.tuples(st.just("swap_times"), FILES, SEEDS),
+    st.tuples(st.just("scale"), FILES, SEEDS, st.sampled_from([1e-3, 0.5, 2.0, 180 / np.pi, 1e3])),
+    st.tuples(st.just("drop_column"), FILES, SEEDS),
+    st.tuples(st.just("clock"), st.sampled_from([-30.0, -5.0, 2.5, 10.0])),
+    st.tuples(st.just("gap"), SEEDS, st.sampled_from([2, 10, 100])),
+    st.tuples(st.just("flip_quaternion")),
+)
+
+
+def apply(directory, operation):
+    """One mutation of a campaign directory, in place."""
+    kind, *args = operation
+    name = args[0] if args and isinstance(args[0], str) else "gyro.csv"
+    path = directory / name
+    frame = pd.read_csv(path)
+    rng = np.random.default_rng(args[1] if len(args) > 1 and kind != "clock" else 0)
+    if kind == "delete_rows":
+        frame = frame.drop(index=rng.choice(len(frame), size=args[2], replace=False))
+    elif kind == "nan":
+        frame.iloc[rng.integers(len(frame)), rng.integers(frame.shape[1])] = np.nan
+    elif kind == "swap_times":
+        i = rng.integers(1, len(frame) - 1)
+        frame.loc[[i, i + 1], "time"] = frame.loc[[i + 1, i], "time"].to_numpy()
+    elif kind == "scale":
+        columns = [c for c in frame.columns if c.startswith("dtg")] or ["q1", "q2", "q3", "q4"]
+        frame[columns] *= args[2]
+    elif kind == "drop_column":
+        frame = frame.drop(columns=[frame.columns[rng.integers(frame.shape[1])]])
+    elif kind == "clock":
+        path = directory / "star_tracker.csv"
+        frame = pd.read_csv(path)
+        frame["time"] += args[0]
+    elif kind == "gap":
+        rng = np.random.default_rng(args[0])
+        start = rng.integers(len(frame) - args[1])
+        frame = frame.drop(index=range(start, start + args[1]))
+    elif kind == "flip_quaternion":
+        path = directory / "star_tracker.csv"
+        frame = pd.read_csv(path)
+        frame[["q1", "q2", "q3", "q4"]] = frame[["q4", "q1", "q2", "q3"]].to_numpy()
+    frame.to_csv(path, index=False, float_format="%.17g")
+
+
+@contextmanager
+def time_bound(seconds):
+    def expire(signum, frame):
+        raise TimeoutError(f"a case ran longer than {seconds} s")
+    previous = signal.signal(signal.SIGALRM, expire)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+def calibrate(directory):
+    """What the pipeline does up to the point estimate, as the rules call it; returns the
+    estimate (its WLS covariance is what the posterior is centred on)."""
+    campaign, findings = consistency.read_checked(directory)
+    outliers = [o.time_s for o in findings.outliers]
+    maneuvers = [preprocess.slice_maneuver(campaign, m.id, outliers) for m in campaign.maneuvers]
+    spec = baseline(campaign.channels)
+    theta0 = classic.classic_vector(classic.classic_table(maneuvers, spec), spec)
+    stated = {"sigma_cross_arcsec": 5.0, "sigma_about_arcsec": 20.0, "arw_deg_sqrt_h": 0.003,
+              "boresight_body": [0.3, 0.0, 0.954]}
+    est = point_estimate(maneuvers, spec, stated, theta0)
+    check_physical(maneuvers, est, Priors.from_spec(est.spec, stated, 1.0).bound)
+    return campaign, est
+
+
+@pytest.fixture(scope="module")
+def truth(tiny):
+    from gyrocal.telemetry import read_campaign
+    channels = read_campaign(tiny[0]).channels
+    return baseline(channels).core_vector(truth_vector(channels, tiny[1]))
+
+
+@settings(max_examples=40, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@given(operations=st.lists(OPERATIONS, min_size=1, max_size=3))
+def test_any_mutation_ends_in_a_clear_error_or_a_covering_estimate(operations, tiny, truth, tmp_path_factory):
+    directory = tmp_path_factory.mktemp("mutated") / "campaign"
+    shutil.copytree(tiny[0], directory)
+    for operation in operations:
+        apply(directory, operation)
+    with time_bound(CASE_SECONDS):
+        try:
+            _, est = calibrate(directory)
+        except (TelemetryError, EstimateError) as err:
+            event(f"refused: {type(err).__name__}")
+            message = str(err)
+            assert str(directory) in message or "maneuver" in message, message
+            assert "Traceback" not in message
+            return
+    event("calibrated")
+    informed = est.spec.free[est.spec.core]
+    sd = np.sqrt(np.diag(est.cov))[est.spec.core][informed]
+    z = (est.theta[est.spec.core][informed] - truth[informed]) / sd
+    assert np.max(np.abs(z)) < COVER_SD, (operations, np.array(est.spec.labels)[est.spec.core][informed][np.argmax(np.abs(z))])

@@ -1,0 +1,196 @@
+"""Telemetry as it comes: each corruption gets a message a user can act on; messy but valid
+campaigns pass, with what was found counted; nothing unidentified drags what is identified."""
+
+import json
+
+import mutations
+import numpy as np
+import pandas as pd
+import pytest
+
+from gyrocal import cli, consistency, steps
+from gyrocal.estimate import EstimateError
+
+from conftest import run_campaign
+
+EXPECTED = {
+    "gyro increments in degrees": "57.",
+    "gyro increments 1000x too large": "1000 times too large",
+    "gyro rates instead of increments": "rates in rad/s rather than increments",
+    "gyro cumulative angle": "cumulative angle",
+    "gyro gap inside a rotation": "inside maneuver yaw_pos",
+    "scalar-first quaternions under q1..q4": "scalar first",
+    "5 s star-tracker clock offset": "shifted by -5 s",
+    "overlapping maneuvers": "overlap",
+    "axis label names the wrong axis": "axis label wrong",
+    "direction label is the wrong one": "opposite of the label's direction",
+    "window with no rotation": "is the window on a hold",
+    "valid=2": "column 'valid': must be 0 or 1, got 2",
+    "boresight given as strings": "star_tracker.boresight_body: must be a non-zero 3-vector",
+    "gyro: a scalar": "gyro: must be a mapping",
+    "unquoted direction: -": 'quote a direction, direction: "-"',
+    "blank line, then a NaN": "line 22, column 'dtg1_roll': value is NaN",
+    "t_start: true": "t_start: must be a time in seconds, got True",
+}
+
+
+def validate_cli(directory, capsys):
+    code = cli.main(["validate", str(directory)])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+@pytest.mark.parametrize("case", sorted(mutations.REFUSED))
+def test_validate_refuses_each_corruption_with_a_message_naming_the_cause(case, tiny, tmp_path, capsys):
+    directory = tmp_path / "campaign"
+    mutations.corrupted_copy(tiny[0], directory, mutations.REFUSED[case])
+    code, out, err = validate_cli(directory, capsys)
+    assert code == 2, out
+    assert EXPECTED[case] in err
+    assert "Traceback" not in err and "np.int64" not in err
+
+
+def test_every_refused_case_has_its_expected_message():
+    assert set(EXPECTED) == set(mutations.REFUSED)
+
+
+def test_quaternions_rounded_to_5_decimals_are_renormalised_and_counted(tiny, tmp_path, capsys):
+    directory = tmp_path / "campaign"
+    mutations.corrupted_copy(tiny[0], directory, mutations.quaternion_decimals(5))
+    campaign, _ = consistency.read_checked(directory)
+    assert campaign.st_renormalised > 0.9 * (campaign.st_valid == 1).sum()
+    assert np.allclose(np.linalg.norm(campaign.st_quat[campaign.st_valid == 1], axis=1), 1.0, atol=1e-12)
+
+
+def test_a_hyphenated_directory_without_a_name_gets_a_safe_default_name(tiny, tmp_path, capsys):
+    directory = tmp_path / "my-campaign"
+    mutations.corrupted_copy(tiny[0], directory, mutations.hyphen_name)
+    code, out, _ = validate_cli(directory, capsys)
+    assert code == 0 and "campaign my_campaign: OK" in out
+
+
+def test_a_window_without_holds_is_a_warning_and_classic_gives_no_number(tiny, tmp_path):
+    from gyrocal import classic, preprocess
+    directory = tmp_path / "campaign"
+    mutations.corrupted_copy(tiny[0], directory, mutations.no_hold)
+    campaign, findings = consistency.read_checked(directory)
+    assert any("yaw_pos: no inertial hold before or after" in w for w in findings.warnings)
+    assert classic.classic(preprocess.slice_maneuver(campaign, "yaw_pos")).empty
+
+
+def test_a_clean_campaign_has_no_warning_and_no_outlier(tiny):
+    _, findings = consistency.read_checked(tiny[0])
+    assert findings.warnings == [] and findings.outliers == []
+
+
+def test_neighbour_residual_is_zero_on_a_line_and_isolates_a_spike():
+    x = np.column_stack([np.arange(20.0), -2.0 * np.arange(20.0)])
+    assert np.allclose(consistency.neighbour_residual(x), 0.0)
+    x[7] += [10.0, 0.0]
+    r = consistency.neighbour_residual(x)
+    assert r[7, 0] == pytest.approx(10.0)
+    assert np.allclose(np.delete(r, 7, axis=0), 0.0)
+
+
+@pytest.fixture(scope="module")
+def outlier_run(tiny, tmp_path_factory, config):
+    base = tmp_path_factory.mktemp("outliers")
+    directory = base / "campaign"
+    lines = mutations.corrupted_copy(tiny[0], directory, mutations.st_outliers)
+    run_campaign(directory, base / "out", config)
+    return base / "out", lines
+
+
+def test_five_star_tracker_outliers_are_listed_and_left_out(outlier_run):
+    out, lines = outlier_run
+    info = json.loads((out / "input.json").read_text())
+    assert sorted(o["line"] for o in info["star_tracker_outliers"]) == sorted(lines)
+    assert info["rows"]["star_tracker_outliers"] == 5
+    assert all(300 < o["size_arcsec"] < 850 for o in info["star_tracker_outliers"])
+    html = (out / "report.html").read_text()
+    assert "Star-tracker outliers left out of the fit (5)" in html
+
+
+def test_five_outliers_move_no_estimate_by_more_than_half_an_sd(outlier_run, tiny_run):
+    out, _ = outlier_run
+    clean = pd.read_csv(tiny_run[0] / "baseline/calibration.csv")
+    dirty = pd.read_csv(out / "baseline/calibration.csv")
+    shift = np.abs(dirty["mean"] - clean["mean"]) / clean["sd"]
+    assert shift.max() < 0.5
+
+
+@pytest.fixture(scope="module")
+def unflown_run(tiny, tmp_path_factory, config):
+    base = tmp_path_factory.mktemp("unflown")
+    directory = base / "campaign"
+    mutations.corrupted_copy(tiny[0], directory, mutations.drop_maneuver("pitch_neg"))
+    run_campaign(directory, base / "out", config)
+    return base / "out"
+
+
+def test_a_direction_never_flown_is_prior_only_and_its_posterior_is_the_prior(unflown_run):
+    cal = pd.read_csv(unflown_run / "baseline/calibration.csv")
+    flagged = cal[cal["prior_only"]]
+    assert sorted(flagged["channel"] + "." + flagged["parameter"]) == ["dtg1_pitch.sf_neg", "dtg2_pitch.sf_neg"]
+    assert np.allclose(flagged["sd"], 5000.0, rtol=0.05)
+    assert np.allclose(flagged["mean"], 0.0, atol=0.1 * 5000.0)
+
+
+def test_a_prior_only_parameter_drags_no_identified_one(unflown_run, tiny_run, tiny):
+    full = pd.read_csv(tiny_run[0] / "baseline/calibration.csv")
+    cal = pd.read_csv(unflown_run / "baseline/calibration.csv")
+    informed = ~cal["prior_only"].to_numpy()
+    shift = (np.abs(cal["mean"] - full["mean"]) / full["sd"])[informed]
+    assert shift.max() < 0.25
+    truth = tiny[1]["parameters"]
+    z = [(r.mean - truth[r.channel][r.parameter]) / r.sd for r in cal[informed].itertuples()]
+    assert np.max(np.abs(z)) < 3.5
+
+
+def test_the_verdict_names_the_missing_maneuver(unflown_run):
+    html = (unflown_run / "report.html").read_text()
+    assert "NO-GO" in html
+    assert "dtg1_pitch.sf_neg (no -pitch maneuver)" in html
+    assert "No correction for dtg1_pitch, dtg2_pitch" in html
+
+
+def test_a_point_estimate_beyond_the_bounds_stops_before_sampling_naming_parameter_and_maneuver(
+        tiny_run, config, tmp_path):
+    out, npz = tiny_run
+    with pytest.raises(EstimateError) as err:
+        steps.run_posterior(npz, out / "baseline/point_estimate.npz", [], {**config["priors"], "sf_bound_ppm": 100.0},
+                            None, config["sampler"], config["grid"], config["convergence"], config["seed"],
+                            *(tmp_path / name for name in ("p.nc", "s.csv", "f.csv", "j.json", "e.csv")))
+    message = str(err.value)
+    assert "dtg1_roll.sf_pos = 14" in message and "(bound 100," in message
+    assert "fits maneuver" in message
+    assert not (tmp_path / "p.nc").exists()
+
+
+def test_every_json_output_is_strict_json(tiny_run):
+    out, _ = tiny_run
+
+    def refuse(constant):
+        raise ValueError(f"non-standard JSON constant {constant}")
+
+    files = sorted(out.rglob("*.json"))
+    assert len(files) >= 4
+    for path in files:
+        json.loads(path.read_text(), parse_constant=refuse)
+
+
+def test_same_config_and_seed_give_byte_identical_outputs(tiny, tiny_run, config, tmp_path):
+    out, _ = tiny_run
+    run_campaign(tiny[0], tmp_path, config)
+    for name in ("baseline/calibration.csv", "baseline/diagnostics.json", "report.html", "input.json"):
+        assert (tmp_path / name).read_bytes() == (out / name).read_bytes(), name
+
+
+def test_posterior_netcdf_differs_by_nothing_but_content(tiny, tiny_run, config, tmp_path):
+    import arviz as az
+    out, _ = tiny_run
+    run_campaign(tiny[0], tmp_path, config)
+    a, b = az.from_netcdf(out / "baseline/posterior.nc"), az.from_netcdf(tmp_path / "baseline/posterior.nc")
+    for group in a.groups():
+        assert a[group].attrs == b[group].attrs
+        assert a[group].equals(b[group])
