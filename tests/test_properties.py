@@ -54,18 +54,19 @@ def apply(directory, operation):
         frame = frame.drop(index=rng.choice(len(frame), size=args[2], replace=False))
     elif kind == "nan":
         frame.iloc[rng.integers(len(frame)), rng.integers(frame.shape[1])] = np.nan
-    elif kind == "swap_times":
+    elif kind == "swap_times" and "time" in frame:
         i = rng.integers(1, len(frame) - 1)
         frame.loc[[i, i + 1], "time"] = frame.loc[[i + 1, i], "time"].to_numpy()
     elif kind == "scale":
-        columns = [c for c in frame.columns if c.startswith("dtg")] or ["q1", "q2", "q3", "q4"]
+        columns = [c for c in frame.columns if c.startswith("dtg") or c in ("q1", "q2", "q3", "q4")]
         frame[columns] *= args[2]
     elif kind == "drop_column":
         frame = frame.drop(columns=[frame.columns[rng.integers(frame.shape[1])]])
     elif kind == "clock":
         path = directory / "star_tracker.csv"
         frame = pd.read_csv(path)
-        frame["time"] += args[0]
+        if "time" in frame:
+            frame["time"] += args[0]
     elif kind == "gap":
         rng = np.random.default_rng(args[0])
         start = rng.integers(len(frame) - args[1])
@@ -73,7 +74,8 @@ def apply(directory, operation):
     elif kind == "flip_quaternion":
         path = directory / "star_tracker.csv"
         frame = pd.read_csv(path)
-        frame[["q1", "q2", "q3", "q4"]] = frame[["q4", "q1", "q2", "q3"]].to_numpy()
+        if {"q1", "q2", "q3", "q4"} <= set(frame):
+            frame[["q1", "q2", "q3", "q4"]] = frame[["q4", "q1", "q2", "q3"]].to_numpy()
     frame.to_csv(path, index=False, float_format="%.17g")
 
 

@@ -41,9 +41,9 @@ def unflown(maneuvers, spec: ModelSpec) -> dict:
 
 
 def uninformed(stats: Stats, spec: ModelSpec) -> dict:
-    """Parameters whose own information in the data (``stats.A``, the nuisance integrated out),
-    relative to their prior's, is below `INFORMATION_RATIO_MIN`."""
+    """Parameters not yet prior-only whose own information in the data (``stats.A``, the nuisance
+    integrated out), relative to their prior's, is below `INFORMATION_RATIO_MIN`."""
     ratio = np.diag(stats.A) * spec.prior_sd_si**2
     return {spec.labels[i]: (f"the data carry {ratio[i]:.2g} of its prior's information: is its regressor "
                              "constant over the maneuvers, or a copy of the bias?")
-            for i in np.flatnonzero(ratio < INFORMATION_RATIO_MIN)}
+            for i in np.flatnonzero((ratio < INFORMATION_RATIO_MIN) & spec.free)}
