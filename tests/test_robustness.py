@@ -92,6 +92,30 @@ def test_neighbour_residual_is_zero_on_a_line_and_isolates_a_spike():
     assert np.allclose(np.delete(r, 7, axis=0), 0.0)
 
 
+def test_robust_covariance_recovers_the_bulk_despite_gross_outliers():
+    rng = np.random.default_rng(5)
+    cov = np.array([[4.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 9.0]])
+    x = rng.multivariate_normal(np.zeros(3), cov, size=4000)
+    x[:40] += 200.0
+    assert np.allclose(consistency.robust_covariance(x), cov, rtol=0.1, atol=0.15)
+
+
+def test_a_parameter_with_no_information_is_prior_only_and_one_with_little_is_not(tiny):
+    from gyrocal.identification import uninformed
+    from gyrocal.likelihood import Stats
+    from gyrocal.spec import baseline
+    from gyrocal.telemetry import read_campaign
+    spec = baseline(read_campaign(tiny[0]).channels)
+    info = 1.0 / spec.prior_sd_si**2
+    A = np.diag(info * 50.0)
+    A[3, 3] = 0.0
+    A[5, 5] = 0.005 * info[5]
+    A[7, 7] = 0.02 * info[7]
+    flagged = uninformed(Stats(A, np.zeros(len(spec)), 0.0, 0.0, 10), spec)
+    assert sorted(flagged) == sorted([spec.labels[3], spec.labels[5]])
+    assert "constant" in flagged[spec.labels[3]]
+
+
 @pytest.fixture(scope="module")
 def outlier_run(tiny, tmp_path_factory, config):
     base = tmp_path_factory.mktemp("outliers")
