@@ -55,12 +55,15 @@ class Outlier:
     line: int
     """Line of ``star_tracker.csv`` (the header is line 1)."""
     size_arcsec: float
-    """Departure from the running median of its neighbours."""
+    """Departure from its neighbours that the motion does not explain (`outlier_distances`)."""
     mahalanobis: float
+    """The same departure in standard deviations of the data's own noise."""
 
 
 @dataclass
 class Findings:
+    """What `check` found: errors refuse the campaign; warnings and outliers are recorded."""
+
     errors: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
     outliers: list = field(default_factory=list)
@@ -96,6 +99,8 @@ def _gyro_at_st(data, increments) -> np.ndarray:
 
 
 def _body_increments(data, raw) -> np.ndarray:
+    """Body increments of the first channel set from raw channel increments (nominal model),
+    so a reinterpretation of the raw columns can be tried."""
     first = data.sets[0]
     index = {c.name: i for i, c in enumerate(data.channels)}
     zeros = ch.ChannelParams.zeros(data.channels)
