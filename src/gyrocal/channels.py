@@ -18,10 +18,11 @@ from .units import AXES, AXIS_INDEX
 
 @dataclass(frozen=True)
 class Channel:
-    """One sensing axis of a two-axis DTG, named ``dtg<N>_<axis>``."""
+    """One sensing axis of a gyro: of a two-axis DTG (``dtg<N>_<axis>``, ``dtg`` its number) or of
+    any other gyro (``dtg`` None)."""
 
     name: str
-    dtg: int
+    dtg: int | None
     axis: str
 
     def __post_init__(self):

@@ -46,9 +46,10 @@ def classic(data: ManeuverData) -> pd.DataFrame:
     divide by the kinematic matrix of the actual trajectory, which is the angle for
     the scale factor and reduces to it for small rotations. The hold averages are
     differenced in the inertial frame, where the initial attitude offset stays put.
-    A maneuver without both holds gets no row: the method does not apply to it.
+    A maneuver without both holds, or one that turns both ways, gets no row: the method does
+    not apply to it.
     """
-    if missing_holds(data):
+    if data.direction == "both" or missing_holds(data):
         return pd.DataFrame(columns=["maneuver", "set", "channel", "parameter", "value", "angle_rad"])
     before, after = hold_windows(data)
     a = AXIS_INDEX[data.axis]

@@ -1,4 +1,4 @@
-"""The ``gyrocal`` command: simulate a campaign, validate one."""
+"""The ``gyrocal`` command: simulate, import or validate a campaign; compare two calibrations."""
 
 import argparse
 import sys
@@ -14,8 +14,16 @@ def main(argv=None):
     sim.add_argument("scenario")
     sim.add_argument("outdir")
     sim.add_argument("--seed", type=int, default=None, help="default: the scenario's seed")
+    imp = sub.add_parser("import", help="write a campaign directory from tabular telemetry, through a mapping")
+    imp.add_argument("mapping", help="a shipped mapping (repoimu) or a mapping file (.yaml)")
+    imp.add_argument("outdir")
+    imp.add_argument("files", nargs="+", help="one maneuver per file, named after its stem")
     val = sub.add_parser("validate", help="check a campaign directory against the contract")
     val.add_argument("directory")
+    cmp_ = sub.add_parser("compare-campaigns", help="compare two calibration.csv parameter by parameter")
+    cmp_.add_argument("first")
+    cmp_.add_argument("second")
+    cmp_.add_argument("--z-max", type=float, default=3.0, help="agreement limit on |z| (default 3)")
     args = parser.parse_args(argv)
 
     from .telemetry import TelemetryError
@@ -25,9 +33,17 @@ def main(argv=None):
             campaign, truth = run(args.scenario, args.outdir, args.seed)
             print(f"wrote {args.outdir}/campaign ({len(campaign.maneuvers)} maneuvers, seed {truth['seed']}) "
                   f"and {args.outdir}/truth.json")
+        elif args.command == "import":
+            from .importer import import_files, report
+            print(report(*import_files(args.mapping, args.outdir, args.files), args.outdir))
         elif args.command == "validate":
             from .consistency import read_checked, summary
             print(summary(*read_checked(args.directory)))
+        elif args.command == "compare-campaigns":
+            from .agreement import compare_files
+            text, agree = compare_files(args.first, args.second, args.z_max)
+            print(text)
+            return 0 if agree else 1
     except (TelemetryError, ValueError, FileNotFoundError) as exc:
         print(f"gyrocal {args.command}: error: {exc}", file=sys.stderr)
         return 2

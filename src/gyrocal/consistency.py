@@ -12,7 +12,7 @@ The star-tracker outlier screen lives here too: a sample far off its neighbours,
 what the data's own noise allows, is listed and kept out of the fit.
 """
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -35,6 +35,10 @@ OUTLIER_FALSE_ALARMS = 0.01
 
 OUTLIER_REACH = 3
 """The outlier screen compares a sample with the interpolations of up to this many pairs of neighbours."""
+
+OUTLIER_MAX_RUN = 3
+"""An outlier stands alone: a wrong star identification or a reference glitch lasts a sample or
+a few. Longer runs beyond the noise are structure for the model, and stay in the fit."""
 
 MAX_CLOCK_SEARCH_S = 60.0
 """The clock-offset search spans at most this far either way."""
@@ -67,6 +71,8 @@ class Findings:
     errors: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
     outliers: list = field(default_factory=list)
+    mounting: dict = field(default_factory=dict)
+    """The reference's mounting applied (`align`): quaternion, source and angle."""
 
 
 @dataclass
@@ -108,22 +114,37 @@ def _body_increments(data, raw) -> np.ndarray:
 
 
 def fit_rotation(d_gyro, d_st, dt, axis: int, bias=True) -> RotationFit:
-    """Least squares of the gyro's interval rotations on the star tracker's about ``axis``
-    and (with ``bias``) a constant rate: the response is 1 + scale error on the axis and
-    the misalignments across."""
+    """Least squares of the gyro's interval rotations on the star tracker's about all three axes
+    and (with ``bias``) a constant rate. The response to rotation about ``axis`` is 1 + scale
+    error on that axis and the misalignments across; the other axes' columns take up any motion
+    about them (a hand-held trial turns about more than one axis)."""
     excursion = np.ptp(np.cumsum(d_st, axis=0), axis=0)
-    x = np.column_stack([d_st[:, axis], dt] if bias else [d_st[:, axis]])
+    x = np.column_stack([d_st, dt] if bias else [d_st])
     coef, *_ = np.linalg.lstsq(x, d_gyro, rcond=None)
     resid = d_gyro - x @ coef
     sigma = 1.4826 * np.median(np.abs(resid - np.median(resid, axis=0)), axis=0) + 1e-15
-    info = np.linalg.pinv(x.T @ x)[0, 0]
-    return RotationFit(int(np.argmax(excursion)), float(d_st[:, axis].sum()), excursion, coef[0], sigma * np.sqrt(info))
+    info = np.linalg.pinv(x.T @ x)[axis, axis]
+    return RotationFit(int(np.argmax(excursion)), float(d_st[:, axis].sum()), excursion, coef[axis],
+                       sigma * np.sqrt(info))
+
+
+CHECK_BLOCK_S = 1.0
+"""The rotation checks compare the sensors over blocks of samples at least this long: over a
+fast reference's single interval, its noise and any sub-sample timing would bias the slope."""
+
+
+def _blocked(dt, *series):
+    """Sums of consecutive intervals over blocks of at least `CHECK_BLOCK_S` (the dt first)."""
+    size = max(1, int(round(CHECK_BLOCK_S / float(np.median(dt)))))
+    n = len(dt) // size * size
+    return [x[:n].reshape(n // size, size, *x.shape[1:]).sum(axis=1) for x in (dt, *series)]
 
 
 def _consistent(d_gyro, d_st, dt, axis, sf_bound, mis_bound) -> bool:
     """Whether the gyro's rotation matches the star tracker's within the physical bounds, with
     a bias fitted or (where a rotation at one steady rate leaves it confounded with the
-    scale) without."""
+    scale) without; over blocks of `CHECK_BLOCK_S`."""
+    dt, d_gyro, d_st = _blocked(dt, d_gyro, d_st)
     return any(_within(fit_rotation(d_gyro, d_st, dt, axis, bias), axis, sf_bound, mis_bound) for bias in (True, False))
 
 
@@ -156,7 +177,7 @@ def rotation_findings(campaign: Campaign, data, findings: Findings) -> bool:
     where = f"maneuver {m.id} ({m.direction}{m.axis})"
     noise_rad = float(np.median(np.abs(d_st - np.median(d_st, axis=0))) * 1.4826 + 1e-12)
     min_angle = noise_rad / sf_sd
-    fit = fit_rotation(d_gyro, d_st, dt, a)
+    fit = fit_rotation(*_blocked(dt, d_gyro, d_st)[1:], _blocked(dt)[0], a)
     if fit.excursion_rad.max() < min_angle and np.ptp(np.cumsum(d_gyro, axis=0), axis=0).max() < min_angle:
         findings.errors.append(
             f"{where}: neither the star tracker nor the gyros rotate in [{m.t_start}, {m.t_end}] s "
@@ -168,6 +189,12 @@ def rotation_findings(campaign: Campaign, data, findings: Findings) -> bool:
         if fit.excursion_rad[a] < min_angle:
             findings.errors.append(f"{where}: the star tracker rotates only {np.rad2deg(fit.excursion_rad[a]):.3g} deg "
                                    f"about {m.axis}; a scale factor needs {np.rad2deg(min_angle):.2g} deg")
+        elif m.direction == "both":
+            turned = {"+": d_st[:, a].clip(min=0).sum(), "-": -d_st[:, a].clip(max=0).sum()}
+            missing = [s for s in "+-" if turned[s] < min_angle]
+            if missing:
+                findings.errors.append(f"{where}: labelled both, but the star tracker turns only "
+                                       f"{np.rad2deg(turned[missing[0]]):.3g} deg in the {missing[0]} direction")
         elif np.sign(fit.net_rad) != m.sign:
             findings.errors.append(
                 f"{where}: the star tracker and the gyros turn {np.rad2deg(fit.net_rad):+.1f} deg about {m.axis}, "
@@ -217,6 +244,38 @@ def _diagnose(campaign, data, d_st, dt, a, sf_bound, mis_bound) -> str:
             return (f"the star-tracker quaternions look {cause}: read in that order they match the gyros; "
                     "the contract's q1..q4 are scalar last (docs/interface.md section 1)")
     return ""
+
+
+CLIP_BAND = 0.05
+"""Gyro samples within this share of a maneuver's peak rate are tested for clipping."""
+
+
+def saturation_findings(data, findings: Findings) -> bool:
+    """A gyro that reaches its range clips: where its rate sits near its peak, the reference turns
+    faster than the gyro says, by more than any scale error. Such a maneuver is refused, with
+    the count of clipped samples; it is never fitted silently. Returns whether it clipped."""
+    sf_bound = _limits(data.channels)[0]
+    body = _body_increments(data, data.increments)
+    rate = np.abs(body / data.dt[:, None])
+    k, frac = data.st_interval()
+    d_gyro = np.abs(np.diff(cumulative_at_st(body, k, frac), axis=0))
+    d_st = np.abs(_interval_rotations(data.st_quat))
+    at_st = rate[k[1:]]
+    for a in range(3):
+        peak = rate[:, a].max()
+        near = at_st[:, a] >= (1 - CLIP_BAND) * peak
+        if near.sum() < 5 or d_gyro[near, a].sum() == 0:
+            continue
+        excess = d_st[near, a].sum() / d_gyro[near, a].sum()
+        if excess > 1 + 2 * sf_bound:
+            clipped = int((rate[:, a] >= (1 - CLIP_BAND) * peak).sum())
+            findings.errors.append(
+                f"maneuver {data.id}: {clipped} gyro samples about {AXES[a]} sit within {CLIP_BAND:.0%} of the peak "
+                f"rate {np.rad2deg(peak):.1f} deg/s, where the reference turns {excess:.3f} times as fast: the gyro "
+                "clips at its range, so its rotation there is not measured. Leave the maneuver out, or cut it "
+                "before the first clipped sample")
+            return True
+    return False
 
 
 def gap_findings(campaign: Campaign, findings: Findings):
@@ -394,11 +453,14 @@ def check(campaign: Campaign) -> Findings:
         except TelemetryError as exc:
             findings.errors.append(str(exc))
             continue
-        if not rotation_findings(campaign, data, findings):
+        if saturation_findings(data, findings) or not rotation_findings(campaign, data, findings):
             continue
         clock_findings(data, findings)
         missing = classic.missing_holds(data)
-        if missing:
+        if data.direction == "both":
+            findings.warnings.append(f"maneuver {m.id}: turns both ways: the paper's classic method does not apply "
+                                     "to it (the full-trajectory fit does)")
+        elif missing:
             findings.warnings.append(f"maneuver {m.id}: no inertial hold {' or '.join(missing)} the rotation: "
                                      "the paper's classic method does not apply to it (the full-trajectory "
                                      "fit does)")
@@ -407,18 +469,81 @@ def check(campaign: Campaign) -> Findings:
     threshold = chi2.isf(OUTLIER_FALSE_ALARMS / max(n_total, 1), 3)
     for data, resid, d2 in screened:
         lines = campaign.lines["star_tracker.csv"][np.searchsorted(campaign.st_time, data.st_time)]
-        for j in np.flatnonzero(d2 > threshold):
+        beyond = d2 > threshold
+        isolated = isolated_runs(beyond, OUTLIER_MAX_RUN)
+        for j in np.flatnonzero(isolated):
             findings.outliers.append(Outlier(data.id, float(data.st_time[j]), int(lines[j]),
                                              float(rad_to_arcsec(np.linalg.norm(resid[j]))),
                                              float(np.sqrt(d2[j]))))
+        structure = int((beyond & ~isolated).sum())
+        if structure:
+            findings.warnings.append(
+                f"maneuver {data.id}: {structure} star-tracker samples in runs of more than {OUTLIER_MAX_RUN} depart "
+                "from their neighbours beyond the noise: structure the model should explain, not outliers; "
+                "they stay in the fit")
     return findings
 
 
+def isolated_runs(mask, max_run: int) -> np.ndarray:
+    """The entries of ``mask`` that sit in runs of at most ``max_run`` consecutive True."""
+    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    out = np.zeros(len(mask), dtype=bool)
+    for a, b in zip(starts, ends):
+        if b - a <= max_run:
+            out[a:b] = True
+    return out
+
+
+def estimate_mounting(campaign: Campaign) -> Rotation:
+    """Coarse alignment of the attitude reference: the rotation taking its frame into body axes that
+    best maps its interval rotations onto the gyros' (Wahba's problem, `Rotation.align_vectors`),
+    over every maneuver. It absorbs the common rotation of the gyro misalignments too: after it,
+    misalignments are relative to the reference as the data align it."""
+    pairs = []
+    for m in campaign.maneuvers:
+        data = preprocess.slice_maneuver(campaign, m.id)
+        pairs.append((_gyro_at_st(data, _body_increments(data, data.increments)), _interval_rotations(data.st_quat)))
+    mounting, _ = Rotation.align_vectors(np.vstack([g for g, _ in pairs]), np.vstack([r for _, r in pairs]))
+    return mounting
+
+
+def aligned(campaign: Campaign, mounting: Rotation) -> Campaign:
+    """The campaign with its reference attitudes turned into body axes: ``R_body = R_ref M^-1`` for a
+    mounting ``M`` that takes reference-frame vectors into body axes."""
+    quat = campaign.st_quat.copy()
+    valid = campaign.st_valid == 1
+    quat[valid] = (Rotation.from_quat(quat[valid]) * mounting.inv()).as_quat()
+    return replace(campaign, st_quat=quat)
+
+
+def align(campaign: Campaign) -> tuple:
+    """The reference's mounting from ``campaign.yaml`` (``star_tracker.mounting``): a nominal
+    quaternion, refined by the data's coarse alignment when it is off by more than the largest
+    misalignment; or ``estimate``: the data's alignment alone. Returns the aligned campaign
+    and what was applied."""
+    declared = campaign.star_tracker.get("mounting")
+    if declared is None:
+        return campaign, {}
+    if declared == "estimate":
+        mounting, source = estimate_mounting(campaign), "estimated from the data"
+    else:
+        mounting, source = Rotation.from_quat(declared), "nominal (campaign.yaml)"
+        residual = estimate_mounting(aligned(campaign, mounting))
+        if residual.magnitude() > _limits(campaign.channels)[1]:
+            mounting, source = residual * mounting, "nominal, refined by the data's alignment"
+    applied = {"quat": mounting.as_quat().tolist(), "source": source,
+               "angle_deg": float(np.rad2deg(mounting.magnitude()))}
+    return aligned(campaign, mounting), applied
+
+
 def read_checked(directory):
-    """Read a campaign (format, `telemetry.read_campaign`) and check its physics; every error found
-    is raised at once in one `TelemetryError`. Returns the campaign and its `Findings`."""
-    campaign = read_campaign(directory)
+    """Read a campaign (format, `telemetry.read_campaign`), turn its reference into body axes
+    (`align`) and check its physics; every error found is raised at once in one
+    `TelemetryError`. Returns the aligned campaign and its `Findings`."""
+    campaign, mounting = align(read_campaign(directory))
     findings = check(campaign)
+    findings.mounting = mounting
     if findings.errors:
         listed = "\n".join(f"  - {e}" for e in findings.errors)
         raise TelemetryError(f"{directory}: the data are not physically consistent "
@@ -429,14 +554,18 @@ def read_checked(directory):
 def summary(campaign: Campaign, findings: Findings) -> str:
     """What ``gyrocal validate`` prints: the campaign, then the warnings and outliers."""
     lines = [format_summary(campaign)]
+    if findings.mounting:
+        lines.append(f"  reference  mounting {findings.mounting['source']}: {findings.mounting['angle_deg']:.3f} deg "
+                     f"from body axes")
     if campaign.st_renormalised:
         lines.append(f"  renormalised {campaign.st_renormalised} star-tracker quaternions (norm off 1 by more "
                      f"than {UNIT_NORM_TOL:g}, as rounding leaves them)")
     for w in findings.warnings:
         lines.append(f"  warning: {w}")
     if findings.outliers:
-        lines.append(f"  star-tracker outliers, left out of the fit: {len(findings.outliers)}")
-        for o in findings.outliers:
+        lines.append(f"  star-tracker outliers, left out of the fit: {len(findings.outliers)}"
+                     + (" (the 20 largest; all in input.json)" if len(findings.outliers) > 20 else ""))
+        for o in sorted(findings.outliers, key=lambda o: -o.mahalanobis)[:20]:
             lines.append(f"    {o.maneuver:<12} line {o.line:>7}  t = {o.time_s:.2f} s  {o.size_arcsec:8.1f} arcsec "
                          f"({o.mahalanobis:.1f} sd)")
     return "\n".join(lines)

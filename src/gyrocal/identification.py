@@ -26,7 +26,7 @@ def unflown(maneuvers, spec: ModelSpec) -> dict:
     """Channel-model terms no maneuver informs, with the reason: a scale-factor branch needs a
     maneuver about its channel's axis in its direction; a misalignment toward axis b needs a
     maneuver about b (either direction)."""
-    flown = {(d.axis, d.direction) for d in maneuvers}
+    flown = {(d.axis, sign) for d in maneuvers for sign in (("+", "-") if d.direction == "both" else (d.direction,))}
     rotated = {d.axis for d in maneuvers}
     reasons = {}
     for p in spec.parameters[spec.core]:

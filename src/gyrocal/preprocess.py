@@ -56,7 +56,7 @@ class ManeuverData:
     def save(self, path):
         np.savez_compressed(
             path, id=self.id, axis=self.axis, direction=self.direction,
-            channel_names=[c.name for c in self.channels], channel_dtg=[c.dtg for c in self.channels],
+            channel_names=[c.name for c in self.channels], channel_dtg=[-1 if c.dtg is None else c.dtg for c in self.channels],
             channel_axis=[c.axis for c in self.channels], in_loop=list(self.in_loop),
             gyro_time=self.gyro_time, increments=self.increments, st_time=self.st_time,
             st_quat=self.st_quat, attitude0_quat=self.attitude0_quat,
@@ -67,7 +67,7 @@ class ManeuverData:
     @classmethod
     def load(cls, path):
         z = np.load(path, allow_pickle=False)
-        channels = tuple(ch.Channel(str(n), int(d), str(a))
+        channels = tuple(ch.Channel(str(n), None if int(d) < 0 else int(d), str(a))
                          for n, d, a in zip(z["channel_names"], z["channel_dtg"], z["channel_axis"]))
         return cls(str(z["id"]), str(z["axis"]), str(z["direction"]), channels,
                    tuple(str(n) for n in z["in_loop"]), z["gyro_time"], z["increments"], z["st_time"],

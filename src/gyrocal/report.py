@@ -68,13 +68,13 @@ def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> di
                                "channel": c.name, "misalignment (arcsec)": cell(c.name, f"mis_{b}")})
     t2, t3 = [], []
     for a in PAPER_AXES:
-        for c in sorted((c for c in channels if c.axis == a), key=lambda c: c.dtg):
-            t2.append({"axis": a, "DTG": f"DTG#{c.dtg}", "channel": c.name,
+        for c in sorted((c for c in channels if c.axis == a), key=lambda c: (c.dtg or 0, c.name)):
+            t2.append({"axis": a, "DTG": "-" if c.dtg is None else f"DTG#{c.dtg}", "channel": c.name,
                        "selected": "yes" if c.name in in_loop else "no",
                        "positive scale factor (ppm)": cell(c.name, "sf_pos"),
                        "negative scale factor (ppm)": cell(c.name, "sf_neg")})
             others = [b for b in PAPER_AXES if b != a]
-            row = {"axis": a, "DTG": f"DTG#{c.dtg}", "channel": c.name}
+            row = {"axis": a, "DTG": "-" if c.dtg is None else f"DTG#{c.dtg}", "channel": c.name}
             for b in others:
                 row[f"{paper_term(a, b)} = mis_{b} (arcsec)"] = cell(c.name, f"mis_{b}")
             t3.append(row)

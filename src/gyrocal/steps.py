@@ -14,6 +14,7 @@ from dataclasses import asdict
 
 import arviz as az
 import pandas as pd
+from scipy.spatial.transform import Rotation
 
 from . import (
     __version__,
@@ -107,6 +108,7 @@ def validate(campaign_dir, out_json):
                  "star_tracker_renormalised": campaign.st_renormalised},
         "warnings": findings.warnings,
         "star_tracker_outliers": [asdict(o) for o in findings.outliers],
+        "mounting": findings.mounting,
         "star_tracker": campaign.star_tracker,
         "gyro": campaign.gyro,
         "checksums_sha256": telemetry.checksums(campaign_dir),
@@ -116,8 +118,11 @@ def validate(campaign_dir, out_json):
 def run_preprocess(campaign_dir, input_json, maneuver_id, out_npz, out_csv, out_png):
     """Slice one maneuver, leaving out the star-tracker outliers that validation listed;
     propagate every channel set nominally, save table and figure."""
+    info = read_json(input_json)
     campaign = telemetry.read_campaign(campaign_dir)
-    outliers = [o["time_s"] for o in read_json(input_json)["star_tracker_outliers"]]
+    if info["mounting"]:
+        campaign = consistency.aligned(campaign, Rotation.from_quat(info["mounting"]["quat"]))
+    outliers = [o["time_s"] for o in info["star_tracker_outliers"]]
     data = preprocess.slice_maneuver(campaign, maneuver_id, outliers)
     table = preprocess.error_table(data)
     write_with(data.save, out_npz)

@@ -28,6 +28,8 @@ NORM_REFUSE_TOL = 1e-3
 inside, a wrong column does not."""
 NAME_PATTERN = re.compile(r"^[A-Za-z0-9_]+$")
 CHANNEL_PATTERN = re.compile(r"^dtg(\d+)_(roll|pitch|yaw)$")
+DIRECTIONS = ("+", "-", "both")
+"""A maneuver turns one way, the other, or both (several turns each way, no inertial holds)."""
 
 
 READ_CSV_EXACT = {} if int(pd.__version__.split(".")[0]) >= 3 else {"float_precision": "round_trip"}
@@ -49,7 +51,8 @@ class Maneuver:
 
     @property
     def sign(self) -> float:
-        return 1.0 if self.direction == "+" else -1.0
+        """+1 or -1; 0 for a maneuver that turns both ways."""
+        return {"+": 1.0, "-": -1.0}.get(self.direction, 0.0)
 
 
 @dataclass
@@ -93,7 +96,8 @@ class Campaign:
     def to_yaml_dict(self) -> dict:
         return {
             "name": self.name,
-            "channels": {c.name: {"dtg": c.dtg, "axis": c.axis} for c in self.channels},
+            "channels": {c.name: {**({"dtg": c.dtg} if c.dtg is not None else {}), "axis": c.axis}
+                         for c in self.channels},
             "star_tracker": dict(self.star_tracker),
             "gyro": dict(self.gyro),
             "maneuvers": [{"id": m.id, "axis": m.axis, "direction": m.direction,
@@ -109,20 +113,24 @@ def _fail(path, message):
 
 def _parse_channels(path, raw) -> tuple:
     if not isinstance(raw, dict) or not raw:
-        _fail(path, "'channels' must map each gyro channel name to {dtg: N, axis: roll|pitch|yaw}")
+        _fail(path, "'channels' must map each gyro channel name to {axis: roll|pitch|yaw} (and, for a DTG, dtg: N)")
     channels = []
     for name, entry in raw.items():
         where = f"channels.{name}"
-        match = CHANNEL_PATTERN.match(str(name))
-        if not match:
-            _fail(path, f"{where}: channel names are dtg<N>_<axis> (e.g. dtg2_yaw), got {name!r}")
-        if not isinstance(entry, dict) or set(entry) != {"dtg", "axis"}:
-            _fail(path, f"{where}: needs exactly the keys 'dtg' and 'axis'")
+        if not NAME_PATTERN.match(str(name)):
+            _fail(path, f"{where}: a channel name may hold only letters, digits and '_'")
+        if not isinstance(entry, dict) or "axis" not in entry or set(entry) - {"dtg", "axis"}:
+            _fail(path, f"{where}: needs the key 'axis' (roll, pitch or yaw) and may have 'dtg' (the DTG's number)")
         if entry["axis"] not in AXES:
             _fail(path, f"{where}.axis: must be one of {list(AXES)}, got {entry['axis']!r}")
-        if not isinstance(entry["dtg"], int) or (int(match.group(1)), match.group(2)) != (entry["dtg"], entry["axis"]):
-            _fail(path, f"{where}: dtg/axis ({entry['dtg']}, {entry['axis']}) disagree with the name")
-        channels.append(Channel(str(name), entry["dtg"], entry["axis"]))
+        dtg = entry.get("dtg")
+        if dtg is not None and (not isinstance(dtg, int) or isinstance(dtg, bool)):
+            _fail(path, f"{where}.dtg: must be a whole number, got {dtg!r}")
+        match = CHANNEL_PATTERN.match(str(name))
+        if match and (int(match.group(1)), match.group(2)) != (dtg, entry["axis"]):
+            _fail(path, f"{where}: a name dtg<N>_<axis> needs dtg: N and that axis; got dtg/axis "
+                        f"({dtg}, {entry['axis']})")
+        channels.append(Channel(str(name), dtg, entry["axis"]))
     return tuple(channels)
 
 
@@ -150,8 +158,8 @@ def _parse_maneuvers(path, raw, channel_names) -> tuple:
         seen.add(mid)
         if m["axis"] not in AXES:
             _fail(path, f"{where}.axis: must be one of {list(AXES)}, got {m['axis']!r}")
-        if str(m["direction"]) not in ("+", "-"):
-            _fail(path, f"{where}.direction: must be \"+\" or \"-\", got {m['direction']!r}")
+        if str(m["direction"]) not in DIRECTIONS:
+            _fail(path, f"{where}.direction: must be \"+\", \"-\" or both, got {m['direction']!r}")
         for key in ("t_start", "t_end"):
             if not _is_number(m[key]):
                 _fail(path, f"{where}.{key}: must be a time in seconds, got {m[key]!r}")
@@ -343,7 +351,7 @@ def _positive_number(value) -> bool:
 
 
 def _parse_star_tracker(path, raw) -> dict:
-    allowed = {"sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body"}
+    allowed = {"sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "mounting"}
     if set(raw) - allowed:
         _fail(path, f"star_tracker: unknown key(s) {sorted(set(raw) - allowed)}")
     for key in ("sigma_cross_arcsec", "sigma_about_arcsec"):
@@ -359,6 +367,12 @@ def _parse_star_tracker(path, raw) -> dict:
         if abs(np.linalg.norm(b) - 1.0) > 1e-12:
             b = b / np.linalg.norm(b)
         out["boresight_body"] = b.tolist()
+    if "mounting" in raw:
+        q = raw["mounting"]
+        if q != "estimate" and (not isinstance(q, list) or len(q) != 4 or not all(_is_number(v) for v in q)
+                                or abs(np.linalg.norm(q) - 1.0) > NORM_REFUSE_TOL):
+            _fail(path, "star_tracker.mounting: the reference frame's attitude in body axes, a unit quaternion "
+                        f"[q1, q2, q3, q4] (scalar last), or estimate; got {q!r}")
     return out
 
 

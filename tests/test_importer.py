@@ -1,0 +1,103 @@
+"""Tabular telemetry through a mapping, and two calibrations compared: on small files whose truth
+is known."""
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+from scipy.spatial.transform import Rotation
+
+from gyrocal import agreement, cli, importer, telemetry
+
+
+def repoimu_like(path, rate_rad_s=0.5, n=400, dt=0.01, t0=3.0, dropouts=(50, 51)):
+    """A RepoIMU-format file: a turn about x at a rate that varies, Vicon scalar first, gyro rates in
+    rad/s, accelerometer and magnetometer columns; all-zero quaternions at ``dropouts``."""
+    t = t0 + dt * np.arange(n)
+    rate = rate_rad_s * np.sin(2 * np.pi * (t - t0) / (n * dt))
+    angle = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * dt)])
+    quat = Rotation.from_rotvec(np.outer(angle, [1.0, 0.0, 0.0])).as_quat()
+    wxyz = quat[:, [3, 0, 1, 2]]
+    wxyz[list(dropouts)] = 0.0
+    rows = np.column_stack([t, wxyz, np.full((n, 3), 9.81), rate, np.zeros(n), np.zeros(n), np.ones((n, 3))])
+    header = "Time (s);Vicon Orientation;;;;IMU Acceleration;;;IMU Gyroscope;;;IMU Magnetometer;;;\n"
+    header += ";W;X;Y;Z;X;Y;Z;X;Y;Z;X;Y;Z;\n"
+    path.write_text(header + "\n".join(";".join(f"{v:.10g}" for v in r) + ";" for r in rows) + "\n")
+    return t, quat, rate
+
+
+def test_import_writes_a_campaign_per_the_contract(tmp_path):
+    t, quat, rate = repoimu_like(tmp_path / "Trial_A.csv")
+    repoimu_like(tmp_path / "Trial_B.csv", t0=10.0, dropouts=())
+    out = tmp_path / "campaign"
+    campaign, counts = importer.import_files("repoimu", out, [tmp_path / "Trial_A.csv", tmp_path / "Trial_B.csv"])
+    again = telemetry.read_campaign(out)
+    assert [m.id for m in again.maneuvers] == ["Trial_A", "Trial_B"]
+    assert [m.direction for m in again.maneuvers] == ["both", "both"]
+    assert again.maneuvers[0].axis == "roll"
+    assert again.channel_names == ["gyro_x", "gyro_y", "gyro_z"]
+    assert all(c.dtg is None for c in again.channels)
+    assert sorted(again.extras()) == ["acc_x", "acc_y", "acc_z", "mag_x", "mag_y", "mag_z"]
+    assert counts["Trial_A"]["reference_dropouts"] == 2 and counts["Trial_B"]["reference_dropouts"] == 0
+    assert list(np.flatnonzero(again.st_valid == 0)) == [50, 51]
+    first = slice(0, len(t))
+    valid = again.st_valid[first] == 1
+    assert np.allclose(again.st_quat[first][valid], quat[valid], atol=1e-9)
+    step = np.diff(t)
+    assert np.allclose(again.gyro_columns["gyro_x"][first][1:], 0.5 * (rate[1:] + rate[:-1]) * step)
+    second = again.maneuvers[1]
+    assert second.t_start == pytest.approx(again.maneuvers[0].t_end + 0.01)
+
+
+def test_a_users_own_format_needs_a_mapping_not_code(tmp_path):
+    t = 0.1 * np.arange(50)
+    quat = Rotation.from_rotvec(np.outer(0.02 * np.arange(50), [0, 0, 1.0])).as_quat()
+    increments_deg = np.zeros((50, 3))
+    increments_deg[1:, 2] = np.rad2deg(0.02)
+    frame = pd.DataFrame({"t": t, **{f"q{i}": quat[:, i] for i in range(4)},
+                          "gx": increments_deg[:, 0], "gy": increments_deg[:, 1], "gz": increments_deg[:, 2]})
+    frame.to_csv(tmp_path / "yaw_turn.csv", index=False)
+    mapping = {"format": {"delimiter": ",", "header_rows": 1}, "time": {"column": 1},
+               "reference": {"columns": [2, 3, 4, 5], "order": "xyzw"},
+               "gyro": {"quantity": "increment", "unit": "deg", "columns": {"g_x": 6, "g_y": 7, "g_z": 8},
+                        "axes": {"g_x": "roll", "g_y": "pitch", "g_z": "yaw"}},
+               "maneuver": {"direction": "+"}}
+    (tmp_path / "mine.yaml").write_text(yaml.safe_dump(mapping))
+    campaign, _ = importer.import_files(tmp_path / "mine.yaml", tmp_path / "out", [tmp_path / "yaw_turn.csv"])
+    again = telemetry.read_campaign(tmp_path / "out")
+    assert again.maneuvers[0].axis == "yaw" and again.maneuvers[0].direction == "+"
+    assert np.allclose(again.gyro_columns["g_z"][1:], 0.02)
+
+
+def test_a_mapping_that_points_past_the_columns_is_refused_naming_the_file(tmp_path, capsys):
+    (tmp_path / "short.csv").write_text("a;b\nc;d\n1;2\n")
+    code = cli.main(["import", "repoimu", str(tmp_path / "out"), str(tmp_path / "short.csv")])
+    err = capsys.readouterr().err
+    assert code == 2 and "short.csv" in err and "column" in err
+
+
+def test_an_unknown_mapping_names_the_shipped_ones(capsys):
+    code = cli.main(["import", "nosuch", "/tmp/never", "x.csv"])
+    assert code == 2 and "repoimu" in capsys.readouterr().err
+
+
+def calibration(means, sds, prior_only=None):
+    n = len(means)
+    return pd.DataFrame({"channel": ["gyro_x"] * n, "parameter": [f"p{i}" for i in range(n)], "unit": ["ppm"] * n,
+                         "mean": means, "sd": sds, "prior_only": prior_only or [False] * n})
+
+
+def test_compare_campaigns_z_scores_use_both_sds():
+    table = agreement.compare(calibration([100.0, 0.0], [3.0, 1.0]), calibration([108.0, 0.0], [4.0, 1.0]))
+    assert table["z"].tolist() == pytest.approx([8.0 / 5.0, 0.0])
+
+
+def test_compare_campaigns_verdict_and_exit_code(tmp_path, capsys):
+    calibration([100.0, 0.0], [3.0, 1.0]).to_csv(tmp_path / "a.csv", index=False)
+    calibration([100.0, 5.0], [3.0, 1.0], [False, True]).to_csv(tmp_path / "b.csv", index=False)
+    calibration([120.0, 0.0], [3.0, 1.0]).to_csv(tmp_path / "c.csv", index=False)
+    assert cli.main(["compare-campaigns", str(tmp_path / "a.csv"), str(tmp_path / "b.csv")]) == 0
+    assert "VERDICT: AGREE" in capsys.readouterr().out
+    assert cli.main(["compare-campaigns", str(tmp_path / "a.csv"), str(tmp_path / "c.csv")]) == 1
+    out = capsys.readouterr().out
+    assert "VERDICT: DISAGREE: 1 of 2" in out and "z = +4.71" in out
