@@ -30,7 +30,7 @@ def test_import_writes_a_campaign_per_the_contract(tmp_path):
     t, quat, rate = repoimu_like(tmp_path / "Trial_A.csv")
     repoimu_like(tmp_path / "Trial_B.csv", t0=10.0, dropouts=())
     out = tmp_path / "campaign"
-    campaign, counts = importer.import_files("repoimu", out, [tmp_path / "Trial_A.csv", tmp_path / "Trial_B.csv"])
+    _, counts = importer.import_files("repoimu", out, [tmp_path / "Trial_A.csv", tmp_path / "Trial_B.csv"])
     again = telemetry.read_campaign(out)
     assert [m.id for m in again.maneuvers] == ["Trial_A", "Trial_B"]
     assert [m.direction for m in again.maneuvers] == ["both", "both"]
@@ -63,7 +63,7 @@ def test_a_users_own_format_needs_a_mapping_not_code(tmp_path):
                         "axes": {"g_x": "roll", "g_y": "pitch", "g_z": "yaw"}},
                "maneuver": {"direction": "+"}}
     (tmp_path / "mine.yaml").write_text(yaml.safe_dump(mapping))
-    campaign, _ = importer.import_files(tmp_path / "mine.yaml", tmp_path / "out", [tmp_path / "yaw_turn.csv"])
+    importer.import_files(tmp_path / "mine.yaml", tmp_path / "out", [tmp_path / "yaw_turn.csv"])
     again = telemetry.read_campaign(tmp_path / "out")
     assert again.maneuvers[0].axis == "yaw" and again.maneuvers[0].direction == "+"
     assert np.allclose(again.gyro_columns["g_z"][1:], 0.02)

@@ -3,7 +3,6 @@ campaigns pass, with what was found counted; nothing unidentified drags what is 
 
 import json
 
-import mutations
 import numpy as np
 import pandas as pd
 import pytest
@@ -11,6 +10,7 @@ import pytest
 from gyrocal import cli, consistency, steps
 from gyrocal.estimate import EstimateError
 
+import mutations
 from conftest import run_campaign
 
 EXPECTED = {
@@ -225,3 +225,16 @@ def test_posterior_netcdf_differs_by_nothing_but_content(tiny, tiny_run, config,
     for group in a.groups():
         assert a[group].attrs == b[group].attrs
         assert a[group].equals(b[group])
+
+
+def test_a_noise_no_sensor_can_have_stops_before_sampling_with_the_residuals(tiny_run):
+    import dataclasses
+
+    from gyrocal import preprocess
+    from gyrocal.estimate import PointEstimate, check_noise
+    out, npz = tiny_run
+    est = PointEstimate.load(out / "baseline/point_estimate.npz")
+    collapsed = dataclasses.replace(est, log_sigma=est.log_sigma + np.array([-8.0, 0.0, 0.0]))
+    check_noise([preprocess.ManeuverData.load(p) for p in npz], est)
+    with pytest.raises(EstimateError, match=r"sigma_cross_arcsec .* \(stated 5\).*RMS about roll, pitch, yaw"):
+        check_noise([preprocess.ManeuverData.load(p) for p in npz], collapsed)

@@ -119,7 +119,7 @@ def test_a_valid_flag_other_than_0_or_1_names_the_line(campaign_copy):
 
 def test_a_bad_direction_names_the_maneuver(campaign_copy):
     edit_yaml(campaign_copy / "campaign.yaml", lambda m: m["maneuvers"][1].update(direction="up"))
-    expect(campaign_copy, r"campaign\.yaml: maneuvers\[1\] \(yaw_neg\)\.direction: must be \"\+\" or \"-\", got 'up'")
+    expect(campaign_copy, r"campaign\.yaml: maneuvers\[1\] \(yaw_neg\)\.direction: must be \"\+\", \"-\" or both, got 'up'")
 
 
 def test_non_numeric_cell_is_named(campaign_copy):

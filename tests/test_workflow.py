@@ -5,10 +5,10 @@ import shutil
 import subprocess
 import sys
 
-import mutations
 import pandas as pd
 import pytest
 
+import mutations
 from conftest import ROOT
 
 SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile")]

@@ -135,7 +135,7 @@ fast reference's single interval, its noise and any sub-sample timing would bias
 
 def _blocked(dt, *series):
     """Sums of consecutive intervals over blocks of at least `CHECK_BLOCK_S` (the dt first)."""
-    size = max(1, int(round(CHECK_BLOCK_S / float(np.median(dt)))))
+    size = max(1, round(CHECK_BLOCK_S / float(np.median(dt))))
     n = len(dt) // size * size
     return [x[:n].reshape(n // size, size, *x.shape[1:]).sum(axis=1) for x in (dt, *series)]
 
@@ -495,17 +495,20 @@ def isolated_runs(mask, max_run: int) -> np.ndarray:
     return out
 
 
-def estimate_mounting(campaign: Campaign) -> Rotation:
+def estimate_mounting(campaign: Campaign) -> tuple:
     """Coarse alignment of the attitude reference: the rotation taking its frame into body axes that
     best maps its interval rotations onto the gyros' (Wahba's problem, `Rotation.align_vectors`),
-    over every maneuver. It absorbs the common rotation of the gyro misalignments too: after it,
-    misalignments are relative to the reference as the data align it."""
+    over every maneuver, and the sd of its angle about each body axis (deg). It absorbs the
+    common rotation of the gyro misalignments too: after it, misalignments are relative to the
+    reference as the data align it. About an axis no maneuver turns across, it is not determined."""
     pairs = []
     for m in campaign.maneuvers:
         data = preprocess.slice_maneuver(campaign, m.id)
         pairs.append((_gyro_at_st(data, _body_increments(data, data.increments)), _interval_rotations(data.st_quat)))
-    mounting, _ = Rotation.align_vectors(np.vstack([g for g, _ in pairs]), np.vstack([r for _, r in pairs]))
-    return mounting
+    gyro, reference = np.vstack([g for g, _ in pairs]), np.vstack([r for _, r in pairs])
+    mounting, rssd, sensitivity = Rotation.align_vectors(gyro, reference, return_sensitivity=True)
+    variance = rssd**2 / max(len(gyro) - 3, 1)
+    return mounting, np.rad2deg(np.sqrt(np.diag(sensitivity) * variance))
 
 
 def aligned(campaign: Campaign, mounting: Rotation) -> Campaign:
@@ -525,15 +528,18 @@ def align(campaign: Campaign) -> tuple:
     declared = campaign.star_tracker.get("mounting")
     if declared is None:
         return campaign, {}
+    sd_deg = None
     if declared == "estimate":
-        mounting, source = estimate_mounting(campaign), "estimated from the data"
+        (mounting, sd_deg), source = estimate_mounting(campaign), "estimated from the data"
     else:
         mounting, source = Rotation.from_quat(declared), "nominal (campaign.yaml)"
-        residual = estimate_mounting(aligned(campaign, mounting))
+        residual, residual_sd = estimate_mounting(aligned(campaign, mounting))
         if residual.magnitude() > _limits(campaign.channels)[1]:
-            mounting, source = residual * mounting, "nominal, refined by the data's alignment"
+            mounting, source, sd_deg = residual * mounting, "nominal, refined by the data's alignment", residual_sd
     applied = {"quat": mounting.as_quat().tolist(), "source": source,
                "angle_deg": float(np.rad2deg(mounting.magnitude()))}
+    if sd_deg is not None:
+        applied["sd_deg"] = {a: float(v) for a, v in zip(AXES, sd_deg)}
     return aligned(campaign, mounting), applied
 
 
@@ -556,7 +562,9 @@ def summary(campaign: Campaign, findings: Findings) -> str:
     lines = [format_summary(campaign)]
     if findings.mounting:
         lines.append(f"  reference  mounting {findings.mounting['source']}: {findings.mounting['angle_deg']:.3f} deg "
-                     f"from body axes")
+                     f"from body axes"
+                     + ("; sd about " + ", ".join(f"{a} {v:.3g}" for a, v in findings.mounting["sd_deg"].items())
+                        + " deg" if "sd_deg" in findings.mounting else ""))
     if campaign.st_renormalised:
         lines.append(f"  renormalised {campaign.st_renormalised} star-tracker quaternions (norm off 1 by more "
                      f"than {UNIT_NORM_TOL:g}, as rounding leaves them)")

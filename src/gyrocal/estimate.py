@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import least_squares, minimize
 
-from . import errormodel, identification, noise
+from . import errormodel, identification, noise, units
 from .likelihood import campaign_stats, maneuver_stats
 from .noise import variances
 from .spec import ModelSpec
@@ -135,6 +135,30 @@ class EstimateError(RuntimeError):
     """The point estimate is not physical; the message names the parameter and the maneuver."""
 
 
+NOISE_PLAUSIBLE = 1e3
+"""A fitted noise scale more than this factor away from the stated one (either way) is not a noise
+the sensors can have: the residuals are structure the model lacks."""
+
+
+def check_noise(maneuvers, est: PointEstimate):
+    """Stop before sampling when REML puts a noise scale `NOISE_PLAUSIBLE` times off the stated one;
+    the message gives each maneuver's residual RMS about roll, pitch and yaw."""
+    ratio = np.exp(est.log_sigma - noise.log_sigma_of(est.stated_noise))
+    off = (ratio > NOISE_PLAUSIBLE) | (ratio < 1.0 / NOISE_PLAUSIBLE)
+    if off.any():
+        fitted, stated = noise.stated_scales(est.log_sigma), noise.stated_scales(noise.log_sigma_of(est.stated_noise))
+        listed = "; ".join(f"{k} {fitted[k]:.3g} (stated {stated[k]:.3g})" for k, bad in zip(fitted, off) if bad)
+        lins, _ = linearize_all(maneuvers, est)
+        rms = [np.sqrt(np.mean((lin.body_error[:, 0] - lin.body_error[:, 0].mean(axis=0)) ** 2, axis=0))
+               / units.ARCSEC_RAD for lin in lins]
+        residuals = "; ".join(f"{d.id} {r[0]:.0f}, {r[1]:.0f}, {r[2]:.0f}" for d, r in zip(maneuvers, rms))
+        raise EstimateError(
+            f"point estimate of model {est.spec.model}: the fitted noise is not a noise these sensors can have: "
+            f"{listed}. The residuals hold structure far above the noise that the model lacks (RMS about roll, "
+            f"pitch, yaw, arcsec: {residuals}); validate the campaign (gyrocal validate) and read its warnings, "
+            "or add the effect they point to")
+
+
 def check_physical(maneuvers, est: PointEstimate, bound_si):
     """Stop before sampling when the WLS puts a parameter beyond its physical bound by more than
     `identification.DETECTION_SD` of its own standard error: the data then say it is out (a
@@ -219,9 +243,10 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     """REML noise scales about a starting point (the classic estimate), then WLS from it.
 
     Parameters the maneuvers cannot inform are marked prior-only first and held at their
-    prior mean (`identification`). The classic estimate is within a few tens of ppm of the
-    optimum, so the model is linear enough about it for the noise scales; the WLS then
-    needs a few steps. A model with correlated star-tracker noise first estimates its
+    prior mean (`identification`). Where the classic method gave nothing (maneuvers that turn
+    both ways, or have no holds), a WLS with the stated noise gives the start. The classic
+    estimate is within a few tens of ppm of the optimum, so the model is linear enough about
+    it for the noise scales; the WLS then needs a few steps. A model with correlated star-tracker noise first estimates its
     correlation time there.
     """
     spec = spec.with_prior_only(identification.unflown(maneuvers, spec))
@@ -234,6 +259,8 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
                              0.0, stated_noise)
 
     start = start_at(spec)
+    if not np.any(theta0):
+        start = wls(maneuvers, spec, stated_noise, log_sigma, start.theta)
     lins, noises = linearize_all(maneuvers, start)
     weak = identification.uninformed(campaign_stats(noises, variances(log_sigma)), spec)
     if weak:
@@ -245,4 +272,5 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
         noises = [noise.build(lin, start.boresight, tau) for lin in lins]
     if estimate_scales:
         log_sigma = estimate_noise(noises, log_sigma)
-    return wls(maneuvers, start.spec, stated_noise, log_sigma, start.theta, correlation_time_s=tau)
+    return wls(maneuvers, start.spec, stated_noise, log_sigma, start.theta, start.biases, start.chi0,
+               correlation_time_s=tau)

@@ -108,11 +108,14 @@ class LogPosterior:
         logprior = -0.5 * np.sum(((theta - pr.mean) / pr.sd) ** 2, axis=1)
         logprior += -0.5 * np.sum(((log_sigma - pr.log_sigma_center) / pr.log_sigma_sd) ** 2, axis=1)
         ok = inside & np.all(np.abs(theta) <= pr.bound, axis=1)
-        return np.where(ok, loglik + logprior, -np.inf)
+        value = loglik + logprior
+        return np.where(ok & np.isfinite(value), value, -np.inf)
 
 
-def ratio_curvature(noises, ratios, step=0.02):
-    """Standard deviations of the two ratios from the REML profile's Hessian."""
+def ratio_curvature(noises, ratios, fallback_sd, step=0.02):
+    """Standard deviations of the two ratios from the REML profile's Hessian; where the profile is
+    flat or not convex there (a noise scale the data cannot tell, as when the model misses
+    structure far above the noise), ``fallback_sd`` (their prior's), with a warning."""
     f = lambda r: profile_reml(noises, r)[0]
     h = np.zeros((2, 2))
     f0 = f(ratios)
@@ -121,6 +124,10 @@ def ratio_curvature(noises, ratios, step=0.02):
         h[i, i] = (f(ratios + e[i]) - 2 * f0 + f(ratios - e[i])) / step**2
     h[0, 1] = h[1, 0] = (f(ratios + e[0] + e[1]) - f(ratios + e[0] - e[1])
                          - f(ratios - e[0] + e[1]) + f(ratios - e[0] - e[1])) / (4 * step**2)
+    if not np.all(np.isfinite(h)) or np.any(np.linalg.eigvalsh(h) <= 0):
+        logging.getLogger("gyrocal").warning(
+            "the REML profile of the noise ratios is not convex at %s: the grid spans their prior instead", ratios)
+        return np.full(2, float(fallback_sd))
     cov = np.linalg.inv(h)
     return np.sqrt(np.clip(np.diag(cov), 1e-10, None))
 
@@ -306,7 +313,7 @@ def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dic
     """Linearise about the point estimate, tabulate the noise ratios and run the ensembles."""
     lins, noises = linearize_all(maneuvers, estimate)
     ratios = estimate.log_sigma[1:] - estimate.log_sigma[0]
-    ratio_sd = ratio_curvature(noises, ratios)
+    ratio_sd = ratio_curvature(noises, ratios, np.sqrt(2.0) * priors.log_sigma_sd[0])
     grid = RatioGrid(noises, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"])
     logpost = LogPosterior(grid, estimate.theta, priors)
     parts = [maneuver_stats(nz, variances(estimate.log_sigma)) for nz in noises]

@@ -33,7 +33,7 @@ from . import (
 from . import report as review
 from .calibration import calibration_table, posterior_mean_params
 from .correction import campaign_correction
-from .estimate import EstimateError, PointEstimate, check_physical, point_estimate
+from .estimate import EstimateError, PointEstimate, check_noise, check_physical, point_estimate
 from .noise import stated_scales
 from .outputs import atomic, write_csv, write_json, write_text, write_with
 from .spec import ModelSpec
@@ -173,6 +173,7 @@ def run_posterior(npz_paths, point_npz, plugin_paths, priors_cfg, prior_from, sa
     maneuvers = load_maneuvers(npz_paths)
     est = PointEstimate.load(point_npz, known_effects(plugin_paths))
     priors = model_priors(est, priors_cfg, prior_from)
+    check_noise(maneuvers, est)
     check_physical(maneuvers, est, priors.bound)
     post = posterior.sample(maneuvers, est, priors, sampler_cfg, grid_cfg, seed)
     idata, summary, fit, record = inferencedata.assemble(post, maneuvers, sampler_cfg, convergence_cfg, seed)

@@ -1,0 +1,42 @@
+"""The RepoIMU T-stick recordings (real Xsens gyros against a Vicon reference), read from
+../shared/data: what a user would check after `gyrocal import` and `gyrocal validate`."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from gyrocal import consistency, importer
+from gyrocal.telemetry import TelemetryError
+
+DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "repoimu"
+pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason=f"the RepoIMU recordings are not at {DATA} "
+                                "(see README, 'Telemetry in another format, and real data')")
+TRIALS = ["TStick_Test02_Trial1", "TStick_Test03_Trial1", "TStick_Test04_Trial1"]
+
+
+@pytest.fixture(scope="module")
+def xyz(tmp_path_factory):
+    out = tmp_path_factory.mktemp("tstick") / "tstick"
+    importer.import_files("repoimu", out, [DATA / f"{t}.csv" for t in TRIALS])
+    return out
+
+
+def test_the_x_y_z_trials_import_and_pass_validation(xyz):
+    campaign, findings = consistency.read_checked(xyz)
+    assert [m.id for m in campaign.maneuvers] == TRIALS
+    assert [m.axis for m in campaign.maneuvers] == ["roll", "pitch", "yaw"]
+    assert 2.0 < findings.mounting["angle_deg"] < 3.5
+    assert len(findings.outliers) < 0.02 * len(campaign.st_time)
+
+
+def test_the_fast_trial_is_refused_for_clipping(tmp_path):
+    out = tmp_path / "fast"
+    importer.import_files("repoimu", out, [DATA / "TStick_Test05_Trial1.csv"])
+    with pytest.raises(TelemetryError, match=r"clips at its range"):
+        consistency.read_checked(out)
+
+
+def test_the_reference_quaternions_are_unit_and_scalar_last(xyz):
+    campaign, _ = consistency.read_checked(xyz)
+    assert np.allclose(np.linalg.norm(campaign.st_quat, axis=1), 1.0, atol=1e-6)
