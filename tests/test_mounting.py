@@ -54,3 +54,12 @@ def test_a_nominal_mounting_far_off_is_refined_by_the_data(tiny, tmp_path):
     assert findings.mounting["source"] == "nominal, refined by the data's alignment"
     estimated = Rotation.from_quat(findings.mounting["quat"])
     assert np.rad2deg((estimated * MOUNTING.inv()).magnitude()) * 3600 < 60.0
+
+
+def test_the_report_says_what_an_estimated_mounting_leaves_unidentified():
+    from gyrocal.report import mounting_text
+    text = mounting_text({"quat": [0, 0, 0, 1], "source": "estimated from the data", "angle_deg": 2.855,
+                          "sd_deg": {"roll": 0.1, "pitch": 0.2, "yaw": 0.1}})
+    assert "2.855 deg" in text and "Everything is relative" in text and "non-orthogonality" in text
+    assert "Everything is relative" not in mounting_text({"quat": [0, 0, 0, 1], "source": "nominal (campaign.yaml)",
+                                                          "angle_deg": 1.0})

@@ -105,6 +105,22 @@ def width_limits(rcfg: dict, spec) -> dict:
     return {unit: rcfg[f"max_ci_width_{unit}"] for unit in set(spec.units[spec.core])}
 
 
+def mounting_text(mounting: dict) -> str:
+    """What the reviewer must know of the reference's mounting: where it came from and, when the data
+    aligned it, which misalignment combinations the data can then tell apart."""
+    if not mounting:
+        return "The reference measures the body frame itself (no mounting declared)."
+    text = f"Reference mounting {mounting['source']}: {mounting['angle_deg']:.3f} deg from body axes"
+    if "sd_deg" in mounting:
+        text += " (sd about " + ", ".join(f"{a} {v:.3g} deg" for a, v in mounting["sd_deg"].items()) + ")"
+    if mounting["source"] != "nominal (campaign.yaml)":
+        text += (". Everything is relative: the alignment from the data takes up the rotation the gyro triad "
+                 "shares with the reference, so the misalignments are relative to the reference as the data "
+                 "align it. The data tell apart each pair's sum (mis_b of the a channel plus mis_a of the b "
+                 "channel: the triad's non-orthogonality), not the triad's rotation as a whole")
+    return text + "."
+
+
 def informed_core(spec) -> list:
     """Labels of the channel-model terms the data inform (prior-only ones have their own check)."""
     return [p.label for p in spec.parameters[spec.core] if not p.prior_only]
@@ -201,7 +217,8 @@ def build_context(model, maneuvers, tables, est, diagnostics, sampler, correctio
         "accounting": accounting, "warnings": info["warnings"],
         "outliers": pd.DataFrame(info["star_tracker_outliers"],
                                  columns=["maneuver", "time_s", "line", "size_arcsec", "mahalanobis"]).round(2),
-        "renormalised": info["rows"]["star_tracker_renormalised"], "checksums": info["checksums_sha256"], "sampler": sampler,
+        "renormalised": info["rows"]["star_tracker_renormalised"], "mounting": mounting_text(info["mounting"]),
+        "checksums": info["checksums_sha256"], "sampler": sampler,
         "config": yaml.safe_dump(cfg, sort_keys=False),
     }
 
@@ -273,6 +290,7 @@ def render(ctx: dict) -> str:
     parts.append("<h3>Attitude error at the end of every maneuver, before and after the correction</h3>")
     parts.append(_table(ctx["effect_table"].round(1), "before-after"))
     parts.append("<h2>Data accounting</h2>")
+    parts.append(f"<p id='mounting'>{html.escape(ctx['mounting'])}</p>")
     parts.append(_table(ctx["accounting"], "accounting"))
     parts.append(f"<h3>Star-tracker outliers left out of the fit ({len(ctx['outliers'])})</h3><p class='small'>"
                  "Samples whose departure from their neighbours the motion cannot explain, beyond what the data's "
