@@ -18,6 +18,7 @@ include: "workflow/rules/estimate.smk"
 include: "workflow/rules/posterior.smk"
 include: "workflow/rules/diagnostics.smk"
 include: "workflow/rules/report.smk"
+include: "workflow/rules/fleet.smk"
 
 
 rule all:

@@ -74,7 +74,7 @@ def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
                       out / "model_comparison.csv", out / "model_comparison.png")
     files = {name: [out / m / file for m in models] for name, file in MODEL_FILES.items()}
     steps.run_report(list(models), files, npz, [out / f"preprocess/{m}.csv" for m in ids], out / "input.json",
-                     out / "model_comparison.csv", truth_path, cfg, out / "report.html")
+                     out / "model_comparison.csv", truth_path, cfg, out / "report.html", out / "verdict.json")
     return npz
 
 

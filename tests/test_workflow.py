@@ -101,3 +101,32 @@ def test_snakemake_ends_with_the_validators_message_and_no_traceback(case, tiny,
     assert "Traceback" not in run.stderr + run.stdout
     assert "gyrocal: the campaign was refused:" in run.stderr
     assert EXPECTED[case] in "\n".join(run.stderr.strip().splitlines()[-25:])
+
+
+def test_a_fleet_of_three_runs_as_independent_campaigns_with_the_single_runs_numbers(tiny, workflow_run,
+                                                                                      tmp_path):
+    fleet = tmp_path / "fleet"
+    for name in ("sat_a", "sat_b", "sat_c"):
+        shutil.copytree(tiny[0], fleet / name)
+        meta = fleet / name / "campaign.yaml"
+        meta.write_text(meta.read_text().replace("name: tiny", f"name: {name}"))
+    work = tmp_path / "work"
+    run = subprocess.run(SNAKEMAKE + ["--cores", "2", "-d", str(work), "--config", f"campaigns={fleet}"],
+                         capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr[-3000:]
+    single = (workflow_run / "results/tiny/baseline/calibration.csv").read_text()
+    for name in ("sat_a", "sat_b", "sat_c"):
+        assert (work / "results" / name / "baseline/calibration.csv").read_text() == single
+        assert json.loads((work / "results" / name / "verdict.json").read_text())["verdict"] in ("GO", "NO-GO")
+    summary = pd.read_csv(work / "results/fleet/summary.csv")
+    assert sorted(summary["campaign"].unique()) == ["sat_a", "sat_b", "sat_c"]
+    assert len(summary) >= 3 * 24 and len(summary) % 3 == 0
+    assert (work / "results/fleet/summary.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_a_fleet_with_two_campaigns_of_one_name_is_refused(tiny, tmp_path):
+    for name in ("one", "two"):
+        shutil.copytree(tiny[0], tmp_path / "fleet" / name)
+    run = subprocess.run(SNAKEMAKE + ["-n", "-d", str(tmp_path / "work"), "--config", f"campaigns={tmp_path / 'fleet'}"],
+                         capture_output=True, text=True, check=False)
+    assert run.returncode != 0 and "are both campaign 'tiny'" in run.stderr

@@ -233,9 +233,16 @@ img{max-width:100%} .small{font-size:12px;color:#555} pre{background:#f6f6f6;pad
 """
 
 
+def verdict(ctx: dict) -> dict:
+    """The verdict and the checks behind it, as ``verdict.json`` holds them."""
+    go = all(c["passed"] for c in ctx["checks"])
+    return {"campaign": ctx["campaign"], "model": ctx["model"], "verdict": "GO" if go else "NO-GO",
+            "checks": ctx["checks"]}
+
+
 def render(ctx: dict) -> str:
     """The HTML document from the assembled context (all figures already embedded)."""
-    go = all(c["passed"] for c in ctx["checks"])
+    go = verdict(ctx)["verdict"] == "GO"
     parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>gyrocal review: {html.escape(ctx['campaign'])}</title>",
              f"<style>{CSS}</style></head><body>",
              f"<h1>Gyro calibration review: {html.escape(ctx['campaign'])}</h1>",

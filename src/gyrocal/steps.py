@@ -23,6 +23,7 @@ from . import (
     consistency,
     diagnostics,
     effects,
+    fleet,
     inferencedata,
     plots,
     posterior,
@@ -221,8 +222,9 @@ def run_compare(models, posterior_paths, diagnostics_paths, summary_paths, elpd_
 
 
 def run_report(models, model_files, npz_paths, table_paths, input_json, comparison_csv, truth_json, cfg,
-               out_html):
-    """``report.html``: the pre-uplink review of a campaign (see `gyrocal.report`).
+               out_html, out_verdict):
+    """``report.html``: the pre-uplink review of a campaign (see `gyrocal.report`), and its verdict
+    with the checks behind it in ``verdict.json``, for scripts and fleets.
 
     ``model_files`` maps each name of `outputs.MODEL_FILES` to its paths, one per model in
     the order of ``models``; the reviewed model's are read.
@@ -239,4 +241,15 @@ def run_report(models, model_files, npz_paths, table_paths, input_json, comparis
         az.from_netcdf(str(files["posterior"])), table, read_json(input_json),
         read_json(truth_json)["parameters"] if truth_json else None, cfg, calibrations)
     write_text(review.render(ctx), out_html)
+    write_json(review.verdict(ctx), out_verdict)
 
+
+def run_fleet(verdict_paths, out_csv, out_png):
+    """``results/fleet/``: every campaign's reviewed model and verdict in one table and figure."""
+    verdicts = [read_json(p) for p in verdict_paths]
+    calibrations = {(v["campaign"], v["model"]): pd.read_csv(fleet.calibration_path(p, v["model"]))
+                    for v, p in zip(verdicts, verdict_paths)}
+    table = fleet.summary(verdicts, calibrations)
+    write_csv(table, out_csv)
+    fig = fleet.figure(table)
+    write_with(lambda handle: plots.save(fig, handle), out_png)

@@ -1,5 +1,11 @@
-"""Which campaign this run is about, and the paths every rule shares."""
+"""Which campaigns this run is about, and the paths every rule shares.
 
+One run calibrates one campaign (``telemetry=DIR``, or the simulated scenario) or a fleet
+(``campaigns=DIR``: every directory under DIR that holds a ``campaign.yaml``), each as
+independent jobs under ``results/<campaign>/``; a fleet adds ``results/fleet/``.
+"""
+
+import re
 import sys
 import time
 from pathlib import Path
@@ -9,31 +15,47 @@ from gyrocal import steps as _steps
 from gyrocal import telemetry as _telemetry
 from gyrocal.outputs import MODEL_FILES as _MODEL_FILES
 
-if config["telemetry"]:
-    CAMPAIGN_DIR = config["telemetry"]
+
+def _user_campaign(directory):
     try:
-        _meta = _telemetry.read_meta(CAMPAIGN_DIR)
-    except _telemetry.TelemetryError as _refused:
-        sys.exit(f"gyrocal: the campaign was refused:\n{_refused}")
-    CAMPAIGN = _meta["name"]
-    MANEUVERS = [m.id for m in _meta["maneuvers"]]
-    SIMULATED = False
+        meta = _telemetry.read_meta(directory)
+    except _telemetry.TelemetryError as refused:
+        sys.exit(f"gyrocal: the campaign was refused:\n{refused}")
+    return meta["name"], {"dir": str(directory), "maneuvers": [m.id for m in meta["maneuvers"]], "simulated": False}
+
+
+CAMPAIGNS = {}
+"""Campaign name -> its directory, maneuver ids and whether the scenario simulates it."""
+FLEET = bool(config["campaigns"])
+if FLEET:
+    _found = sorted(d for d in Path(config["campaigns"]).iterdir() if (d / "campaign.yaml").is_file())
+    if not _found:
+        sys.exit(f"gyrocal: no campaign directory (with a campaign.yaml) under {config['campaigns']}")
+    for _d in _found:
+        _name, _entry = _user_campaign(_d)
+        if _name == "fleet":
+            sys.exit(f"gyrocal: {_d} is campaign 'fleet', the name of the fleet's summary; give it another name")
+        if _name in CAMPAIGNS:
+            sys.exit(f"gyrocal: {_d} and {CAMPAIGNS[_name]['dir']} are both campaign {_name!r}; names must differ")
+        CAMPAIGNS[_name] = _entry
+elif config["telemetry"]:
+    _name, _entry = _user_campaign(config["telemetry"])
+    CAMPAIGNS[_name] = _entry
 else:
     if not Path(config["scenario"]).exists() and Path(workflow.basedir, config["scenario"]).exists():
         config["scenario"] = str(Path(workflow.basedir, config["scenario"]))
     _meta = _simulate.peek(config["scenario"])
-    CAMPAIGN = _meta["name"]
-    MANEUVERS = _meta["maneuvers"]
-    CAMPAIGN_DIR = f"{config['results']}/{CAMPAIGN}/simulated/campaign"
-    SIMULATED = True
+    CAMPAIGNS[_meta["name"]] = {"dir": f"{config['results']}/{_meta['name']}/simulated/campaign",
+                                "maneuvers": _meta["maneuvers"], "simulated": True}
 
-RESULTS = f"{config['results']}/{CAMPAIGN}"
-LOGS = f"logs/{CAMPAIGN}"
+RESULTS = f"{config['results']}/{{campaign}}"
+LOGS = "logs/{campaign}"
 MODELS = sorted(config["models"], key=lambda m: m != "baseline")  # baseline is the reference
 PLUGINS = config["plugins"]
 
 wildcard_constraints:
-    maneuver="|".join(MANEUVERS),
+    campaign="|".join(re.escape(c) for c in CAMPAIGNS),
+    maneuver="|".join(sorted({re.escape(m) for c in CAMPAIGNS.values() for m in c["maneuvers"]})),
     model="|".join(MODELS),
 
 
@@ -44,7 +66,7 @@ def refusal_messages():
     """What the steps of this run refused (their logs from `gyrocal.steps.REFUSED` on), to repeat
     when a run fails."""
     found = []
-    for path in sorted(Path(LOGS).rglob("*.log")):
+    for path in sorted(Path("logs").rglob("*.log")):
         if path.stat().st_mtime < _STARTED:
             continue
         text = path.read_text()
@@ -53,20 +75,44 @@ def refusal_messages():
     return found
 
 
-def campaign_input():
+def campaign_dir(wildcards):
+    return CAMPAIGNS[wildcards.campaign]["dir"]
+
+
+def campaign_input(wildcards):
     """The campaign files a step reads: the simulator's output or the user's directory."""
-    if SIMULATED:
-        return {"campaign": CAMPAIGN_DIR}
-    return {f: f"{CAMPAIGN_DIR}/{f}" for f in ("campaign.yaml", "star_tracker.csv", "gyro.csv")}
+    entry = CAMPAIGNS[wildcards.campaign]
+    if entry["simulated"]:
+        return {"campaign": entry["dir"]}
+    return {f: f"{entry['dir']}/{f}" for f in ("campaign.yaml", "star_tracker.csv", "gyro.csv")}
+
+
+def truth_input(wildcards):
+    """The simulation's truth, for a simulated campaign's report."""
+    if CAMPAIGNS[wildcards.campaign]["simulated"]:
+        return [f"{config['results']}/{wildcards.campaign}/simulated/truth.json"]
+    return []
 
 
 def maneuver_files(ext):
-    return expand(f"{RESULTS}/preprocess/{{maneuver}}.{ext}", maneuver=MANEUVERS)
+    """A campaign's per-maneuver files of one kind, as an input function."""
+
+    def files(wildcards):
+        return expand(f"{config['results']}/{wildcards.campaign}/preprocess/{{maneuver}}.{ext}",
+                      maneuver=CAMPAIGNS[wildcards.campaign]["maneuvers"])
+
+    return files
+
+
+def model_files(name):
+    """One per-model file of every model variant, in MODELS' order (a campaign's)."""
+    return expand(f"{RESULTS}/{{model}}/{name}", model=MODELS, allow_missing=True)
 
 
 def report_model_files(wildcards):
     """Every model's files the report reads, named as gyrocal.outputs.MODEL_FILES, in MODELS' order."""
-    return {name: expand(f"{RESULTS}/{{model}}/{file}", model=MODELS) for name, file in _MODEL_FILES.items()}
+    return {name: expand(f"{config['results']}/{wildcards.campaign}/{{model}}/{file}", model=MODELS)
+            for name, file in _MODEL_FILES.items()}
 
 
 def section(*keys):
@@ -87,9 +133,20 @@ def model_effects(wildcards):
     return config["models"][wildcards.model]
 
 
-def all_outputs():
-    out = [f"{RESULTS}/input.json"] + maneuver_files("png")
+def campaign_outputs(campaign):
+    """Everything a campaign's run leaves, as paths."""
+    results = f"{config['results']}/{campaign}"
+    out = [f"{results}/input.json"]
+    out += expand(f"{results}/preprocess/{{maneuver}}.png", maneuver=CAMPAIGNS[campaign]["maneuvers"])
     for model in MODELS:
-        out += [f"{RESULTS}/{model}/calibration.csv", f"{RESULTS}/{model}/correction.json",
-                f"{RESULTS}/{model}/diagnostics.json"]
-    return out + [f"{RESULTS}/classic.csv", f"{RESULTS}/model_comparison.csv", f"{RESULTS}/report.html"]
+        out += [f"{results}/{model}/calibration.csv", f"{results}/{model}/correction.json",
+                f"{results}/{model}/diagnostics.json"]
+    return out + [f"{results}/classic.csv", f"{results}/model_comparison.csv", f"{results}/report.html",
+                  f"{results}/verdict.json"]
+
+
+def all_outputs():
+    out = [path for campaign in CAMPAIGNS for path in campaign_outputs(campaign)]
+    if FLEET:
+        out += [f"{config['results']}/fleet/summary.csv", f"{config['results']}/fleet/summary.png"]
+    return out

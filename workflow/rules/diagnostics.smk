@@ -21,10 +21,10 @@ rule diagnostics:
 rule compare:
     """Residual RMS, PSIS-LOO and exact leave-one-maneuver-out of every variant; which are plausible."""
     input:
-        posterior=expand(f"{RESULTS}/{{model}}/posterior.nc", model=MODELS),
-        diagnostics=expand(f"{RESULTS}/{{model}}/diagnostics.json", model=MODELS),
-        summary=expand(f"{RESULTS}/{{model}}/posterior_summary.csv", model=MODELS),
-        elpd=expand(f"{RESULTS}/{{model}}/elpd_maneuvers.csv", model=MODELS),
+        posterior=model_files("posterior.nc"),
+        diagnostics=model_files("diagnostics.json"),
+        summary=model_files("posterior_summary.csv"),
+        elpd=model_files("elpd_maneuvers.csv"),
     output:
         table=report(f"{RESULTS}/model_comparison.csv", caption="../report/comparison.rst",
                      category="Model comparison"),

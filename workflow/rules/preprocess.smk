@@ -1,11 +1,11 @@
 rule validate:
     """Read and check the campaign; record rows, checksums and what was skipped."""
     input:
-        unpack(lambda wc: campaign_input()),
+        unpack(campaign_input),
     output:
         f"{RESULTS}/input.json",
     params:
-        campaign_dir=CAMPAIGN_DIR,
+        campaign_dir=campaign_dir,
     conda:
         "../envs/gyrocal.yaml"
     log:
@@ -17,7 +17,7 @@ rule validate:
 rule preprocess:
     """One maneuver: slice, propagate every channel set nominally, error angles of eq. 4."""
     input:
-        unpack(lambda wc: campaign_input()),
+        unpack(campaign_input),
         checked=f"{RESULTS}/input.json",
     output:
         data=f"{RESULTS}/preprocess/{{maneuver}}.npz",
@@ -29,7 +29,7 @@ rule preprocess:
             subcategory="{maneuver}",
         ),
     params:
-        campaign_dir=CAMPAIGN_DIR,
+        campaign_dir=campaign_dir,
     conda:
         "../envs/gyrocal.yaml"
     log:

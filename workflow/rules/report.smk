@@ -7,9 +7,10 @@ rule report:
         tables=maneuver_files("csv"),
         checked=f"{RESULTS}/input.json",
         comparison=f"{RESULTS}/model_comparison.csv",
-        truth=[f"{config['results']}/{CAMPAIGN}/simulated/truth.json"] if SIMULATED else [],
+        truth=truth_input,
     output:
-        report(f"{RESULTS}/report.html", caption="../report/review.rst", category="Review before uplink"),
+        html=report(f"{RESULTS}/report.html", caption="../report/review.rst", category="Review before uplink"),
+        verdict=f"{RESULTS}/verdict.json",
     params:
         config=section(),
         models=MODELS,

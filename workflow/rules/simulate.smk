@@ -3,8 +3,8 @@ rule simulate:
     input:
         scenario=config["scenario"],
     output:
-        campaign=directory(f"{config['results']}/{CAMPAIGN}/simulated/campaign"),
-        truth=f"{config['results']}/{CAMPAIGN}/simulated/truth.json",
+        campaign=directory(f"{RESULTS}/simulated/campaign"),
+        truth=f"{RESULTS}/simulated/truth.json",
     params:
         seed=config["simulation_seed"],
     conda:
