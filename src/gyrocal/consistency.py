@@ -43,6 +43,10 @@ a few. Longer runs beyond the noise are structure for the model, and stay in the
 MAX_CLOCK_SEARCH_S = 60.0
 """The clock-offset search spans at most this far either way."""
 
+CLOCK_SEARCH_POINTS = 400
+"""Shifts of the clock-offset search's coarse pass; a fine pass at a quarter of a star-tracker
+step follows about its best (the misfit varies smoothly with the shift)."""
+
 ALTERNATIVES = (
     (180.0 / np.pi, "increments in degrees rather than radians?"),
     (1e3, "increments 1000 times too large (mrad rather than rad?)"),
@@ -113,6 +117,28 @@ def _body_increments(data, raw) -> np.ndarray:
     return ch.solve_body(raw[:, [index[n] for n in first]], zeros.subset(first))
 
 
+@dataclass
+class Sensed:
+    """What both sensors saw during one maneuver, computed once for every check."""
+
+    data: object
+    """The maneuver (`preprocess.ManeuverData`)."""
+    body: np.ndarray
+    """(K, 3) body increments of the first channel set at nominal parameters (rad)."""
+    d_gyro: np.ndarray
+    """(M-1, 3) those increments summed between star-tracker samples (rad)."""
+    d_st: np.ndarray
+    """(M-1, 3) the star tracker's rotation between its samples, body axes (rad)."""
+    dt: np.ndarray
+    """(M-1,) star-tracker sample intervals (s)."""
+
+
+def sense(data) -> Sensed:
+    """Both sensors' rotations of one maneuver, for every check of it."""
+    body = _body_increments(data, data.increments)
+    return Sensed(data, body, _gyro_at_st(data, body), _interval_rotations(data.st_quat), np.diff(data.st_time))
+
+
 def fit_rotation(d_gyro, d_st, dt, axis: int, bias=True) -> RotationFit:
     """Least squares of the gyro's interval rotations on the star tracker's about all three axes
     and (with ``bias``) a constant rate. The response to rotation about ``axis`` is 1 + scale
@@ -165,20 +191,20 @@ def _limits(channels):
     return bounds["sf_pos"], mis, sds["sf_pos"]
 
 
-def rotation_findings(campaign: Campaign, data, findings: Findings) -> bool:
+def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Findings) -> bool:
     """Angle, axis, direction and units of one maneuver's rotation, gyro against star tracker;
     whether it is consistent."""
-    m = campaign.maneuver(data.id)
+    m = campaign.maneuver(sensed.data.id)
     a = AXIS_INDEX[m.axis]
-    sf_bound, mis_bound, sf_sd = _limits(campaign.channels)
-    d_st = _interval_rotations(data.st_quat)
-    dt = np.diff(data.st_time)
-    d_gyro = _gyro_at_st(data, _body_increments(data, data.increments))
+    sf_bound, mis_bound, sf_sd = limits
+    d_st, dt, d_gyro = sensed.d_st, sensed.dt, sensed.d_gyro
     where = f"maneuver {m.id} ({m.direction}{m.axis})"
     noise_rad = float(np.median(np.abs(d_st - np.median(d_st, axis=0))) * 1.4826 + 1e-12)
     min_angle = noise_rad / sf_sd
-    fit = fit_rotation(*_blocked(dt, d_gyro, d_st)[1:], _blocked(dt)[0], a)
-    if fit.excursion_rad.max() < min_angle and np.ptp(np.cumsum(d_gyro, axis=0), axis=0).max() < min_angle:
+    blocked_dt, blocked_gyro, blocked_st = _blocked(dt, d_gyro, d_st)
+    fit = fit_rotation(blocked_gyro, blocked_st, blocked_dt, a)
+    gyro_excursion = np.ptp(np.cumsum(d_gyro, axis=0), axis=0)
+    if fit.excursion_rad.max() < min_angle and gyro_excursion.max() < min_angle:
         findings.errors.append(
             f"{where}: neither the star tracker nor the gyros rotate in [{m.t_start}, {m.t_end}] s "
             f"(at most {np.rad2deg(fit.excursion_rad.max()):.3g} deg; a scale factor needs at least "
@@ -201,13 +227,12 @@ def rotation_findings(campaign: Campaign, data, findings: Findings) -> bool:
                 f"the opposite of the label's direction {m.direction!r}")
         return len(findings.errors) == n_errors
     st_axis = AXES[fit.axis]
-    gyro_excursion = np.ptp(np.cumsum(d_gyro, axis=0), axis=0)
     if st_axis != m.axis and AXES[int(np.argmax(gyro_excursion))] != m.axis:
         findings.errors.append(
             f"{where}: the star tracker and the gyros both rotate mostly about {st_axis} "
             f"({np.rad2deg(fit.excursion_rad[fit.axis]):.1f} deg), not {m.axis}: is the maneuver's axis label wrong?")
         return False
-    hint = _diagnose(campaign, data, d_st, dt, a, sf_bound, mis_bound)
+    hint = _diagnose(campaign, sensed, a, sf_bound, mis_bound)
     if hint:
         findings.errors.append(f"{where}: {hint}")
         return False
@@ -220,10 +245,9 @@ def rotation_findings(campaign: Campaign, data, findings: Findings) -> bool:
     return False
 
 
-def _diagnose(campaign, data, d_st, dt, a, sf_bound, mis_bound) -> str:
+def _diagnose(campaign, sensed: Sensed, a, sf_bound, mis_bound) -> str:
     """The likely cause of an inconsistent rotation: the first reinterpretation that makes it consistent."""
-    body = _body_increments(data, data.increments)
-    d_gyro = _gyro_at_st(data, body)
+    data, d_gyro, d_st, dt = sensed.data, sensed.d_gyro, sensed.d_st, sensed.dt
     scale = np.ptp(np.cumsum(d_gyro[:, a])) / np.ptp(np.cumsum(d_st[:, a]))
     dt_gyro = float(np.median(data.dt))
     candidates = list(ALTERNATIVES) + [
@@ -250,17 +274,14 @@ CLIP_BAND = 0.05
 """Gyro samples within this share of a maneuver's peak rate are tested for clipping."""
 
 
-def saturation_findings(data, findings: Findings) -> bool:
+def saturation_findings(sensed: Sensed, sf_bound, findings: Findings) -> bool:
     """A gyro that reaches its range clips: where its rate sits near its peak, the reference turns
     faster than the gyro says, by more than any scale error. Such a maneuver is refused, with
     the count of clipped samples; it is never fitted silently. Returns whether it clipped."""
-    sf_bound = _limits(data.channels)[0]
-    body = _body_increments(data, data.increments)
-    rate = np.abs(body / data.dt[:, None])
-    k, frac = data.st_interval()
-    d_gyro = np.abs(np.diff(cumulative_at_st(body, k, frac), axis=0))
-    d_st = np.abs(_interval_rotations(data.st_quat))
-    at_st = rate[k[1:]]
+    data = sensed.data
+    rate = np.abs(sensed.body / data.dt[:, None])
+    d_gyro, d_st = np.abs(sensed.d_gyro), np.abs(sensed.d_st)
+    at_st = rate[data.st_interval()[0][1:]]
     for a in range(3):
         peak = rate[:, a].max()
         near = at_st[:, a] >= (1 - CLIP_BAND) * peak
@@ -333,17 +354,17 @@ def lost_increments(campaign: Campaign, findings: Findings):
                 + "): rows were dropped and their increments lost")
 
 
-def clock_offset_s(data) -> float:
+def clock_offset_s(sensed: Sensed) -> float:
     """Time shift of the gyro clock against the star tracker's that best lines up their rotation
-    about the maneuver axis (a positive shift: the gyro's time stamps are late)."""
+    about the maneuver axis (a positive shift: the gyro's time stamps are late): a coarse then a
+    fine grid search of the misfit, refined by a parabola."""
+    data = sensed.data
     a = AXIS_INDEX[data.axis]
-    body = _body_increments(data, data.increments)
-    theta_gyro = np.concatenate([[0.0], np.cumsum(body[:, a])])
-    theta_st = np.concatenate([[0.0], np.cumsum(_interval_rotations(data.st_quat)[:, a])])
+    theta_gyro = np.concatenate([[0.0], np.cumsum(sensed.body[:, a])])
+    theta_st = np.concatenate([[0.0], np.cumsum(sensed.d_st[:, a])])
     t = data.st_time
     span = min(MAX_CLOCK_SEARCH_S, 0.25 * (t[-1] - t[0]))
     step = 0.25 * float(np.median(np.diff(t)))
-    shifts = np.arange(-span, span + step, step)
 
     def misfit(shift):
         g = np.interp(t + shift, data.gyro_time, theta_gyro)
@@ -351,6 +372,10 @@ def clock_offset_s(data) -> float:
         coef, *_ = np.linalg.lstsq(x, theta_st, rcond=None)
         return float(np.sum((theta_st - x @ coef) ** 2))
 
+    coarse = max(step, 2 * span / CLOCK_SEARCH_POINTS)
+    shifts = np.arange(-span, span + coarse, coarse)
+    best = shifts[int(np.argmin([misfit(s) for s in shifts]))]
+    shifts = np.arange(best - 2 * coarse, best + 2 * coarse + step, step)
     costs = np.array([misfit(s) for s in shifts])
     i = int(np.clip(np.argmin(costs), 1, len(shifts) - 2))
     c0, c1, c2 = costs[i - 1:i + 2]
@@ -359,11 +384,12 @@ def clock_offset_s(data) -> float:
     return float(shifts[i] + step * np.clip(offset, -1, 1))
 
 
-def clock_findings(data, findings: Findings):
+def clock_findings(sensed: Sensed, findings: Findings):
     """A clock offset of more than two samples (of the slower sensor) is an error. A shorter
     one whose error at the peak rate exceeds `DETECTION_SD` star-tracker sd is a warning:
     a latency the criticism loop should find (effect ``st_latency``)."""
-    offset = clock_offset_s(data)
+    data = sensed.data
+    offset = clock_offset_s(sensed)
     limit = 2.0 * max(float(np.median(np.diff(data.st_time))), float(np.median(data.dt)))
     where = f"maneuver {data.id}: the gyro and star-tracker rotations line up best when the gyro clock is shifted by"
     if abs(offset) > limit:
@@ -371,9 +397,9 @@ def clock_findings(data, findings: Findings):
             f"{where} {offset:+.3g} s (more than two samples, {limit:.3g} s): are the two clocks "
             "synchronised, and is each time the end of its sample?")
         return
-    d_st = _interval_rotations(data.st_quat)
+    d_st = sensed.d_st
     noise_rad = 1.4826 * np.median(np.abs(np.diff(d_st, axis=0))) / np.sqrt(2) + 1e-15
-    peak_rate = np.max(np.abs(d_st[:, AXIS_INDEX[data.axis]]) / np.diff(data.st_time))
+    peak_rate = np.max(np.abs(d_st[:, AXIS_INDEX[data.axis]]) / sensed.dt)
     if abs(offset) * peak_rate > DETECTION_SD * noise_rad:
         findings.warnings.append(
             f"{where} {offset:+.3g} s, {rad_to_arcsec(abs(offset) * peak_rate):.0f} arcsec at the peak rate: "
@@ -394,7 +420,7 @@ def neighbour_residual(x, reach=OUTLIER_REACH) -> np.ndarray:
     return resid
 
 
-def outlier_distances(data):
+def outlier_distances(sensed: Sensed):
     """Each star-tracker sample's departure from its neighbours (`neighbour_residual` of the error
     of eq. 4, rad, body axes), less what the motion explains, and its squared Mahalanobis
     distance under the robust covariance of those departures: the data's own noise.
@@ -406,9 +432,9 @@ def outlier_distances(data):
     nine regressors are fitted on the inliers and taken out, so only what the motion cannot
     explain remains.
     """
+    data, body = sensed.data, sensed.body
     zeros = ch.ChannelParams.zeros(data.channels)
     err = neighbour_residual(preprocess.error_angles(data, data.sets[0], zeros))
-    body = _body_increments(data, data.increments)
     rate = body / data.dt[:, None]
     k, frac = data.st_interval()
     motion = neighbour_residual(np.concatenate([cumulative_at_st(body, k, frac), rate[k],
@@ -446,6 +472,7 @@ def check(campaign: Campaign) -> Findings:
     and left out by `preprocess`."""
     findings = Findings()
     gap_findings(campaign, findings)
+    limits = _limits(campaign.channels)
     screened = []
     for m in campaign.maneuvers:
         try:
@@ -453,9 +480,10 @@ def check(campaign: Campaign) -> Findings:
         except TelemetryError as exc:
             findings.errors.append(str(exc))
             continue
-        if saturation_findings(data, findings) or not rotation_findings(campaign, data, findings):
+        sensed = sense(data)
+        if saturation_findings(sensed, limits[0], findings) or not rotation_findings(campaign, sensed, limits, findings):
             continue
-        clock_findings(data, findings)
+        clock_findings(sensed, findings)
         missing = classic.missing_holds(data)
         if data.direction == "both":
             findings.warnings.append(f"maneuver {m.id}: turns both ways: the paper's classic method does not apply "
@@ -464,7 +492,7 @@ def check(campaign: Campaign) -> Findings:
             findings.warnings.append(f"maneuver {m.id}: no inertial hold {' or '.join(missing)} the rotation: "
                                      "the paper's classic method does not apply to it (the full-trajectory "
                                      "fit does)")
-        screened.append((data, *outlier_distances(data)))
+        screened.append((data, *outlier_distances(sensed)))
     n_total = sum(len(d2) for _, _, d2 in screened)
     threshold = chi2.isf(OUTLIER_FALSE_ALARMS / max(n_total, 1), 3)
     for data, resid, d2 in screened:
@@ -501,11 +529,8 @@ def estimate_mounting(campaign: Campaign) -> tuple:
     over every maneuver, and the sd of its angle about each body axis (deg). It absorbs the
     common rotation of the gyro misalignments too: after it, misalignments are relative to the
     reference as the data align it. About an axis no maneuver turns across, it is not determined."""
-    pairs = []
-    for m in campaign.maneuvers:
-        data = preprocess.slice_maneuver(campaign, m.id)
-        pairs.append((_gyro_at_st(data, _body_increments(data, data.increments)), _interval_rotations(data.st_quat)))
-    gyro, reference = np.vstack([g for g, _ in pairs]), np.vstack([r for _, r in pairs])
+    sensed = [sense(preprocess.slice_maneuver(campaign, m.id)) for m in campaign.maneuvers]
+    gyro, reference = np.vstack([s.d_gyro for s in sensed]), np.vstack([s.d_st for s in sensed])
     mounting, rssd, sensitivity = Rotation.align_vectors(gyro, reference, return_sensitivity=True)
     variance = rssd**2 / max(len(gyro) - 3, 1)
     return mounting, np.rad2deg(np.sqrt(np.diag(sensitivity) * variance))
