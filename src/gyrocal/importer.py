@@ -23,7 +23,7 @@ import pandas as pd
 import yaml
 
 from .channels import Channel
-from .telemetry import NAME_PATTERN, Campaign, Maneuver, TelemetryError, write_campaign
+from .telemetry import NAME_PATTERN, Campaign, Maneuver, TelemetryError, default_name, write_campaign
 from .units import AXES
 
 ORDERS = {"xyzw": [0, 1, 2, 3], "wxyz": [1, 2, 3, 0]}
@@ -164,7 +164,7 @@ def build_campaign(files, mapping, name: str) -> tuple:
 def import_files(mapping_name, outdir, files) -> tuple:
     """``gyrocal import``: read ``files`` through a mapping and write the campaign to ``outdir``."""
     mapping = read_mapping(mapping_name)
-    name = "".join(c if c.isalnum() or c == "_" else "_" for c in Path(outdir).resolve().name)
+    name = default_name(outdir)
     campaign, counts = build_campaign(files, mapping, name)
     write_campaign(campaign, outdir)
     return campaign, counts

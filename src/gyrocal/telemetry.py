@@ -6,6 +6,7 @@ wrong; rows are counted as in a spreadsheet: the header is line 1.
 """
 
 import hashlib
+import io
 import itertools
 import re
 import shutil
@@ -189,8 +190,8 @@ def _read_csv(path, required) -> pd.DataFrame:
     if not path.exists():
         _fail(path, "file not found")
     try:
-        frame = pd.read_csv(path, **READ_CSV_EXACT)
         text = path.read_text()
+        frame = pd.read_csv(io.StringIO(text), **READ_CSV_EXACT)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         _fail(path, f"cannot be read as CSV: {exc}")
     lines = np.array([i + 1 for i, line in enumerate(text.splitlines()) if line.strip()][1:])
