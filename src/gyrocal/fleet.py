@@ -25,23 +25,22 @@ def summary(verdicts: list, calibrations: dict) -> pd.DataFrame:
 
 
 def figure(table: pd.DataFrame):
-    """Each channel-model parameter across the fleet: posterior mean and 95 % interval per campaign,
-    GO in green and NO-GO in red."""
+    """Each parameter across the fleet: posterior mean and 95 % interval per campaign, GO in green
+    and NO-GO in red; a campaign whose reviewed model lacks the parameter is left blank."""
     import matplotlib.pyplot as plt
-    core = table[table["unit"].isin(["ppm", "arcsec"])]
-    labels = sorted(set(core["channel"] + "." + core["parameter"]))
+    labels = sorted(set(table["channel"] + "." + table["parameter"]))
     cols = 4
     rows = int(np.ceil(len(labels) / cols))
     fig, axes = plt.subplots(rows, cols, figsize=(3.2 * cols, 2.2 * rows), squeeze=False)
     campaigns = sorted(table["campaign"].unique())
     for ax, label in zip(axes.ravel(), labels):
-        sub = core[core["channel"] + "." + core["parameter"] == label].set_index("campaign").loc[campaigns]
+        sub = table[table["channel"] + "." + table["parameter"] == label].set_index("campaign").reindex(campaigns)
         x = np.arange(len(campaigns))
         colors = np.where(sub["verdict"] == "GO", "tab:green", "tab:red")
         ax.errorbar(x, sub["mean"], yerr=[sub["mean"] - sub["ci95_low"], sub["ci95_high"] - sub["mean"]], fmt="none",
                     ecolor="0.5", lw=1)
         ax.scatter(x, sub["mean"], c=colors, s=12, zorder=3)
-        ax.set_title(f"{label} ({sub['unit'].iloc[0]})", fontsize=8)
+        ax.set_title(f"{label} ({sub['unit'].dropna().iloc[0]})", fontsize=8)
         ax.set_xticks(x, campaigns, rotation=90, fontsize=6)
         ax.tick_params(axis="y", labelsize=7)
     for ax in axes.ravel()[len(labels):]:
