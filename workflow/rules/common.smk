@@ -24,6 +24,11 @@ def _user_campaign(directory):
     return meta["name"], {"dir": str(directory), "maneuvers": [m.id for m in meta["maneuvers"]], "simulated": False}
 
 
+def results_of(campaign):
+    """Where a campaign's results go (``campaign`` may be the wildcard ``{campaign}``)."""
+    return f"{config['results']}/{campaign}"
+
+
 CAMPAIGNS = {}
 """Campaign name -> its directory, maneuver ids and whether the scenario simulates it."""
 FLEET = bool(config["campaigns"])
@@ -45,10 +50,10 @@ else:
     if not Path(config["scenario"]).exists() and Path(workflow.basedir, config["scenario"]).exists():
         config["scenario"] = str(Path(workflow.basedir, config["scenario"]))
     _meta = _simulate.peek(config["scenario"])
-    CAMPAIGNS[_meta["name"]] = {"dir": f"{config['results']}/{_meta['name']}/simulated/campaign",
+    CAMPAIGNS[_meta["name"]] = {"dir": f"{results_of(_meta['name'])}/simulated/campaign",
                                 "maneuvers": _meta["maneuvers"], "simulated": True}
 
-RESULTS = f"{config['results']}/{{campaign}}"
+RESULTS = results_of("{campaign}")
 LOGS = "logs/{campaign}"
 MODELS = sorted(config["models"], key=lambda m: m != "baseline")  # baseline is the reference
 PLUGINS = config["plugins"]
@@ -90,7 +95,7 @@ def campaign_input(wildcards):
 def truth_input(wildcards):
     """The simulation's truth, for a simulated campaign's report."""
     if CAMPAIGNS[wildcards.campaign]["simulated"]:
-        return [f"{config['results']}/{wildcards.campaign}/simulated/truth.json"]
+        return [f"{results_of(wildcards.campaign)}/simulated/truth.json"]
     return []
 
 
@@ -98,7 +103,7 @@ def maneuver_files(ext):
     """A campaign's per-maneuver files of one kind, as an input function."""
 
     def files(wildcards):
-        return expand(f"{config['results']}/{wildcards.campaign}/preprocess/{{maneuver}}.{ext}",
+        return expand(f"{results_of(wildcards.campaign)}/preprocess/{{maneuver}}.{ext}",
                       maneuver=CAMPAIGNS[wildcards.campaign]["maneuvers"])
 
     return files
@@ -111,7 +116,7 @@ def model_files(name):
 
 def report_model_files(wildcards):
     """Every model's files the report reads, named as gyrocal.outputs.MODEL_FILES, in MODELS' order."""
-    return {name: expand(f"{config['results']}/{wildcards.campaign}/{{model}}/{file}", model=MODELS)
+    return {name: expand(f"{results_of(wildcards.campaign)}/{{model}}/{file}", model=MODELS)
             for name, file in _MODEL_FILES.items()}
 
 
@@ -135,7 +140,7 @@ def model_effects(wildcards):
 
 def campaign_outputs(campaign):
     """Everything a campaign's run leaves, as paths."""
-    results = f"{config['results']}/{campaign}"
+    results = results_of(campaign)
     out = [f"{results}/input.json"]
     out += expand(f"{results}/preprocess/{{maneuver}}.png", maneuver=CAMPAIGNS[campaign]["maneuvers"])
     for model in MODELS:
@@ -148,5 +153,5 @@ def campaign_outputs(campaign):
 def all_outputs():
     out = [path for campaign in CAMPAIGNS for path in campaign_outputs(campaign)]
     if FLEET:
-        out += [f"{config['results']}/fleet/summary.csv", f"{config['results']}/fleet/summary.png"]
+        out += [f"{results_of('fleet')}/summary.csv", f"{results_of('fleet')}/summary.png"]
     return out
