@@ -198,7 +198,7 @@ def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Find
     a = AXIS_INDEX[m.axis]
     sf_bound, mis_bound, sf_sd = limits
     d_st, dt, d_gyro = sensed.d_st, sensed.dt, sensed.d_gyro
-    where = f"maneuver {m.id} ({m.direction}{m.axis})"
+    where = f"maneuver {m.id} ({m.turn})"
     noise_rad = float(np.median(np.abs(d_st - np.median(d_st, axis=0))) * 1.4826 + 1e-12)
     min_angle = noise_rad / sf_sd
     blocked_dt, blocked_gyro, blocked_st = _blocked(dt, d_gyro, d_st)

@@ -120,8 +120,9 @@ def read_file(path, mapping) -> Imported:
     return Imported(path.stem, time, quat, valid, increments, extras)
 
 
-def maneuver_axis(imported: Imported, axes: dict) -> str:
-    """The body axis a file rotates about most (the largest total gyro rotation)."""
+def maneuver_axis(imported: Imported, axes: list) -> str:
+    """The body axis a file rotates about most (the largest total gyro rotation); ``axes`` are the
+    gyro columns' axes, in their order."""
     turned = np.abs(imported.increments).sum(axis=0)
     return axes[int(np.argmax(turned))]
 

@@ -129,7 +129,7 @@ def run_preprocess(campaign_dir, input_json, maneuver_id, out_npz, out_csv, out_
     write_with(data.save, out_npz)
     write_csv(table, out_csv)
     m = campaign.maneuver(maneuver_id)
-    fig = plots.maneuver_figure(table, f"{campaign.name}: {m.id} ({m.direction}{m.axis}), nominal parameters")
+    fig = plots.maneuver_figure(table, f"{campaign.name}: {m.id} ({m.turn}), nominal parameters")
     write_with(lambda handle: plots.save(fig, handle), out_png)
 
 

@@ -51,6 +51,11 @@ class Maneuver:
     in_loop: tuple = ()
 
     @property
+    def turn(self) -> str:
+        """The rotation as reports name it: ``+yaw``, ``-roll``, or ``both yaw``."""
+        return f"both {self.axis}" if self.direction == "both" else f"{self.direction}{self.axis}"
+
+    @property
     def sign(self) -> float:
         """+1 or -1; 0 for a maneuver that turns both ways."""
         return {"+": 1.0, "-": -1.0}.get(self.direction, 0.0)
@@ -424,6 +429,6 @@ def summary(campaign: Campaign) -> str:
         f"  maneuvers  {len(campaign.maneuvers)}",
     ]
     for m in campaign.maneuvers:
-        lines.append(f"    {m.id:<12} {m.direction}{m.axis:<6} {m.t_start:10.1f} to {m.t_end:10.1f} s "
+        lines.append(f"    {m.id:<12} {m.turn:<7} {m.t_start:10.1f} to {m.t_end:10.1f} s "
                      f"({m.t_end - m.t_start:.0f} s)")
     return "\n".join(lines)
