@@ -246,8 +246,8 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     prior mean (`identification`). Where the classic method gave nothing (maneuvers that turn
     both ways, or have no holds), a WLS with the stated noise gives the start. The classic
     estimate is within a few tens of ppm of the optimum, so the model is linear enough about
-    it for the noise scales; the WLS then needs a few steps. A model with correlated star-tracker noise first estimates its
-    correlation time there.
+    it for the noise scales; the WLS then needs a few steps. A model with correlated
+    star-tracker noise first estimates its correlation time there.
     """
     spec = spec.with_prior_only(identification.unflown(maneuvers, spec))
     log_sigma = noise.log_sigma_of(stated_noise)
