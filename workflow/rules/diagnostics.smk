@@ -14,6 +14,8 @@ rule diagnostics:
         "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/{{model}}/diagnostics.log",
+    benchmark:
+        f"{LOGS}/{{model}}/diagnostics.benchmark.tsv",
     script:
         "../scripts/diagnostics.py"
 
@@ -37,5 +39,7 @@ rule compare:
         "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/compare.log",
+    benchmark:
+        f"{LOGS}/compare.benchmark.tsv",
     script:
         "../scripts/compare.py"

@@ -8,6 +8,8 @@ rule classic:
         "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/classic.log",
+    benchmark:
+        f"{LOGS}/classic.benchmark.tsv",
     script:
         "../scripts/classic.py"
 
@@ -28,5 +30,7 @@ rule point_estimate:
         "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/{{model}}/point_estimate.log",
+    benchmark:
+        f"{LOGS}/{{model}}/point_estimate.benchmark.tsv",
     script:
         "../scripts/point_estimate.py"

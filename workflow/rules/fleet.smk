@@ -10,5 +10,7 @@ rule fleet:
         "../envs/gyrocal.yaml"
     log:
         "logs/fleet.log",
+    benchmark:
+        "logs/fleet.benchmark.tsv",
     script:
         "../scripts/fleet.py"

@@ -21,6 +21,8 @@ rule posterior:
         "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/{{model}}/posterior.log",
+    benchmark:
+        f"{LOGS}/{{model}}/posterior.benchmark.tsv",
     script:
         "../scripts/posterior.py"
 
@@ -43,5 +45,7 @@ rule calibrate:
         "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/{{model}}/calibrate.log",
+    benchmark:
+        f"{LOGS}/{{model}}/calibrate.benchmark.tsv",
     script:
         "../scripts/calibrate.py"

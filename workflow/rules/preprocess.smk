@@ -10,6 +10,8 @@ rule validate:
         "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/validate.log",
+    benchmark:
+        f"{LOGS}/validate.benchmark.tsv",
     script:
         "../scripts/validate.py"
 
@@ -34,5 +36,7 @@ rule preprocess:
         "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/preprocess/{{maneuver}}.log",
+    benchmark:
+        f"{LOGS}/preprocess/{{maneuver}}.benchmark.tsv",
     script:
         "../scripts/preprocess.py"

@@ -18,5 +18,7 @@ rule report:
         "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/report.log",
+    benchmark:
+        f"{LOGS}/report.benchmark.tsv",
     script:
         "../scripts/report.py"

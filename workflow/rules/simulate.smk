@@ -11,5 +11,7 @@ rule simulate:
         "../envs/gyrocal.yaml"
     log:
         f"{LOGS}/simulate.log",
+    benchmark:
+        f"{LOGS}/simulate.benchmark.tsv",
     script:
         "../scripts/simulate.py"
