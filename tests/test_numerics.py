@@ -7,9 +7,10 @@ full matrices, straight from its definition.
 
 import numpy as np
 import pytest
+from scipy.linalg import cholesky_banded
 from scipy.spatial.transform import Rotation
 
-from gyrocal import diagnostics, errormodel, noise, predictive
+from gyrocal import diagnostics, errormodel, noise, predictive, selectedinverse
 from gyrocal.likelihood import Stats, campaign_stats
 from gyrocal.noise import variances
 from gyrocal.posterior import RatioGrid
@@ -104,18 +105,20 @@ def integrated_loglik(r, cov, g):
             - 0.5 * np.linalg.slogdet(gram)[1] - 0.5 * quad)
 
 
-def test_leave_block_out_loglik_equals_brute_force_conditional_densities():
-    """log p(block | rest) = log p(all) - log p(rest), each with the nuisance integrated out."""
+@pytest.mark.parametrize("tau, block_s", [(0.0, 8.0), (2.5, 8.0), (0.0, 1.0), (2.5, 1.5)])
+def test_leave_block_out_loglik_equals_brute_force_conditional_densities(tau, block_s):
+    """log p(block | rest) = log p(all) - log p(rest), each with the nuisance integrated out;
+    with correlated star-tracker noise (a wider band), and with blocks shorter than the band."""
     lin = tiny_linearization(2)
-    nz = noise.build(lin, BORESIGHT)
+    nz = noise.build(lin, BORESIGHT, tau)
     ratios = np.array([0.9, -1.8])
     wm = predictive.WhitenedManeuver(nz, ratios)
     rng = np.random.default_rng(3)
     dtheta = rng.normal(0, 0.02, (3, P))
     scale = rng.uniform(0.5, 2.0, 3) * 1e-8
-    blocks = predictive.block_index(lin, np.cumsum(lin.st_dt), 8.0)
+    blocks = predictive.block_index(lin, np.cumsum(lin.st_dt), block_s)
     got = predictive.leave_block_out_loglik(lin, wm, dtheta, scale, blocks)
-    unit = dense_covariance(lin, variances([0.0, ratios[0], ratios[1]]))
+    unit = dense_covariance(lin, variances([0.0, ratios[0], ratios[1]]), tau)
     g = noise.nuisance_design(lin).reshape(len(unit), -1)
     for d in range(len(dtheta)):
         r = lin.z.reshape(-1) - lin.design.reshape(len(unit), P) @ dtheta[d]
@@ -125,6 +128,25 @@ def test_leave_block_out_loglik_equals_brute_force_conditional_densities():
             rest = blocks != b
             expected = full - integrated_loglik(r[rest], cov[np.ix_(rest, rest)], g[rest])
             assert got[d, b] == pytest.approx(expected, rel=1e-7, abs=1e-6)
+
+
+@pytest.mark.parametrize("sizes", [[7, 9, 7, 3], [4, 12, 2, 9, 5], [30]])
+def test_selected_inverse_windows_equal_the_dense_inverse(sizes):
+    """Takahashi's recursion gives C^-1 over each block and the next, short blocks merged."""
+    rng = np.random.default_rng(len(sizes))
+    n, bandwidth = sum(sizes), 5
+    a = rng.normal(size=(n, n)) * (np.abs(np.subtract.outer(np.arange(n), np.arange(n))) <= bandwidth // 2)
+    c = a @ a.T + n * np.eye(n)
+    chol = cholesky_banded(np.array([np.concatenate([np.diag(c, -d), np.zeros(d)]) for d in range(bandwidth + 1)]),
+                           lower=True)
+    edges = selectedinverse.recursion_bounds(np.concatenate([[0], np.cumsum(sizes)]), bandwidth)
+    assert np.all(np.diff(edges)[:-1] >= bandwidth)
+    seen = []
+    for start, z in selectedinverse.inverse_windows(chol, edges):
+        stop = start + len(z)
+        assert z == pytest.approx(np.linalg.inv(c)[start:stop, start:stop], rel=1e-10, abs=1e-14)
+        seen.append(start)
+    assert seen == list(edges[-2::-1])
 
 
 def test_ratio_grid_reproduces_cubic_polynomials_exactly():

@@ -10,6 +10,7 @@ import numpy as np
 
 from .errormodel import Linearization
 from .noise import ManeuverNoise, nuisance_design, variances
+from .selectedinverse import inverse_windows, recursion_bounds
 
 
 class WhitenedManeuver:
@@ -73,9 +74,11 @@ def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dthet
     For a Gaussian with precision P, ``log p(y_b | y_-b) = 1/2 log|P_bb| - n_b/2 log 2 pi
     - 1/2 (P r)_b' P_bb^-1 (P r)_b``; with a flat-prior nuisance G the precision is
     ``P = Q - QG (G'QG)^-1 G'Q``. Q is the inverse of the undifferenced covariance,
-    ``T' C^-1 T`` with C the banded covariance of the differenced series. The noise
-    ratios are those ``whitened`` was factored at; the scale (sigma_cross^2) is per draw.
-    These are the pointwise terms PSIS-LOO needs (one-step-ahead terms are not).
+    ``T' C^-1 T`` with C the banded covariance of the differenced series, so ``Q_bb``
+    needs ``C^-1`` over the block and the ``width`` rows after it: `selectedinverse`
+    gives those in time linear in the telemetry length. The noise ratios are those
+    ``whitened`` was factored at; the scale (sigma_cross^2) is per draw. These are the
+    pointwise terms PSIS-LOO needs (one-step-ahead terms are not).
     """
     from scipy.linalg import cho_solve_banded
 
@@ -94,17 +97,29 @@ def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dthet
     q_r = q_data[:, None] - q_x @ dtheta.T
     p_r = q_r - q_g @ (gqg_inv @ (g_und.T @ q_r))
     n_blocks = block_of_row.max() + 1
-    out = np.empty((len(dtheta), n_blocks))
-    for b in range(n_blocks):
-        rows = np.flatnonzero(block_of_row == b)
-        unit = np.zeros((n, len(rows)))
-        unit[rows, np.arange(len(rows))] = 1.0
-        diff_unit = np.concatenate([unit[:width], unit[width:] - unit[:-width]])
-        q_cols = q_apply(diff_unit)[rows]
-        p_bb = q_cols - q_g[rows] @ gqg_inv @ q_g[rows].T
-        factor = np.linalg.cholesky(p_bb)
-        logdet = 2 * np.sum(np.log(np.diag(factor)))
-        w = np.linalg.solve(factor, p_r[rows])
-        quad = np.sum(w**2, axis=0)
-        out[:, b] = 0.5 * (logdet - len(rows) * np.log(2 * np.pi * scale)) - 0.5 * quad / scale
+    first_row = np.searchsorted(block_of_row, np.arange(n_blocks + 1))
+    edges = recursion_bounds(np.unique(first_row), chol.shape[0] - 1)
+    home = np.searchsorted(edges, first_row[:-1], side="right") - 1
+    out = np.zeros((len(dtheta), n_blocks))
+    for start, z in inverse_windows(chol, edges):
+        for b in np.flatnonzero((edges[home] == start) & (first_row[1:] > first_row[:-1])):
+            rows = slice(first_row[b], first_row[b + 1])
+            q_bb = _undifferenced_block(z, rows.start - start, rows.stop - start, width, n - start)
+            p_bb = q_bb - q_g[rows] @ gqg_inv @ q_g[rows].T
+            factor = np.linalg.cholesky(p_bb)
+            logdet = 2 * np.sum(np.log(np.diag(factor)))
+            w = np.linalg.solve(factor, p_r[rows])
+            quad = np.sum(w**2, axis=0)
+            out[:, b] = 0.5 * (logdet - (rows.stop - rows.start) * np.log(2 * np.pi * scale)) - 0.5 * quad / scale
     return out
+
+
+def _undifferenced_block(z, i0, i1, width, n_local):
+    """``(T' Z T)[i0:i1, i0:i1]`` from a window ``z`` of ``Z = C^-1`` that reaches ``width`` rows
+    past ``i1`` (or the end of the series, ``n_local``): T's column j is ``e_j - e_(j+width)``."""
+    q = z[i0:i1, i0:i1].copy()
+    v = int(np.clip(n_local - width - i0, 0, i1 - i0))
+    q[:v] -= z[i0 + width:i0 + width + v, i0:i1]
+    q[:, :v] -= z[i0:i1, i0 + width:i0 + width + v]
+    q[:v, :v] += z[i0 + width:i0 + width + v, i0 + width:i0 + width + v]
+    return q
