@@ -32,9 +32,11 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from gyrocal import comparison, noise, predictive, simulate, steps
+from gyrocal import comparison, noise, predictive, simulate
 from gyrocal.estimate import PointEstimate, linearize_all
 from gyrocal.likelihood import Stats, leave_one_out_log_evidence, log_evidence, maneuver_stats, total
+from gyrocal.steps import common
+from gyrocal.steps import posterior as posterior_step
 
 from conftest import DATA, config_with, run_campaign
 from test_criticism import BASE
@@ -87,9 +89,9 @@ def study(scenario: Path, effect: str, tmp: Path):
     validate(cfg, str(ROOT / "workflow/schemas/config.schema.yaml"))
     cfg = config_with(cfg, {"baseline": BASE, "extended": BASE + [effect]})
     npz = run_campaign(tmp / "sim" / "campaign", tmp / "out", cfg, ("baseline", "extended"))
-    maneuvers = steps.load_maneuvers(npz)
+    maneuvers = common.load_maneuvers(npz)
     table = pd.read_csv(tmp / "out" / "model_comparison.csv").set_index("model")
-    base_diag = steps.read_json(tmp / "out" / "baseline" / "diagnostics.json")
+    base_diag = common.read_json(tmp / "out" / "baseline" / "diagnostics.json")
     chi2 = next(r for r in base_diag["ranking"] if r["name"] == effect)
     print(f"\n=== {scenario.name}: baseline vs baseline + {effect} ===")
     print(f"1. structure test at the baseline: chi2 {chi2['chi2_drop']:.1f} on {chi2['df']} df "
@@ -98,11 +100,11 @@ def study(scenario: Path, effect: str, tmp: Path):
     print(f"2. PSIS-LOO, 60-s blocks: elpd diff {table.loc['extended', 'elpd_diff_vs_first']:.1f} "
           f"+- {table.loc['extended', 'elpd_diff_se']:.1f}; p_loo baseline {table.loc['baseline', 'p_loo']:.1f}, "
           f"extended {table.loc['extended', 'p_loo']:.1f}")
-    known = steps.known_effects(cfg["plugins"])
+    known = common.known_effects(cfg["plugins"])
     lomo = {}
     for model in ("baseline", "extended"):
         est = PointEstimate.load(tmp / "out" / model / "point_estimate.npz", known)
-        priors = steps.model_priors(est, cfg["priors"])
+        priors = posterior_step.model_priors(est, cfg["priors"])
         prior_mean, prior_sd = priors.mean - est.theta, priors.sd
         var = noise.variances(est.log_sigma)
         lins, noises = linearize_all(maneuvers, est)

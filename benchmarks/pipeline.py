@@ -31,10 +31,12 @@ def snakemake_wall_s() -> float:
 def sampler_figures():
     from snakemake.utils import validate
 
-    from gyrocal import classic, estimate, inferencedata, posterior, preprocess, simulate, steps, telemetry
+    from gyrocal import classic, estimate, inferencedata, posterior, preprocess, simulate, telemetry
     from gyrocal.likelihood import campaign_stats, conditional_posterior
     from gyrocal.noise import variances
     from gyrocal.spec import baseline
+    from gyrocal.steps import common
+    from gyrocal.steps import posterior as posterior_step
 
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     validate(cfg, str(ROOT / "workflow/schemas/config.schema.yaml"))
@@ -42,11 +44,11 @@ def sampler_figures():
         simulate.run(ROOT / "config/scenarios/mom.yaml", tmp)
         campaign = telemetry.read_campaign(Path(tmp) / "campaign")
     maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
-    stated = steps.noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
+    stated = common.noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
     spec = baseline(campaign.channels)
     theta0 = classic.classic_vector(classic.classic_table(maneuvers, spec), spec)
     est = estimate.point_estimate(maneuvers, spec, stated, theta0)
-    priors = steps.model_priors(est, cfg["priors"])
+    priors = posterior_step.model_priors(est, cfg["priors"])
     start = time.perf_counter()
     post = posterior.sample(maneuvers, est, priors, cfg["sampler"], cfg["grid"], cfg["seed"])
     sampling_s = time.perf_counter() - start

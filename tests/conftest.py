@@ -46,35 +46,36 @@ def truth_vector(channels, truth):
 
 def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
     """Every workflow step in the order the rules run them, each given the config the rule gives it."""
-    from gyrocal import steps, telemetry
+    from gyrocal import telemetry
     from gyrocal.outputs import MODEL_FILES
+    from gyrocal.steps import calibrate, classic, compare, diagnostics, point_estimate, posterior, preprocess, report, validate
     ids = [m.id for m in telemetry.read_meta(campaign_dir)["maneuvers"]]
-    steps.validate(campaign_dir, out / "input.json")
+    validate.run(campaign_dir, out / "input.json")
     for m in ids:
-        steps.run_preprocess(campaign_dir, out / "input.json", m, out / f"preprocess/{m}.npz", out / f"preprocess/{m}.csv",
-                             out / f"preprocess/{m}.png")
+        preprocess.run(campaign_dir, out / "input.json", m, out / f"preprocess/{m}.npz", out / f"preprocess/{m}.csv",
+                       out / f"preprocess/{m}.png")
     npz = [out / f"preprocess/{m}.npz" for m in ids]
-    steps.run_classic(npz, out / "classic.csv")
+    classic.run(npz, out / "classic.csv")
     plugins = cfg["plugins"]
     for model in models:
         d = out / model
-        steps.run_point_estimate(npz, out / "input.json", out / "classic.csv", model, cfg["models"][model],
-                                 cfg["noise"], plugins, d / "point_estimate.npz")
-        steps.run_posterior(npz, d / "point_estimate.npz", plugins, cfg["priors"], cfg["prior_from"] or None,
-                            cfg["sampler"], cfg["grid"], cfg["convergence"], cfg["seed"], d / "posterior.nc",
-                            d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json", d / "elpd_maneuvers.csv")
-        steps.run_calibrate(d / "point_estimate.npz", d / "posterior_summary.csv", npz, d / "calibration.csv",
-                            d / "correction.json")
-        steps.run_diagnostics(npz, d / "point_estimate.npz", d / "posterior_summary.csv", d / "fit.csv", plugins,
-                              cfg["diagnostics"], d / "diagnostics.json")
-    steps.run_compare(list(models), [out / m / "posterior.nc" for m in models],
-                      [out / m / "diagnostics.json" for m in models],
-                      [out / m / "posterior_summary.csv" for m in models],
-                      [out / m / "elpd_maneuvers.csv" for m in models], cfg["model_choice"],
-                      out / "model_comparison.csv", out / "model_comparison.png")
+        point_estimate.run(npz, out / "input.json", out / "classic.csv", model, cfg["models"][model],
+                           cfg["noise"], plugins, d / "point_estimate.npz")
+        posterior.run(npz, d / "point_estimate.npz", plugins, cfg["priors"], cfg["prior_from"] or None,
+                      cfg["sampler"], cfg["grid"], cfg["convergence"], cfg["seed"], d / "posterior.nc",
+                      d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json", d / "elpd_maneuvers.csv")
+        calibrate.run(d / "point_estimate.npz", d / "posterior_summary.csv", npz, d / "calibration.csv",
+                      d / "correction.json")
+        diagnostics.run(npz, d / "point_estimate.npz", d / "posterior_summary.csv", d / "fit.csv", plugins,
+                        cfg["diagnostics"], d / "diagnostics.json")
+    compare.run(list(models), [out / m / "posterior.nc" for m in models],
+                [out / m / "diagnostics.json" for m in models],
+                [out / m / "posterior_summary.csv" for m in models],
+                [out / m / "elpd_maneuvers.csv" for m in models], cfg["model_choice"],
+                out / "model_comparison.csv", out / "model_comparison.png")
     files = {name: [out / m / file for m in models] for name, file in MODEL_FILES.items()}
-    steps.run_report(list(models), files, npz, [out / f"preprocess/{m}.csv" for m in ids], out / "input.json",
-                     out / "model_comparison.csv", truth_path, cfg, out / "report.html", out / "verdict.json")
+    report.run(list(models), files, npz, [out / f"preprocess/{m}.csv" for m in ids], out / "input.json",
+               out / "model_comparison.csv", truth_path, cfg, out / "report.html", out / "verdict.json")
     return npz
 
 

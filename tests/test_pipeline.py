@@ -9,9 +9,11 @@ import pandas as pd
 import pytest
 
 from gyrocal import channels as ch
-from gyrocal import correction, effects, errormodel, estimate, noise, steps, telemetry
+from gyrocal import correction, effects, errormodel, estimate, noise, telemetry
 from gyrocal.estimate import PointEstimate
 from gyrocal.likelihood import campaign_stats
+from gyrocal.steps import common
+from gyrocal.steps import posterior as posterior_step
 from gyrocal.units import PPM
 
 from conftest import truth_vector
@@ -26,9 +28,9 @@ def calibration_with_truth(out, truth):
 
 def posterior_again(out, npz, cfg, tmp_path):
     """The posterior step once more on a finished run's point estimate, with ``cfg``."""
-    steps.run_posterior(npz, out / "baseline/point_estimate.npz", [], cfg["priors"], None, cfg["sampler"],
-                        cfg["grid"], cfg["convergence"], cfg["seed"], tmp_path / "p.nc", tmp_path / "s.csv",
-                        tmp_path / "f.csv", tmp_path / "j.json", tmp_path / "e.csv")
+    posterior_step.run(npz, out / "baseline/point_estimate.npz", [], cfg["priors"], None, cfg["sampler"],
+                       cfg["grid"], cfg["convergence"], cfg["seed"], tmp_path / "p.nc", tmp_path / "s.csv",
+                       tmp_path / "f.csv", tmp_path / "j.json", tmp_path / "e.csv")
 
 
 def test_validate_step_records_rows_and_checksums(tiny_run):
@@ -114,7 +116,7 @@ def test_sequential_campaign_takes_priors_from_an_earlier_posterior(tiny_run, co
     first = pd.read_csv(out / "baseline/calibration.csv")
     earlier = first[first["channel"] != "dtg3_roll"]
     earlier.to_csv(tmp_path / "earlier.csv", index=False)
-    priors = steps.model_priors(est, config["priors"], tmp_path / "earlier.csv")
+    priors = posterior_step.model_priors(est, config["priors"], tmp_path / "earlier.csv")
     spec = est.spec
     for r in earlier.itertuples():
         i = spec.index(f"{r.channel}.{r.parameter}")
@@ -125,7 +127,7 @@ def test_sequential_campaign_takes_priors_from_an_earlier_posterior(tiny_run, co
     assert priors.sd[own] == pytest.approx([5000 * PPM, 5000 * PPM, 1000 / 206264.806, 1000 / 206264.806])
     earlier.assign(unit="deg").to_csv(tmp_path / "wrong_unit.csv", index=False)
     with pytest.raises(ValueError, match=r"dtg1_roll\.sf_pos is in deg, but this model declares it in ppm"):
-        steps.model_priors(est, config["priors"], tmp_path / "wrong_unit.csv")
+        posterior_step.model_priors(est, config["priors"], tmp_path / "wrong_unit.csv")
 
 
 def test_wls_is_within_3_sd_of_the_truth_on_the_default_scenario(mom, mom_run):
@@ -162,7 +164,7 @@ def test_linearised_model_agrees_with_the_exact_one_to_1_percent_of_the_sd(mom, 
     """Posterior draws pushed 3 sd out: the exact model's departure from the linear one
     moves the estimate by under 1 % of each posterior sd."""
     out, npz = mom_run
-    maneuvers = steps.load_maneuvers(npz)
+    maneuvers = common.load_maneuvers(npz)
     est = PointEstimate.load(out / "baseline/point_estimate.npz", effects.LIBRARY)
     lins, noises = estimate.linearize_all(maneuvers, est)
     var = noise.variances(est.log_sigma)

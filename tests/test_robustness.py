@@ -7,8 +7,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal import cli, consistency, steps
+from gyrocal import cli, consistency
 from gyrocal.estimate import EstimateError
+from gyrocal.steps import posterior as posterior_step
 
 import mutations
 from conftest import run_campaign
@@ -187,9 +188,9 @@ def test_a_point_estimate_beyond_the_bounds_stops_before_sampling_naming_paramet
         tiny_run, config, tmp_path):
     out, npz = tiny_run
     with pytest.raises(EstimateError) as err:
-        steps.run_posterior(npz, out / "baseline/point_estimate.npz", [], {**config["priors"], "sf_bound_ppm": 100.0},
-                            None, config["sampler"], config["grid"], config["convergence"], config["seed"],
-                            *(tmp_path / name for name in ("p.nc", "s.csv", "f.csv", "j.json", "e.csv")))
+        posterior_step.run(npz, out / "baseline/point_estimate.npz", [], {**config["priors"], "sf_bound_ppm": 100.0},
+                           None, config["sampler"], config["grid"], config["convergence"], config["seed"],
+                           *(tmp_path / name for name in ("p.nc", "s.csv", "f.csv", "j.json", "e.csv")))
     message = str(err.value)
     assert "dtg1_roll.sf_pos = 14" in message and "(bound 100," in message
     assert "fits maneuver" in message

@@ -11,7 +11,7 @@ import time
 from pathlib import Path
 
 from gyrocal import simulate as _simulate
-from gyrocal import steps as _steps
+from gyrocal.steps.common import REFUSED as _REFUSED
 from gyrocal import telemetry as _telemetry
 from gyrocal.outputs import MODEL_FILES as _MODEL_FILES
 
@@ -68,15 +68,15 @@ _STARTED = time.time()
 
 
 def refusal_messages():
-    """What the steps of this run refused (their logs from `gyrocal.steps.REFUSED` on), to repeat
+    """What the steps of this run refused (their logs from `gyrocal.steps.common.REFUSED` on), to repeat
     when a run fails."""
     found = []
     for path in sorted(Path("logs").rglob("*.log")):
         if path.stat().st_mtime < _STARTED:
             continue
         text = path.read_text()
-        if _steps.REFUSED in text:
-            found.append(text[text.index(_steps.REFUSED):].rstrip())
+        if _REFUSED in text:
+            found.append(text[text.index(_REFUSED):].rstrip())
     return found
 
 

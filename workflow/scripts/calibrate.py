@@ -1,5 +1,5 @@
-from gyrocal import steps
+from gyrocal.steps import calibrate, common
 
-steps.start(snakemake.log[0])
-steps.run_calibrate(snakemake.input.point, snakemake.input.summary, snakemake.input.maneuvers,
-                    snakemake.output.calibration, snakemake.output.correction)
+common.start(snakemake.log[0])
+calibrate.run(snakemake.input.point, snakemake.input.summary, snakemake.input.maneuvers,
+              snakemake.output.calibration, snakemake.output.correction)

@@ -1,4 +1,4 @@
-from gyrocal import steps
+from gyrocal.steps import classic, common
 
-steps.start(snakemake.log[0])
-steps.run_classic(snakemake.input.maneuvers, snakemake.output[0])
+common.start(snakemake.log[0])
+classic.run(snakemake.input.maneuvers, snakemake.output[0])

@@ -1,6 +1,6 @@
-from gyrocal import steps
+from gyrocal.steps import common, compare
 
-steps.start(snakemake.log[0])
-steps.run_compare(snakemake.params.models, snakemake.input.posterior, snakemake.input.diagnostics,
-                  snakemake.input.summary, snakemake.input.elpd, snakemake.params.choice, snakemake.output.table,
-                  snakemake.output.figure)
+common.start(snakemake.log[0])
+compare.run(snakemake.params.models, snakemake.input.posterior, snakemake.input.diagnostics,
+            snakemake.input.summary, snakemake.input.elpd, snakemake.params.choice, snakemake.output.table,
+            snakemake.output.figure)

@@ -1,6 +1,6 @@
-from gyrocal import steps
+from gyrocal.steps import common, diagnostics
 
-steps.start(snakemake.log[0])
-steps.run_diagnostics(snakemake.input.maneuvers, snakemake.input.point, snakemake.input.summary,
-                      snakemake.input.fit, snakemake.input.plugins, snakemake.params.thresholds,
-                      snakemake.output[0])
+common.start(snakemake.log[0])
+diagnostics.run(snakemake.input.maneuvers, snakemake.input.point, snakemake.input.summary,
+                snakemake.input.fit, snakemake.input.plugins, snakemake.params.thresholds,
+                snakemake.output[0])

@@ -1,4 +1,4 @@
-from gyrocal import steps
+from gyrocal.steps import common, fleet
 
-steps.start(snakemake.log[0])
-steps.run_fleet(snakemake.input.verdicts, snakemake.output.table, snakemake.output.figure)
+common.start(snakemake.log[0])
+fleet.run(snakemake.input.verdicts, snakemake.output.table, snakemake.output.figure)

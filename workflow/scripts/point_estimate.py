@@ -1,6 +1,6 @@
-from gyrocal import steps
+from gyrocal.steps import common, point_estimate
 
-steps.start(snakemake.log[0])
-steps.run_point_estimate(snakemake.input.maneuvers, snakemake.input.checked, snakemake.input.classic,
-                         snakemake.wildcards.model, snakemake.params.effects, snakemake.params.noise,
-                         snakemake.input.plugins, snakemake.output[0])
+common.start(snakemake.log[0])
+point_estimate.run(snakemake.input.maneuvers, snakemake.input.checked, snakemake.input.classic,
+                   snakemake.wildcards.model, snakemake.params.effects, snakemake.params.noise,
+                   snakemake.input.plugins, snakemake.output[0])

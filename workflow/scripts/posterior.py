@@ -1,9 +1,9 @@
-from gyrocal import steps
+from gyrocal.steps import common, posterior
 
 p = snakemake.params
-steps.start(snakemake.log[0])
-with steps.refusal():
-    steps.run_posterior(snakemake.input.maneuvers, snakemake.input.point, snakemake.input.plugins, p.priors,
-                        snakemake.input.prior_from[0] if snakemake.input.prior_from else None, p.sampler, p.grid,
-                        p.convergence, p.seed, snakemake.output.posterior, snakemake.output.summary,
-                        snakemake.output.fit, snakemake.output.sampler, snakemake.output.elpd)
+common.start(snakemake.log[0])
+with common.refusal():
+    posterior.run(snakemake.input.maneuvers, snakemake.input.point, snakemake.input.plugins, p.priors,
+                  snakemake.input.prior_from[0] if snakemake.input.prior_from else None, p.sampler, p.grid,
+                  p.convergence, p.seed, snakemake.output.posterior, snakemake.output.summary,
+                  snakemake.output.fit, snakemake.output.sampler, snakemake.output.elpd)

@@ -1,5 +1,5 @@
-from gyrocal import steps
+from gyrocal.steps import common, preprocess
 
-steps.start(snakemake.log[0])
-steps.run_preprocess(snakemake.params.campaign_dir, snakemake.input.checked, snakemake.wildcards.maneuver,
-                     snakemake.output.data, snakemake.output.table, snakemake.output.figure)
+common.start(snakemake.log[0])
+preprocess.run(snakemake.params.campaign_dir, snakemake.input.checked, snakemake.wildcards.maneuver,
+               snakemake.output.data, snakemake.output.table, snakemake.output.figure)

@@ -1,8 +1,8 @@
-from gyrocal import steps
 from gyrocal.outputs import MODEL_FILES
+from gyrocal.steps import common, report
 
 i = snakemake.input
-steps.start(snakemake.log[0])
-steps.run_report(snakemake.params.models, {name: list(getattr(i, name)) for name in MODEL_FILES}, i.maneuvers,
-                 i.tables, i.checked, i.comparison, i.truth[0] if i.truth else None, snakemake.params.config,
-                 snakemake.output.html, snakemake.output.verdict)
+common.start(snakemake.log[0])
+report.run(snakemake.params.models, {name: list(getattr(i, name)) for name in MODEL_FILES}, i.maneuvers,
+           i.tables, i.checked, i.comparison, i.truth[0] if i.truth else None, snakemake.params.config,
+           snakemake.output.html, snakemake.output.verdict)

@@ -1,4 +1,5 @@
-from gyrocal import simulate, steps
+from gyrocal import simulate
+from gyrocal.steps import common
 
-steps.start(snakemake.log[0])
+common.start(snakemake.log[0])
 simulate.run(snakemake.input.scenario, snakemake.output.campaign.rsplit("/", 1)[0], snakemake.params.seed)

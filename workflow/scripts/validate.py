@@ -1,5 +1,5 @@
-from gyrocal import steps
+from gyrocal.steps import common, validate
 
-steps.start(snakemake.log[0])
-with steps.refusal():
-    steps.validate(snakemake.params.campaign_dir, snakemake.output[0])
+common.start(snakemake.log[0])
+with common.refusal():
+    validate.run(snakemake.params.campaign_dir, snakemake.output[0])

@@ -1,0 +1,11 @@
+"""Rule ``classic``: the paper's method over every maneuver."""
+
+from .. import classic, spec
+from ..outputs import write_csv
+from .common import load_maneuvers
+
+
+def run(npz_paths, out_csv):
+    """The paper's method over every maneuver, once per campaign."""
+    maneuvers = load_maneuvers(npz_paths)
+    write_csv(classic.classic_table(maneuvers, spec.baseline(maneuvers[0].channels)), out_csv)

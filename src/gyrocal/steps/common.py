@@ -1,0 +1,61 @@
+"""What every step shares: its process set-up, the refusal of bad input, and small readers."""
+
+import json
+import logging
+import os
+import sys
+import warnings
+from contextlib import contextmanager
+
+from .. import effects, preprocess
+from ..estimate import EstimateError
+from ..telemetry import TelemetryError
+
+log = logging.getLogger("gyrocal")
+
+REFUSED = "gyrocal: the campaign was refused:"
+"""How a step's message about bad input begins, in its log and on the console."""
+
+
+def start(log_path):
+    """Set up a workflow step's process: gyrocal's log and Python's warnings go to the step's
+    log file, and figures render headless (Agg, set before any step imports matplotlib)."""
+    os.environ["MPLBACKEND"] = "Agg"
+    logging.basicConfig(filename=log_path, level=logging.INFO, force=True,
+                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    logging.captureWarnings(True)
+    # arviz 0.23's matplotlib backend calls an API matplotlib 3.11 deprecates; not ours to fix.
+    warnings.filterwarnings("ignore", message="Passing a dict or None as alias_mapping", category=DeprecationWarning)
+
+
+@contextmanager
+def refusal():
+    """Turn bad input (`telemetry.TelemetryError`, `estimate.EstimateError`) into its message on
+    stderr and in the step's log, and exit 1: a user reads what is wrong, not a traceback."""
+    try:
+        yield
+    except (TelemetryError, EstimateError) as exc:
+        log.error("%s\n%s", REFUSED, exc)
+        sys.exit(f"{REFUSED}\n{exc}")
+
+
+def known_effects(plugin_paths) -> dict:
+    """The library's effects and the plugins' (each plugin file loaded once), by name."""
+    return {**effects.LIBRARY, **effects.load_plugins(plugin_paths or [])}
+
+
+def noise_knowledge(info: dict, defaults: dict) -> dict:
+    """The star-tracker and gyro noise knowledge: campaign.yaml (as recorded in
+    ``input.json``) first, then the config's ``noise`` section."""
+    keys = ("sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "arw_deg_sqrt_h")
+    stated = {**info["star_tracker"], **info["gyro"]}
+    return {k: stated.get(k, defaults[k]) for k in keys}
+
+
+def load_maneuvers(npz_paths) -> list:
+    return [preprocess.ManeuverData.load(p) for p in npz_paths]
+
+
+def read_json(path):
+    with open(path) as handle:
+        return json.load(handle)

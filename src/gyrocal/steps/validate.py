@@ -1,0 +1,34 @@
+"""Rule ``validate``: read a campaign, check its format and physics, record ``input.json``."""
+
+import logging
+from dataclasses import asdict
+
+from .. import __version__, consistency, telemetry
+from ..outputs import write_json
+
+log = logging.getLogger("gyrocal")
+
+
+def run(campaign_dir, out_json):
+    """Read the campaign and check its format and physics (`consistency`); record what was
+    read, the warnings, the star-tracker outliers to leave out, its noise knowledge and
+    the files' checksums."""
+    campaign, findings = consistency.read_checked(campaign_dir)
+    log.info("%s", consistency.summary(campaign, findings))
+    write_json({
+        "campaign": campaign.name,
+        "gyrocal_version": __version__,
+        "channels": campaign.channel_names,
+        "extras": list(campaign.extras()),
+        "maneuvers": [m.id for m in campaign.maneuvers],
+        "rows": {"gyro": len(campaign.gyro_time), "star_tracker": len(campaign.st_time),
+                 "star_tracker_invalid": int((campaign.st_valid == 0).sum()),
+                 "star_tracker_outliers": len(findings.outliers),
+                 "star_tracker_renormalised": campaign.st_renormalised},
+        "warnings": findings.warnings,
+        "star_tracker_outliers": [asdict(o) for o in findings.outliers],
+        "mounting": findings.mounting,
+        "star_tracker": campaign.star_tracker,
+        "gyro": campaign.gyro,
+        "checksums_sha256": telemetry.checksums(campaign_dir),
+    }, out_json)
