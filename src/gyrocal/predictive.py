@@ -7,6 +7,7 @@ replicates come from the banded covariance of `noise`.
 """
 
 import numpy as np
+from scipy.linalg import cho_solve_banded, solve_triangular
 
 from .errormodel import Linearization
 from .noise import ManeuverNoise, nuisance_design, variances
@@ -72,16 +73,14 @@ def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dthet
     """(D, n_blocks) ``log p(block | all other data, draw)`` with the nuisance integrated out.
 
     For a Gaussian with precision P, ``log p(y_b | y_-b) = 1/2 log|P_bb| - n_b/2 log 2 pi
-    - 1/2 (P r)_b' P_bb^-1 (P r)_b``; with a flat-prior nuisance G the precision is
-    ``P = Q - QG (G'QG)^-1 G'Q``. Q is the inverse of the undifferenced covariance,
+    - 1/2 (P r)_b' P_bb^-1 (P r)_b``, and ``P r`` is linear in the draw; with a flat-prior
+    nuisance G the precision is ``P = Q - QG (G'QG)^-1 G'Q``. Q is the inverse of the undifferenced covariance,
     ``T' C^-1 T`` with C the banded covariance of the differenced series, so ``Q_bb``
     needs ``C^-1`` over the block and the ``width`` rows after it: `selectedinverse`
     gives those in time linear in the telemetry length. The noise ratios are those
     ``whitened`` was factored at; the scale (sigma_cross^2) is per draw. These are the
     pointwise terms PSIS-LOO needs (one-step-ahead terms are not).
     """
-    from scipy.linalg import cho_solve_banded
-
     chol, noise = whitened.chol, whitened.noise
     width = lin.z.shape[1] * 3
     n, p, g = noise.n, noise.n_params, noise.n_nuisance
@@ -94,8 +93,8 @@ def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dthet
     q_x = q_apply(noise.rhs[:, :p])
     g_und = nuisance_design(lin).reshape(n, g)
     gqg_inv = np.linalg.inv(g_und.T @ q_g)
-    q_r = q_data[:, None] - q_x @ dtheta.T
-    p_r = q_r - q_g @ (gqg_inv @ (g_und.T @ q_r))
+    p_data = q_data - q_g @ (gqg_inv @ (g_und.T @ q_data))
+    p_x = q_x - q_g @ (gqg_inv @ (g_und.T @ q_x))
     n_blocks = block_of_row.max() + 1
     first_row = np.searchsorted(block_of_row, np.arange(n_blocks + 1))
     edges = recursion_bounds(np.unique(first_row), chol.shape[0] - 1)
@@ -108,8 +107,9 @@ def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dthet
             p_bb = q_bb - q_g[rows] @ gqg_inv @ q_g[rows].T
             factor = np.linalg.cholesky(p_bb)
             logdet = 2 * np.sum(np.log(np.diag(factor)))
-            w = np.linalg.solve(factor, p_r[rows])
-            quad = np.sum(w**2, axis=0)
+            w_data = solve_triangular(factor, p_data[rows], lower=True)
+            w_x = solve_triangular(factor, p_x[rows], lower=True)
+            quad = np.sum((w_data[:, None] - w_x @ dtheta.T) ** 2, axis=0)
             out[:, b] = 0.5 * (logdet - (rows.stop - rows.start) * np.log(2 * np.pi * scale)) - 0.5 * quad / scale
     return out
 

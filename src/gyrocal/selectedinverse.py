@@ -18,7 +18,7 @@ inversion, hence this module.
 from itertools import pairwise
 
 import numpy as np
-from scipy.linalg import solve_triangular
+from scipy.linalg.lapack import dlauum, dtrtri
 
 
 def band_block(chol: np.ndarray, rows: slice, cols: slice) -> np.ndarray:
@@ -42,25 +42,37 @@ def recursion_bounds(bounds: np.ndarray, bandwidth: int) -> np.ndarray:
     return np.array(edges + [int(bounds[-1])])
 
 
+def _inverse_factor(chol: np.ndarray, block: slice):
+    """``L[block, block]^-1`` (lower triangular) and ``L^-T L^-1`` over the block (LAPACK trtri, lauum)."""
+    inv, info = dtrtri(band_block(chol, block, block), lower=1)
+    if info != 0:
+        raise np.linalg.LinAlgError(f"triangular inverse failed (info={info})")
+    gram, _ = dlauum(inv, lower=1)
+    gram = np.tril(gram)
+    return inv, gram + np.tril(gram, -1).T
+
+
 def inverse_windows(chol: np.ndarray, bounds: np.ndarray):
     """Yield ``(start, Z)`` per block of ``bounds``, last first: ``Z = C^-1[start:stop, start:stop]``
     over the block and the one after it (``stop`` is the end of that next block, or n).
 
     ``bounds`` are block edges from 0 to n, every block but the last at least the factor's
-    bandwidth long (`recursion_bounds`).
+    bandwidth ``kd`` long (`recursion_bounds`). ``L[k+1, k]`` is then zero but for its
+    top-right ``kd x kd`` corner, which keeps each step at one triangular inverse and one
+    triangular product of the block.
     """
     if bounds[0] != 0 or bounds[-1] != chol.shape[1]:
         raise ValueError(f"block edges must run from 0 to {chol.shape[1]}, got {bounds[0]} to {bounds[-1]}")
+    kd = chol.shape[0] - 1
     blocks = [slice(int(a), int(b)) for a, b in pairwise(bounds)]
-    last = blocks[-1]
-    inv_last = solve_triangular(band_block(chol, last, last), np.eye(last.stop - last.start), lower=True)
-    z_next = inv_last.T @ inv_last
-    yield last.start, z_next
+    _, z_next = _inverse_factor(chol, blocks[-1])
+    yield blocks[-1].start, z_next
     for k in range(len(blocks) - 2, -1, -1):
         here, after = blocks[k], blocks[k + 1]
-        inv_kk = solve_triangular(band_block(chol, here, here), np.eye(here.stop - here.start), lower=True)
-        below = band_block(chol, after, here)
-        z_below = -z_next @ below @ inv_kk
-        z_here = inv_kk.T @ (inv_kk - below.T @ z_below)
+        c = min(kd, after.stop - after.start)
+        inv_kk, z_here = _inverse_factor(chol, here)
+        corner = band_block(chol, slice(after.start, after.start + c), slice(here.stop - kd, here.stop))
+        z_below = -(z_next[:, :c] @ corner) @ inv_kk[-kd:]
+        z_here -= inv_kk[-kd:].T @ (corner.T @ z_below[:c])
         yield here.start, np.block([[z_here, z_below.T], [z_below, z_next]])
         z_next = z_here
