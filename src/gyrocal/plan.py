@@ -84,6 +84,9 @@ def crlb_sd(A: np.ndarray, free: np.ndarray, prior_sd_si: np.ndarray) -> np.ndar
     parameter loads on a direction the data leave uninformed, NaN for prior-only parameters."""
     out = np.full(len(A), np.nan)
     idx = np.flatnonzero(free)
+    if not len(idx) or not np.any(A[np.ix_(idx, idx)]):
+        out[idx] = np.inf
+        return out
     scale = prior_sd_si[idx]
     values, vectors = np.linalg.eigh(A[np.ix_(idx, idx)] * np.outer(scale, scale))
     null = values <= NULL_FRACTION * values.max()
