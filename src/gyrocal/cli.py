@@ -1,4 +1,4 @@
-"""The ``gyrocal`` command: simulate, import or validate a campaign; compare two calibrations."""
+"""The ``gyrocal`` command: simulate, import or validate a campaign; compare two calibrations; plan a campaign."""
 
 import argparse
 import sys
@@ -24,7 +24,14 @@ def main(argv=None):
     cmp_.add_argument("first")
     cmp_.add_argument("second")
     cmp_.add_argument("--z-max", type=float, default=3.0, help="agreement limit on |z| (default 3)")
+    pln = sub.add_parser("plan", help="predict what a planned campaign (a scenario YAML) will tell, before flying it")
+    pln.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="one scenario, or two to compare side by side")
+    pln.add_argument("--out", default=".", help="where plan.csv, plan_detection.csv and plan.png go (default .)")
+    pln.add_argument("--config", default="config/config.yaml", help="gyrocal config (priors, models, thresholds)")
+    pln.add_argument("--model", default="baseline", help="the model variant to plan for (default baseline)")
     args = parser.parse_args(argv)
+    if args.command == "plan" and len(args.scenarios) > 2:
+        parser.error("plan takes one scenario, or two to compare")
 
     from .telemetry import TelemetryError
     try:
@@ -44,6 +51,11 @@ def main(argv=None):
             text, agree = compare_files(args.first, args.second, args.z_max)
             print(text)
             return 0 if agree else 1
+        elif args.command == "plan":
+            import matplotlib
+            matplotlib.use("Agg")
+            from .plan import run
+            print(run(args.scenarios, args.config, args.out, args.model))
     except (TelemetryError, ValueError, FileNotFoundError) as exc:
         print(f"gyrocal {args.command}: error: {exc}", file=sys.stderr)
         return 2

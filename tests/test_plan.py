@@ -1,0 +1,120 @@
+"""`gyrocal plan`: what a planned campaign predicts, against the pipeline's own estimates and tests."""
+
+import copy
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from gyrocal import cli, diagnostics, plan, preprocess, simulate
+from gyrocal.estimate import point_estimate
+from gyrocal.likelihood import Stats
+from gyrocal.spec import baseline
+
+from conftest import DATA, ROOT, truth_vector
+
+CONFIG = ROOT / "config" / "config.yaml"
+
+
+@pytest.fixture(scope="module")
+def cfg():
+    return plan.read_config(CONFIG)
+
+
+def test_predicted_crlb_equals_the_wls_sd_of_a_simulated_campaign_of_the_same_plan(cfg):
+    """The plan's Cramér-Rao bound is the WLS sd the point estimate reports on noisy data of the
+    same plan (stated noise, no REML), although the plan never draws noise."""
+    scenario = simulate.load_scenario(DATA / "tiny.yaml")
+    predicted = plan.plan(scenario, cfg)
+    campaign, truth = simulate.simulate(scenario)
+    maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
+    spec = baseline(campaign.channels)
+    stated = plan.stated_noise(scenario, cfg["noise"])
+    theta0 = spec.core_vector(truth_vector(campaign.channels, truth))
+    est = point_estimate(maneuvers, spec, stated, theta0, estimate_scales=False)
+    assert predicted.spec.labels == est.spec.labels
+    wls_sd = np.sqrt(np.diag(est.cov))
+    np.testing.assert_allclose(predicted.crlb_sd, wls_sd, rtol=0.02)
+    # the prior (5000 ppm, 1000 arcsec) barely narrows what the data say
+    np.testing.assert_allclose(np.sqrt(np.diag(predicted.cov)), predicted.crlb_sd, rtol=1e-3)
+
+
+def test_one_rate_per_direction_cannot_detect_a_rate_squared_scale_factor_two_rates_can(cfg):
+    """onerate_nonlinearity.yaml hides 8000 ppm/(deg/s)^2 behind one rate per direction: the plan says no
+    test can see it (the scale factor takes it); a second rate per direction makes it detectable."""
+    one = simulate.load_scenario(DATA / "onerate_nonlinearity.yaml")
+    two = copy.deepcopy(one)
+    two["maneuvers"] += [{**m, "id": f"{m['id']}_slow", "rate_deg_s": 0.25} for m in one["maneuvers"]]
+    row = {name: p.detection.set_index("effect").loc["sf_nonlinearity"]
+           for name, p in (("one", plan.plan(one, cfg)), ("two", plan.plan(two, cfg)))}
+    assert not row["one"]["detectable"]
+    assert row["one"]["tested_directions"] == 0
+    assert "scale_factor" in row["one"]["why_not"]
+    assert row["two"]["detectable"]
+    assert row["two"]["tested_directions"] == 6
+    assert row["two"]["unit"] == "ppm/(deg/s)^2"
+    assert 100 < row["two"]["detectable_magnitude"] < 8000
+
+
+def test_noncentrality_equals_the_structure_tests_drop_on_noise_free_data_carrying_the_effect():
+    """On data with no noise and the effect at magnitude delta, the diagnostics' score statistic is
+    exactly the noncentrality; a candidate the model's columns span is not tested (0 directions)."""
+    rng = np.random.default_rng(3)
+    X = rng.normal(size=(40, 6))
+    X[:, 5] = X[:, 0] - 2 * X[:, 1] + 1e-6 * rng.normal(size=40)   # spanned by the model's columns
+    A = X.T @ X
+    base, cand = [0, 1, 2], [3, 4, 5]
+    delta = np.array([0.7, -0.4, 0.0])
+    b = A[:, cand] @ delta
+    drop = diagnostics.conditional_drop(Stats(A, b, float(delta @ A[np.ix_(cand, cand)] @ delta), 0.0, 40), base, cand)
+    lam, df = plan.noncentrality(A, base, cand, delta)
+    assert df == 2
+    assert lam == pytest.approx(drop, rel=1e-9)
+    assert plan.noncentrality(A, base, [5], [1.0]) == (0.0, 0)
+
+
+def test_detectable_noncentrality_of_one_column_at_p_1e_minus_6_is_the_normal_quantiles_sum_squared():
+    """One column, p = 1e-6, power 0.9: sqrt(lambda) = z(1 - 0.5e-6) + z(0.9) = 4.8916 + 1.2816."""
+    assert np.sqrt(plan.detectable_noncentrality(1, 1, -6.0)) == pytest.approx(4.8916 + 1.2816, abs=2e-3)
+
+
+def test_a_direction_never_flown_leaves_its_scale_factors_at_their_prior(cfg):
+    scenario = simulate.load_scenario(DATA / "tiny.yaml")
+    scenario["maneuvers"] = [m for m in scenario["maneuvers"] if m["id"] != "pitch_neg"]
+    table = plan.plan(scenario, cfg).table().set_index(["channel", "parameter"])
+    for channel in ("dtg1_pitch", "dtg2_pitch"):
+        assert table.loc[(channel, "sf_neg"), "prior_only"] == "no -pitch maneuver"
+        assert table.loc[(channel, "sf_neg"), "predicted_sd"] == pytest.approx(5000.0)
+        assert table.loc[(channel, "sf_pos"), "predicted_sd"] < 100.0
+
+
+def test_cli_plan_on_the_default_campaign_prints_and_writes_the_tables(tmp_path, capsys):
+    assert cli.main(["plan", str(ROOT / "config" / "scenarios" / "mom.yaml"), "--out", str(tmp_path),
+                     "--config", str(CONFIG)]) == 0
+    printed = capsys.readouterr().out
+    assert "pairs the plan cannot separate" in printed and "sf_nonlinearity" in printed
+    table = pd.read_csv(tmp_path / "plan.csv")
+    assert len(table) == 24 and set(table["unit"]) == {"ppm", "arcsec"}
+    assert table["predicted_sd"].between(1.0, 50.0).all()   # tens of ppm and a few arcsec on MOM
+    detection = pd.read_csv(tmp_path / "plan_detection.csv")
+    assert set(detection["effect"]) == {"bias_drift", "sf_nonlinearity", "st_latency", "st_correlated_noise"}
+    assert (tmp_path / "plan.png").stat().st_size > 0
+
+
+def test_cli_plan_compares_two_plans_side_by_side(tmp_path, capsys):
+    assert cli.main(["plan", str(DATA / "tiny.yaml"), str(DATA / "onerate_nonlinearity.yaml"), "--out", str(tmp_path),
+                     "--config", str(CONFIG)]) == 0
+    printed = capsys.readouterr().out
+    assert "A = tiny, B = onerate_nonlinearity" in printed
+    assert set(pd.read_csv(tmp_path / "plan.csv")["plan"]) == {"tiny", "onerate_nonlinearity"}
+
+
+def test_cli_plan_refuses_a_maneuver_it_cannot_fly_naming_the_file_and_field(tmp_path, capsys):
+    scenario = yaml.safe_load((DATA / "tiny.yaml").read_text())
+    scenario["maneuvers"][2]["direction"] = "both"
+    path = tmp_path / "bad.yaml"
+    path.write_text(yaml.safe_dump(scenario))
+    assert cli.main(["plan", str(path), "--out", str(tmp_path), "--config", str(CONFIG)]) == 2
+    err = capsys.readouterr().err
+    assert f"{path}: maneuvers[2].direction" in err
