@@ -33,9 +33,8 @@ def sampler_figures():
 
     from gyrocal import classic, estimate, inferencedata, posterior, preprocess, simulate, telemetry
     from gyrocal.likelihood import campaign_stats, conditional_posterior
-    from gyrocal.noise import variances
+    from gyrocal.noise import noise_knowledge, variances
     from gyrocal.spec import baseline
-    from gyrocal.steps import common
     from gyrocal.steps import posterior as posterior_step
 
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
@@ -44,7 +43,7 @@ def sampler_figures():
         simulate.run(ROOT / "config/scenarios/mom.yaml", tmp)
         campaign = telemetry.read_campaign(Path(tmp) / "campaign")
     maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
-    stated = common.noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
+    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
     spec = baseline(campaign.channels)
     theta0 = classic.classic_vector(classic.classic_table(maneuvers, spec), spec)
     est = estimate.point_estimate(maneuvers, spec, stated, theta0)

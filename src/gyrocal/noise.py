@@ -56,6 +56,14 @@ def stated_scales(log_sigma) -> dict:
     return {s.key: float(v) for s, v in zip(NOISE_SCALES, scales_in_units(log_sigma))}
 
 
+def noise_knowledge(info: dict, defaults: dict) -> dict:
+    """The star-tracker and gyro noise knowledge: campaign.yaml (as recorded in
+    ``input.json``, or a plan's scenario) first, then the config's ``noise`` section."""
+    keys = ("sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "arw_deg_sqrt_h")
+    stated = {**info["star_tracker"], **info["gyro"]}
+    return {k: stated.get(k, defaults[k]) for k in keys}
+
+
 def variances(log_sigma) -> dict:
     """Noise variances from ``log [sigma_cross_rad, sigma_about_rad, arw_rad_sqrt_s]``."""
     s = np.exp(2.0 * np.asarray(log_sigma, dtype=float))

@@ -59,8 +59,7 @@ def planned_maneuvers(scenario: dict) -> list:
 
 def stated_noise(scenario: dict, noise_defaults: dict) -> dict:
     """The noise knowledge a run would be given: the scenario's, as its campaign.yaml states it."""
-    from .steps import noise_knowledge
-    return noise_knowledge({"star_tracker": scenario["star_tracker"], "gyro": scenario["gyro"]}, noise_defaults)
+    return noise.noise_knowledge({"star_tracker": scenario["star_tracker"], "gyro": scenario["gyro"]}, noise_defaults)
 
 
 def information(maneuvers, spec: ModelSpec, stated: dict) -> Stats:

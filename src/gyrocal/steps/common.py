@@ -44,14 +44,6 @@ def known_effects(plugin_paths) -> dict:
     return {**effects.LIBRARY, **effects.load_plugins(plugin_paths or [])}
 
 
-def noise_knowledge(info: dict, defaults: dict) -> dict:
-    """The star-tracker and gyro noise knowledge: campaign.yaml (as recorded in
-    ``input.json``) first, then the config's ``noise`` section."""
-    keys = ("sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "arw_deg_sqrt_h")
-    stated = {**info["star_tracker"], **info["gyro"]}
-    return {k: stated.get(k, defaults[k]) for k in keys}
-
-
 def load_maneuvers(npz_paths) -> list:
     return [preprocess.ManeuverData.load(p) for p in npz_paths]
 

@@ -6,10 +6,10 @@ import pandas as pd
 
 from .. import classic, effects
 from ..estimate import point_estimate
-from ..noise import stated_scales
+from ..noise import noise_knowledge, stated_scales
 from ..outputs import write_with
 from ..spec import ModelSpec
-from .common import load_maneuvers, noise_knowledge, read_json
+from .common import load_maneuvers, read_json
 
 log = logging.getLogger("gyrocal")
 
