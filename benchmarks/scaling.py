@@ -1,0 +1,90 @@
+"""Cost against telemetry length: prints figures, asserts nothing.
+
+    python benchmarks/scaling.py [--factors 1 2 4 8]
+
+The default MOM-like scenario is flown k times over (its six maneuvers repeated, each copy
+its own maneuver), so the campaign holds k times the samples at the same rates. Each
+stage of the pipeline runs through the library in this one process, and its wall time
+is printed per k with its ratio to k = 1 and the log-log slope between the smallest and
+largest k (1 is linear). The sampler runs a fixed number of steps, so its figure is the
+cost per step; the leave-one-block-out log-likelihood (PSIS-LOO's pointwise terms) is
+timed on its own, since it was the one stage whose cost grew with the square of the length.
+"""
+
+import argparse
+import copy
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def repeated(scenario: dict, k: int) -> dict:
+    """The scenario's maneuvers flown ``k`` times, in order, each copy with its own id."""
+    out = copy.deepcopy(scenario)
+    out["maneuvers"] = [{**m, "id": f"{m['id']}_{i}"} for i in range(k) for m in scenario["maneuvers"]]
+    return out
+
+
+def stage_times(scenario: dict, cfg: dict) -> dict:
+    from gyrocal import classic, consistency, inferencedata, posterior, preprocess, simulate
+    from gyrocal.estimate import linearize_all, point_estimate
+    from gyrocal.noise import noise_knowledge
+    from gyrocal.spec import baseline
+    from gyrocal.steps.posterior import model_priors
+
+    times = {}
+
+    def timed(name, call):
+        start = time.perf_counter()
+        out = call()
+        times[name] = time.perf_counter() - start
+        return out
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "scenario.yaml"
+        path.write_text(yaml.safe_dump(scenario))
+        timed("simulate (and write)", lambda: simulate.run(path, tmp))
+        campaign, _ = timed("validate (read and check)", lambda: consistency.read_checked(Path(tmp) / "campaign"))
+    maneuvers = timed("preprocess", lambda: [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers])
+    spec = baseline(campaign.channels)
+    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
+    theta0 = timed("classic", lambda: classic.classic_vector(classic.classic_table(maneuvers, spec), spec))
+    est = timed("point estimate (REML + WLS)", lambda: point_estimate(maneuvers, spec, stated, theta0))
+    priors = model_priors(est, cfg["priors"])
+    sampler_cfg = {**cfg["sampler"], "initial_steps": 100, "min_tau_multiple": 0, "max_steps": 100}
+    post = timed("posterior: grid + 400 burn-in + 100 steps", lambda: posterior.sample(
+        maneuvers, est, priors, sampler_cfg, cfg["grid"], cfg["seed"]))
+    lins, noises = linearize_all(maneuvers, est)
+    draws = post.ensemble_draws()[:, :: max(1, post.ensemble_draws().shape[1] // 250)]
+    timed("posterior: LOO log-likelihood, 1000 draws", lambda: inferencedata._fit_and_predictive(
+        post, maneuvers, draws, cfg["sampler"], cfg["seed"]))
+    return times, sum(len(d.st_time) for d in maneuvers)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--factors", type=int, nargs="+", default=[1, 2, 4, 8])
+    args = parser.parse_args()
+    cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
+    from gyrocal.simulate import load_scenario
+    scenario = load_scenario(ROOT / "config/scenarios/mom.yaml")
+    rows = {}
+    for k in args.factors:
+        rows[k] = stage_times(repeated(scenario, k), cfg)
+        print(f"k={k}: {rows[k][1]} star-tracker samples, {sum(rows[k][0].values()):.1f} s in all", flush=True)
+    first, last = args.factors[0], args.factors[-1]
+    print(f"\n{'stage':45s}" + "".join(f"{f'{k}x (s)':>10s}" for k in args.factors) + f"{'ratio':>8s}{'slope':>7s}")
+    for stage in rows[first][0]:
+        t = [rows[k][0][stage] for k in args.factors]
+        slope = np.log(t[-1] / t[0]) / np.log(last / first)
+        print(f"{stage:45s}" + "".join(f"{v:10.2f}" for v in t) + f"{t[-1] / t[0]:8.1f}{slope:7.2f}")
+    print(f"\nratio: time at {last}x over time at {first}x; slope: log-log, 1 = linear in the telemetry length")
+
+
+if __name__ == "__main__":
+    main()
