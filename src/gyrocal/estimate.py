@@ -80,11 +80,11 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
 
     Unknowns: the model's parameters, and per maneuver the initial attitude error and
     the bias of each channel. Each maneuver's unknowns touch only its own rows, so the
-    Jacobian is sparse and the trust-region steps come from LSMR (solved to 1e-12, so
-    they are the dense solver's steps, in as many iterations): the cost grows linearly
-    with the number of maneuvers, where a dense Jacobian's SVD grows with its cube.
-    The exact nonlinear model is re-propagated at every step;
-    weights come from the banded noise covariance (star tracker across and about its
+    Jacobian is sparse and the trust-region steps come from LSMR, solved to 1e-12 so that
+    its Gauss-Newton directions are exact (as many iterations as the dense solver here):
+    the cost grows linearly with the number of maneuvers, where a dense Jacobian's SVD
+    grows with its cube. The exact nonlinear model is re-propagated at every step; weights
+    come from the banded noise covariance (star tracker across and about its
     boresight, gyro random walk). Prior-only parameters stay at ``theta0``; their rows of
     the covariance are NaN.
     """
