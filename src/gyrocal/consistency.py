@@ -257,7 +257,7 @@ def _diagnose(campaign, sensed: Sensed, a, sf_bound, mis_bound) -> str:
         if _consistent(d_gyro / factor, d_st, dt, a, sf_bound, mis_bound):
             return f"the gyro rotation is {scale:.4g} times the star tracker's: {cause}"
     i0 = int(np.searchsorted(campaign.gyro_time, data.gyro_time[0]))
-    raw = campaign.increments()[i0:i0 + len(data.gyro_time)]
+    raw = campaign.increments(slice(i0, i0 + len(data.gyro_time)))
     differenced = _gyro_at_st(data, _body_increments(data, np.diff(raw, axis=0)))
     if _consistent(differenced, d_st, dt, a, sf_bound, mis_bound):
         return ("the gyro columns hold a cumulative angle, not the increment since the previous row: "

@@ -78,7 +78,9 @@ class ManeuverData:
 
 def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=()) -> ManeuverData:
     """Cut one maneuver out of a campaign; invalid star-tracker samples and the outliers
-    (at ``outlier_times_s``, as `consistency` lists them) are counted, not used."""
+    (at ``outlier_times_s``, as `consistency` lists them) are counted, not used. Only the
+    maneuver's rows are copied or rotated (the start attitude interpolates the two valid
+    samples around it), so cutting every maneuver costs the campaign's length once."""
     m = campaign.maneuver(maneuver_id)
     g = campaign.gyro_time
     i0 = int(np.searchsorted(g, m.t_start, side="left"))
@@ -93,8 +95,9 @@ def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=()) -> 
     if g[i0] < campaign.st_time[st_idx[0]] or g[i0] > campaign.st_time[st_idx[-1]]:
         raise TelemetryError(f"{campaign.source}/star_tracker.csv: no valid sample brackets the start "
                              f"of maneuver {m.id} at {g[i0]} s")
-    slerp = Slerp(campaign.st_time[st_idx], Rotation.from_quat(campaign.st_quat[st_idx]))
-    attitude0 = slerp([g[i0]])[0]
+    k = int(np.clip(np.searchsorted(campaign.st_time[st_idx], g[i0], side="right") - 1, 0, max(len(st_idx) - 2, 0)))
+    keys = st_idx[k:k + 2]
+    attitude0 = Slerp(campaign.st_time[keys], Rotation.from_quat(campaign.st_quat[keys]))([g[i0]])[0]
     st_time = campaign.st_time[usable]
     quat = campaign.st_quat[usable]
     if len(st_time) < 10:
@@ -105,7 +108,7 @@ def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=()) -> 
               "st_outliers": int((in_window & outlier).sum()),
               "st_used": int(usable.sum()), "gyro_read": int(i1 - i0 + 1), "gyro_used": int(i1 - i0)}
     return ManeuverData(m.id, m.axis, m.direction, campaign.channels, m.in_loop, g[i0:i1 + 1].copy(),
-                        campaign.increments()[i0 + 1:i1 + 1], st_time, quat, attitude0.as_quat(),
+                        campaign.increments(slice(i0 + 1, i1 + 1)), st_time, quat, attitude0.as_quat(),
                         extras, counts)
 
 

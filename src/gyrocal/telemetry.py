@@ -84,9 +84,9 @@ class Campaign:
     def channel_names(self) -> list:
         return [c.name for c in self.channels]
 
-    def increments(self) -> np.ndarray:
-        """(N, n_channels) raw incremental angles (rad), in channel order."""
-        return np.column_stack([self.gyro_columns[c.name] for c in self.channels])
+    def increments(self, rows=slice(None)) -> np.ndarray:
+        """(N, n_channels) raw incremental angles (rad) of ``rows``, in channel order."""
+        return np.column_stack([self.gyro_columns[c.name][rows] for c in self.channels])
 
     def extras(self) -> dict:
         """Extra ``gyro.csv`` columns (e.g. temperatures): candidate regressors."""
