@@ -92,17 +92,19 @@ class Campaign:
 
 def prepare(name: str, cfg: dict) -> Campaign:
     """Simulate the scenario, slice its maneuvers and compute gyrocal's WLS point estimate."""
-    from gyrocal import classic, estimate, preprocess, simulate, steps, telemetry
+    from gyrocal import classic, estimate, preprocess, simulate, telemetry
+    from gyrocal.noise import noise_knowledge
     from gyrocal.spec import baseline
+    from gyrocal.steps.posterior import model_priors
     with tempfile.TemporaryDirectory() as tmp:
         simulate.run(SCENARIOS[name], tmp)
         campaign = telemetry.read_campaign(Path(tmp) / "campaign")
     maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
-    stated = steps.noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
+    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
     spec = baseline(campaign.channels)
     theta0 = classic.classic_vector(classic.classic_table(maneuvers, spec), spec)
     est = estimate.point_estimate(maneuvers, spec, stated, theta0)
-    return Campaign(name, maneuvers, stated, est, steps.model_priors(est, cfg["priors"]))
+    return Campaign(name, maneuvers, stated, est, model_priors(est, cfg["priors"]))
 
 
 # --- gyrocal -------------------------------------------------------------------------------
