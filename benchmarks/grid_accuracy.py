@@ -1,0 +1,64 @@
+"""How coarse the noise-ratio grid can be: prints figures, asserts nothing.
+
+    python benchmarks/grid_accuracy.py
+
+On the default MOM-like campaign (simulated, preprocessed, WLS for the baseline model), the
+posterior's log-likelihood from the grid's cubic interpolation (`posterior.RatioGrid`) is
+compared with the exact one (`likelihood.campaign_stats` at that point) at 40 noise ratios
+within 2 of their sd, at the point estimate and at a parameter offset drawn from twice the
+posterior's spread. Printed per grid (nodes per side, half width in sd): its build time,
+and the largest error in log-likelihood units. The sampler's accept decisions compare
+log densities, so an error far below 1 changes nothing but rounding.
+"""
+
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+GRIDS = [(11, 7.0), (9, 7.0), (7, 8.0), (5, 8.0)]
+
+
+def main():
+    from gyrocal import classic, posterior, preprocess, simulate, telemetry
+    from gyrocal.estimate import linearize_all, point_estimate
+    from gyrocal.likelihood import campaign_stats
+    from gyrocal.noise import noise_knowledge, variances
+    from gyrocal.spec import baseline
+    from gyrocal.steps.posterior import model_priors
+
+    cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
+    with tempfile.TemporaryDirectory() as tmp:
+        simulate.run(ROOT / "config/scenarios/mom.yaml", tmp)
+        campaign = telemetry.read_campaign(Path(tmp) / "campaign")
+    maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
+    spec = baseline(campaign.channels)
+    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
+    est = point_estimate(maneuvers, spec, stated, classic.classic_vector(classic.classic_table(maneuvers, spec), spec))
+    priors = model_priors(est, cfg["priors"])
+    _, noises = linearize_all(maneuvers, est)
+    ratios = est.log_sigma[1:] - est.log_sigma[0]
+    ratio_sd = posterior.ratio_curvature(noises, ratios, np.sqrt(2.0) * priors.log_sigma_sd[0])
+    scale = np.exp(2 * est.log_sigma[0])
+    rng = np.random.default_rng(0)
+    points = ratios + ratio_sd * rng.uniform(-2, 2, (40, 2))
+    exact = [campaign_stats(noises, variances([0.0, r[0], r[1]])) for r in points]
+    offset = 2 * rng.multivariate_normal(np.zeros(len(spec)), np.linalg.inv(exact[0].A) * scale)
+    print(f"noise ratios {ratios.round(3)}, their sd {ratio_sd.round(4)}; errors in log-likelihood units")
+    for nodes, half_width in GRIDS:
+        start = time.perf_counter()
+        grid = posterior.RatioGrid(noises, ratios, ratio_sd, nodes, half_width)
+        build_s = time.perf_counter() - start
+        A, b, c, logdet, inside = grid.stats(points)
+        errors = [abs(0.5 * ((x @ A[k] @ x - 2 * b[k] @ x + c[k]) - (x @ s.A @ x - 2 * s.b @ x + s.c)) / scale
+                      + 0.5 * (logdet[k] - s.logdet))
+                  for k, s in enumerate(exact) for x in (np.zeros(len(spec)), offset)]
+        print(f"{nodes:2d} x {nodes:2d} nodes over +-{half_width:g} sd: built in {build_s:5.2f} s, "
+              f"inside {inside.mean():.0%}, largest error {max(errors):.2e}")
+
+
+if __name__ == "__main__":
+    main()
