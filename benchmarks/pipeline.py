@@ -2,7 +2,9 @@
 
     python benchmarks/pipeline.py
 
-1. wall time of the default ``snakemake --cores 2`` from an empty results directory;
+1. wall time of the default ``snakemake --cores 2`` from an empty results directory, and
+   per rule (from the benchmark file Snakemake writes beside each job's log): jobs, the
+   wall seconds of its slowest job and of all its jobs, and the largest peak memory;
 2. log-probability evaluations per second (vectorised over the walkers);
 3. effective samples per second of the slowest parameter (the sampling step alone).
 """
@@ -20,12 +22,21 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 
-def snakemake_wall_s() -> float:
+def snakemake_run():
+    """Wall seconds of the default run in an empty directory, and its per-rule table."""
+    import pandas as pd
+
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
         subprocess.run([sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--cores", "2",
                         "-d", tmp, "-q"], check=True, capture_output=True)
-        return time.perf_counter() - start
+        wall = time.perf_counter() - start
+        jobs = [pd.read_csv(f, sep="\t").assign(rule=f.name.split(".")[0] if f.parent.name != "preprocess"
+                                                  else "preprocess")
+                for f in sorted(Path(tmp, "logs").rglob("*.benchmark.tsv"))]
+    table = pd.concat(jobs).groupby("rule").agg(jobs=("s", "size"), slowest_s=("s", "max"), all_jobs_s=("s", "sum"),
+                                                peak_mb=("max_rss", "max"))
+    return wall, table.sort_values("slowest_s", ascending=False).round(2)
 
 
 def sampler_figures():
@@ -68,9 +79,10 @@ def sampler_figures():
 
 
 def main():
-    wall = snakemake_wall_s()
+    wall, rules = snakemake_run()
+    print(f"default snakemake --cores 2, empty results: {wall:8.1f} s wall; per rule:")
+    print(rules.to_string())
     evals, ess, sampling_s, result = sampler_figures()
-    print(f"default snakemake --cores 2, empty results: {wall:8.1f} s wall")
     print(f"log-probability evaluations per second:     {evals:8.0f} (batches of 64 walkers)")
     print(f"sampling step:                              {sampling_s:8.1f} s "
           f"({result.steps} steps x {result.walkers} walkers x {result.chains.shape[0]} ensembles)")

@@ -11,6 +11,8 @@ import base64
 import html
 import io
 import json
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 import pandas as pd
@@ -28,6 +30,21 @@ def embed(fig) -> str:
     fig.savefig(buffer, format="png", dpi=80, pil_kwargs={"compress_level": 3})  # zlib 3: 28 % faster, 8 % larger
     plots.plt.close(fig)
     return f'<img alt="figure" src="data:image/png;base64,{base64.b64encode(buffer.getvalue()).decode()}">'
+
+
+def _draw(job) -> str:
+    figure, args = job
+    return embed(getattr(plots, figure)(*args))
+
+
+def draw_all(jobs, processes: int = 1) -> list:
+    """``embed`` of each ``(plots function name, its arguments)``, in order. Drawing is most of the
+    report's time and each figure is independent, so with ``processes > 1`` they are drawn by
+    that many worker processes; the PNG bytes are the same either way."""
+    if processes <= 1 or len(jobs) < 2:
+        return [_draw(job) for job in jobs]
+    with ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("fork")) as pool:
+        return list(pool.map(_draw, jobs))
 
 
 def _table(frame: pd.DataFrame, table_id=None, classes="") -> str:
@@ -171,11 +188,12 @@ def verdict_checks(calibration, spec, sampler, diagnostics, effect_table, rcfg, 
 
 
 def build_context(model, maneuvers, tables, est, diagnostics, sampler, correction_doc, correction_path, fit, idata,
-                  comparison, info, truth, cfg, calibrations) -> dict:
+                  comparison, info, truth, cfg, calibrations, processes: int = 1) -> dict:
     """Everything `render` shows, from what the report step read: the reviewed model's
     files, the campaign's maneuvers and preprocess tables (same order), ``input.json``
     (``info``), the simulation's truth (or None), the whole config and every model's
-    ``calibration.csv`` (the reviewed one's, and the others' for the model-sensitivity check)."""
+    ``calibration.csv`` (the reviewed one's, and the others' for the model-sensitivity check).
+    Figures are drawn by ``processes`` processes (`draw_all`)."""
     calibration = calibrations[model]
     spec, channels = est.spec, est.spec.channels
     params = [posterior_mean_params(spec, calibration, est.biases[m]) for m in range(len(maneuvers))]
@@ -189,13 +207,16 @@ def build_context(model, maneuvers, tables, est, diagnostics, sampler, correctio
     checks += [modelchoice.plausibility_check(classified),
                modelchoice.sensitivity_check(classified, calibrations, core_labels, cfg["model_choice"]["agree_sd"],
                                              width_limits(cfg["report"], spec))]
-    figures = {}
+    jobs = []
     for data, table in zip(maneuvers, tables):
         own = fit[(fit["maneuver"] == data.id) & (fit["set"] == 0)]
-        figures[data.id] = (embed(plots.maneuver_figure(table, f"{data.id}: model {model}, in-loop set", own))
-                            + embed(plots.residual_figure(fit[fit["maneuver"] == data.id], data.id)))
-    posterior_figs = "".join(embed(plots.pair_figure(idata, c.name)) for c in channels)
-    posterior_figs += embed(plots.trace_figure(idata, calibration))
+        jobs += [("maneuver_figure", (table, f"{data.id}: model {model}, in-loop set", own)),
+                 ("residual_figure", (fit[fit["maneuver"] == data.id], data.id))]
+    jobs += [("pair_figure", (idata, c.name)) for c in channels]
+    jobs += [("trace_figure", (idata, calibration)), ("comparison_figure", (comparison,))]
+    drawn = draw_all(jobs, processes)
+    figures = {d.id: drawn[2 * m] + drawn[2 * m + 1] for m, d in enumerate(maneuvers)}
+    posterior_figs = "".join(drawn[2 * len(maneuvers):-1])
     convergence = calibration[["channel", "parameter", "unit", "mean", "sd", "r_hat", "ess_bulk"]].round(
         {"mean": 2, "sd": 2, "r_hat": 4, "ess_bulk": 0})
     accounting = pd.DataFrame([{"maneuver": d.id, **d.counts} for d in maneuvers])
@@ -209,7 +230,7 @@ def build_context(model, maneuvers, tables, est, diagnostics, sampler, correctio
         "tables": paper_tables(calibration, channels, maneuvers[0].sets[0], truth),
         "maneuver_figures": figures, "posterior_figures": posterior_figs, "convergence": convergence,
         "diagnostics": diagnostics, "comparison": comparison.round(3),
-        "comparison_figure": embed(plots.comparison_figure(comparison)),
+        "comparison_figure": drawn[-1],
         "correction": correction_doc, "correction_path": str(correction_path),
         "effect_table": effect_table.drop(columns=["before norm", "after norm"]).assign(
             **{"before norm (arcsec)": effect_table["before norm"].round(1),

@@ -1,6 +1,7 @@
 rule report:
     """The pre-uplink review: verdict, the paper's tables with intervals, fits, correction.
-    It shows the whole config, so it alone takes all of it."""
+    It shows the whole config, so it alone takes all of it. Its figures are drawn in
+    parallel: it ends the run, when nothing else is left to use the cores."""
     input:
         unpack(report_model_files),
         maneuvers=maneuver_files("npz"),
@@ -14,6 +15,7 @@ rule report:
     params:
         config=section(),
         models=MODELS,
+    threads: 2
     conda:
         "../envs/gyrocal.yaml"
     log:
