@@ -18,16 +18,17 @@ inversion, hence this module.
 from itertools import pairwise
 
 import numpy as np
-from scipy.linalg.lapack import dlauum, dtrtri
+from scipy.linalg.lapack import dtrtri
 
 
 def band_block(chol: np.ndarray, rows: slice, cols: slice) -> np.ndarray:
-    """Dense ``L[rows, cols]`` of a lower band-stored factor (``chol[d, j] = L[j + d, j]``)."""
-    i = np.arange(rows.start, rows.stop)[:, None]
-    j = np.arange(cols.start, cols.stop)[None, :]
-    d = i - j
-    inside = (d >= 0) & (d < chol.shape[0])
-    return np.where(inside, chol[np.clip(d, 0, chol.shape[0] - 1), j], 0.0)
+    """Dense ``L[rows, cols]`` of a lower band-stored factor (``chol[d, j] = L[j + d, j]``),
+    filled one stored diagonal at a time."""
+    out = np.zeros((rows.stop - rows.start, cols.stop - cols.start))
+    for d in range(chol.shape[0]):
+        j = np.arange(max(cols.start, rows.start - d), min(cols.stop, rows.stop - d))
+        out[j + d - rows.start, j - cols.start] = chol[d, j]
+    return out
 
 
 def recursion_bounds(bounds: np.ndarray, bandwidth: int) -> np.ndarray:
@@ -43,13 +44,11 @@ def recursion_bounds(bounds: np.ndarray, bandwidth: int) -> np.ndarray:
 
 
 def _inverse_factor(chol: np.ndarray, block: slice):
-    """``L[block, block]^-1`` (lower triangular) and ``L^-T L^-1`` over the block (LAPACK trtri, lauum)."""
+    """``L[block, block]^-1`` (lower triangular, LAPACK trtri) and ``L^-T L^-1`` over the block."""
     inv, info = dtrtri(band_block(chol, block, block), lower=1)
     if info != 0:
         raise np.linalg.LinAlgError(f"triangular inverse failed (info={info})")
-    gram, _ = dlauum(inv, lower=1)
-    gram = np.tril(gram)
-    return inv, gram + np.tril(gram, -1).T
+    return inv, inv.T @ inv
 
 
 def inverse_windows(chol: np.ndarray, bounds: np.ndarray):
@@ -59,7 +58,7 @@ def inverse_windows(chol: np.ndarray, bounds: np.ndarray):
     ``bounds`` are block edges from 0 to n, every block but the last at least the factor's
     bandwidth ``kd`` long (`recursion_bounds`). ``L[k+1, k]`` is then zero but for its
     top-right ``kd x kd`` corner, which keeps each step at one triangular inverse and one
-    triangular product of the block.
+    product of the block.
     """
     if bounds[0] != 0 or bounds[-1] != chol.shape[1]:
         raise ValueError(f"block edges must run from 0 to {chol.shape[1]}, got {bounds[0]} to {bounds[-1]}")
