@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.spatial.transform import Rotation
-from scipy.stats import chi2
+from scipy.special import chdtr, chdtri, gammaincinv
 
 from . import channels as ch
 from . import classic, preprocess
@@ -406,6 +406,12 @@ def clock_findings(sensed: Sensed, findings: Findings):
             "a latency or clock offset the baseline model lacks (the library effect st_latency has it)")
 
 
+def chi2_quantile(q, df):
+    """The chi-square quantile as `scipy.stats.chi2.ppf` computes it, from `scipy.special`: validate
+    and each preprocess job are processes of their own, and scipy.stats costs 0.3 s to import."""
+    return 2 * gammaincinv(df / 2, q)
+
+
 def neighbour_residual(x, reach=OUTLIER_REACH) -> np.ndarray:
     """Each row of ``x`` (M, p) minus the median of its neighbours' linear interpolations
     ``(x[k-j] + x[k+j]) / 2``, j = 1..reach: zero on any straight line, and a kink leaves only
@@ -441,7 +447,7 @@ def outlier_distances(sensed: Sensed):
                                                 cumulative_at_st(body * np.abs(rate), k, frac)], axis=1))
     inside = np.ones(len(err), dtype=bool)
     inside[[0, -1]] = False
-    cut = chi2.ppf(0.999, 3)
+    cut = chi2_quantile(0.999, 3)
     for _ in range(3):
         coef, *_ = np.linalg.lstsq(motion[inside], err[inside], rcond=None)
         resid = err - motion @ coef
@@ -457,8 +463,8 @@ def robust_covariance(x, iterations=5, quantile=0.99) -> np.ndarray:
     p = x.shape[1]
     scale = 1.4826 * np.median(np.abs(x - np.median(x, axis=0)), axis=0) + 1e-15
     cov = np.diag(scale**2)
-    cut = chi2.ppf(quantile, p)
-    factor = chi2.cdf(cut, p + 2) / chi2.cdf(cut, p)
+    cut = chi2_quantile(quantile, p)
+    factor = chdtr(p + 2, cut) / chdtr(p, cut)
     for _ in range(iterations):
         d2 = np.einsum("mi,ij,mj->m", x, np.linalg.pinv(cov), x)
         inside = x[d2 < cut]
@@ -494,7 +500,7 @@ def check(campaign: Campaign) -> Findings:
                                      "fit does)")
         screened.append((data, *outlier_distances(sensed)))
     n_total = sum(len(d2) for _, _, d2 in screened)
-    threshold = chi2.isf(OUTLIER_FALSE_ALARMS / max(n_total, 1), 3)
+    threshold = chdtri(3, OUTLIER_FALSE_ALARMS / max(n_total, 1))
     for data, resid, d2 in screened:
         lines = campaign.lines["star_tracker.csv"][np.searchsorted(campaign.st_time, data.st_time)]
         beyond = d2 > threshold
