@@ -2,6 +2,7 @@
 campaigns pass, with what was found counted; nothing unidentified drags what is identified."""
 
 import json
+import types
 
 import numpy as np
 import pandas as pd
@@ -239,3 +240,36 @@ def test_a_noise_no_sensor_can_have_stops_before_sampling_with_the_residuals(tin
     check_noise([preprocess.ManeuverData.load(p) for p in npz], est)
     with pytest.raises(EstimateError, match=r"sigma_cross_arcsec .* \(stated 5\).*RMS about roll, pitch, yaw"):
         check_noise([preprocess.ManeuverData.load(p) for p in npz], collapsed)
+
+
+def sensed_turn(clip_rad_s=None, seed=0):
+    """A 200 s turn about roll at 0.5 rad/s (gyro at 10 Hz, reference at 1 Hz with 1e-4 rad
+    noise), the gyro's roll rate clipped at ``clip_rad_s``; pitch and yaw only a slow limit cycle,
+    whose peaks the gyro holds for many samples, far below the reference's noise."""
+    rng = np.random.default_rng(seed)
+    gyro_time = np.arange(0, 200.05, 0.1)
+    true = np.zeros((len(gyro_time) - 1, 3))
+    true[:, 0] = 0.5 * 0.1
+    true[:, 1:] = 5e-6 * 0.1 * np.sin(2 * np.pi * gyro_time[1:, None] / [90.0, 130.0] + rng.uniform(0, 6, 2))
+    body = true.copy()
+    if clip_rad_s is not None:
+        body[:, 0] = np.minimum(body[:, 0], clip_rad_s * 0.1)
+    st_time = gyro_time[::10]
+    data = types.SimpleNamespace(id="roll_pos", dt=np.diff(gyro_time), gyro_time=gyro_time, st_time=st_time,
+                                 st_interval=lambda: (np.clip(np.searchsorted(gyro_time, st_time) - 1, 0, None), None))
+    d_gyro = body.reshape(-1, 10, 3).sum(axis=1)
+    d_st = true.reshape(-1, 10, 3).sum(axis=1) + rng.normal(0, 1e-4, (len(st_time) - 1, 3))
+    return consistency.Sensed(data, body, d_gyro, d_st, np.diff(st_time))
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_saturation_is_not_called_on_an_axis_that_only_sees_noise(seed):
+    findings = consistency.Findings()
+    assert not consistency.saturation_findings(sensed_turn(seed=seed), 0.02, findings)
+    assert findings.errors == []
+
+
+def test_a_gyro_clipped_below_the_turn_rate_is_refused_with_its_count():
+    findings = consistency.Findings()
+    assert consistency.saturation_findings(sensed_turn(clip_rad_s=0.4), 0.02, findings)
+    assert "2000 gyro samples about roll" in findings.errors[0] and "1.250 times as fast" in findings.errors[0]

@@ -276,19 +276,24 @@ CLIP_BAND = 0.05
 
 def saturation_findings(sensed: Sensed, sf_bound, findings: Findings) -> bool:
     """A gyro that reaches its range clips: where its rate sits near its peak, the reference turns
-    faster than the gyro says, by more than any scale error. Such a maneuver is refused, with
-    the count of clipped samples; it is never fitted silently. Returns whether it clipped."""
+    faster than the gyro says, in the gyro's direction, by more than any scale error and more
+    than `DETECTION_SD` times the reference's noise over those samples (on an axis that barely
+    turns, the "peak" is noise). Such a maneuver is refused, with the count of clipped samples;
+    it is never fitted silently. Returns whether it clipped."""
     data = sensed.data
     rate = np.abs(sensed.body / data.dt[:, None])
-    d_gyro, d_st = np.abs(sensed.d_gyro), np.abs(sensed.d_st)
     at_st = rate[data.st_interval()[0][1:]]
     for a in range(3):
         peak = rate[:, a].max()
         near = at_st[:, a] >= (1 - CLIP_BAND) * peak
-        if near.sum() < 5 or d_gyro[near, a].sum() == 0:
+        turned_gyro = np.abs(sensed.d_gyro[near, a]).sum()
+        if near.sum() < 5 or turned_gyro == 0:
             continue
-        excess = d_st[near, a].sum() / d_gyro[near, a].sum()
-        if excess > 1 + 2 * sf_bound:
+        turned_st = np.sum(np.sign(sensed.d_gyro[near, a]) * sensed.d_st[near, a])
+        noise = 1.4826 * np.median(np.abs(np.diff(sensed.d_st[:, a]))) / np.sqrt(2)
+        excess = turned_st / turned_gyro
+        shortfall = turned_st - (1 + 2 * sf_bound) * turned_gyro
+        if shortfall > DETECTION_SD * noise * np.sqrt(near.sum()):
             clipped = int((rate[:, a] >= (1 - CLIP_BAND) * peak).sum())
             findings.errors.append(
                 f"maneuver {data.id}: {clipped} gyro samples about {AXES[a]} sit within {CLIP_BAND:.0%} of the peak "
