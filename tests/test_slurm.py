@@ -1,0 +1,107 @@
+"""A fleet through Slurm with profiles/slurm gives the same numbers as the same fleet run locally.
+
+Needs a Slurm with an idle node and snakemake-executor-plugin-slurm (pip install -e '.[cluster]'):
+
+    bash cluster/slurm-single-node.sh && python -m pytest -m slurm -s
+
+Marked `slurm`, so the default run leaves it out; it skips, saying why, where there is no Slurm.
+"""
+
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+import pytest
+
+from conftest import ROOT
+
+pytestmark = pytest.mark.slurm
+
+SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile")]
+NAMES = ("sat_a", "sat_b", "sat_c")
+# Shorter chains than the default config's: the comparison is of numbers, not of convergence.
+FAST = """\
+sampler: {walkers: 16, burn_steps: 50, initial_steps: 50, chunk_steps: 50, min_tau_multiple: 1, max_steps: 100,
+          loglik_draws: 20, predictive_draws: 10}
+"""
+
+
+def _slurm_missing():
+    """Why this machine cannot run the test, or None."""
+    if shutil.which("sinfo") is None or shutil.which("sbatch") is None:
+        return "no Slurm client (sinfo, sbatch): start one with `bash cluster/slurm-single-node.sh`"
+    try:
+        import snakemake_executor_plugin_slurm  # noqa: F401
+    except ImportError:
+        return "snakemake-executor-plugin-slurm is not installed: pip install -e '.[cluster]'"
+    run = subprocess.run(["sinfo", "-h", "-t", "idle,mixed", "-o", "%n"], capture_output=True, text=True, check=False)
+    if run.returncode != 0:
+        return f"sinfo failed (is slurmctld running?): {run.stderr.strip()}"
+    if not run.stdout.strip():
+        return "no Slurm node is idle: " + subprocess.run(["sinfo"], capture_output=True, text=True, check=False).stdout
+    return None
+
+
+def _status_command():
+    """The plugin queries job states with sacct, which needs accounting (slurmdbd); without it, squeue."""
+    run = subprocess.run(["sacct", "-n", "-X", "-o", "JobID"], capture_output=True, text=True, check=False)
+    return [] if run.returncode == 0 else ["--slurm-status-command", "squeue"]
+
+
+@pytest.fixture(scope="module")
+def fleet(tiny, tmp_path_factory):
+    """Three copies of the tiny campaign under three names, and the speed-up config."""
+    root = tmp_path_factory.mktemp("slurm_fleet")
+    for name in NAMES:
+        shutil.copytree(tiny[0], root / "fleet" / name)
+        meta = root / "fleet" / name / "campaign.yaml"
+        meta.write_text(meta.read_text().replace("name: tiny", f"name: {name}"))
+    (root / "fast.yaml").write_text(FAST)
+    return root
+
+
+def _run(fleet, work, options):
+    work.mkdir()
+    # The jobs run this checkout's gyrocal: sbatch passes the environment on (--export=ALL).
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT / "src"), os.environ.get("PYTHONPATH")]))}
+    start = time.monotonic()
+    run = subprocess.run(SNAKEMAKE + options + ["-d", str(work), "--configfile", str(fleet / "fast.yaml"),
+                                                "--config", f"campaigns={fleet / 'fleet'}"],
+                         cwd=work, env=env, capture_output=True, text=True, check=False)
+    elapsed = time.monotonic() - start
+    (work / "snakemake.out").write_text(run.stdout + run.stderr)
+    assert run.returncode == 0, (run.stdout + run.stderr)[-4000:]
+    return run.stdout + run.stderr, elapsed
+
+
+def test_a_fleet_of_three_through_slurm_gives_the_local_runs_numbers_byte_for_byte(fleet):
+    missing = _slurm_missing()
+    if missing:
+        pytest.skip(missing)
+    said, slurm_s = _run(fleet, fleet / "slurm", ["--profile", str(ROOT / "profiles" / "slurm"), "--jobs", "4",
+                                                  "--slurm-init-seconds-before-status-checks", "5",
+                                                  "--slurm-keep-successful-logs"] + _status_command())
+    _, local_s = _run(fleet, fleet / "local", ["--cores", "2"])
+    print(f"\nfleet of {len(NAMES)}: through Slurm {slurm_s:.0f} s, locally with --cores 2 {local_s:.0f} s")
+
+    # Every job went through sbatch, with the profile's resources.
+    assert "SLURM run ID" in said
+    # per campaign: validate, 6 preprocess, classic, 4 per model (2), compare, report; and the fleet summary
+    assert said.count("has been submitted with SLURM jobid") == 3 * (1 + 6 + 1 + 4 * 2 + 1 + 1) + 1, said[-3000:]
+    logs = fleet / "slurm" / ".snakemake" / "slurm_logs"
+    assert {p.name for p in logs.iterdir()} >= {f"rule_{r}" for r in ("validate", "preprocess", "classic", "point_estimate",
+                                                                     "posterior", "calibrate", "diagnostics", "compare",
+                                                                     "report", "fleet")}
+
+    compared = 0
+    for name in NAMES:
+        local = fleet / "local" / "results" / name
+        for calibration in sorted(local.glob("*/calibration.csv")):
+            on_slurm = fleet / "slurm" / calibration.relative_to(fleet / "local")
+            assert on_slurm.read_bytes() == calibration.read_bytes(), f"{on_slurm} differs from {calibration}"
+            compared += 1
+        assert (fleet / "slurm/results" / name / "verdict.json").read_bytes() == (local / "verdict.json").read_bytes()
+    assert compared == 3 * 2                                 # three campaigns, two models each
+    assert (fleet / "slurm/results/fleet/summary.csv").read_bytes() == (fleet / "local/results/fleet/summary.csv").read_bytes()
