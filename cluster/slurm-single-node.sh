@@ -124,12 +124,6 @@ if [[ $ACCOUNTING == 1 ]]; then
         say "starting slurmdbd (log: $LOG_DIR/slurmdbd.log)"
         slurmdbd
     fi
-    for _ in $(seq 30); do sacctmgr -n list cluster >/dev/null 2>&1 && break; sleep 1; done
-    sacctmgr -n list cluster >/dev/null || { say "slurmdbd does not answer: see $LOG_DIR/slurmdbd.log"; exit 1; }
-    if [[ -z $(sacctmgr -n list cluster gyrocal format=cluster) ]]; then
-        say "registering cluster gyrocal with slurmdbd"
-        sacctmgr -i add cluster gyrocal >/dev/null
-    fi
     STORAGE=$'AccountingStorageType=accounting_storage/slurmdbd\nAccountingStorageHost=localhost\nJobAcctGatherType=jobacct_gather/linux'
 else
     STORAGE=$'AccountingStorageType=accounting_storage/none\nJobAcctGatherType=jobacct_gather/none'
@@ -179,6 +173,15 @@ if ! cmp -s "$NEW_CONF" "$CONF"; then
     CHANGED=1
 fi
 rm -f "$NEW_CONF"
+# sacctmgr reads slurm.conf for where slurmdbd is, so this comes after it is written.
+if [[ $ACCOUNTING == 1 ]]; then
+    for _ in $(seq 30); do sacctmgr -n list cluster >/dev/null 2>&1 && break; sleep 1; done
+    sacctmgr -n list cluster >/dev/null || { say "slurmdbd does not answer: see $LOG_DIR/slurmdbd.log"; exit 1; }
+    if [[ -z $(sacctmgr -n list cluster gyrocal format=cluster) ]]; then
+        say "registering cluster gyrocal with slurmdbd"
+        sacctmgr -i add cluster gyrocal >/dev/null
+    fi
+fi
 
 # 5. The daemons. A changed slurm.conf restarts them (a new accounting type needs a restart);
 #    slurmctld keeps its queue in StateSaveLocation across the restart.

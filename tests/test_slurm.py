@@ -80,11 +80,13 @@ def test_a_fleet_of_three_through_slurm_gives_the_local_runs_numbers_byte_for_by
     missing = _slurm_missing()
     if missing:
         pytest.skip(missing)
+    status = _status_command()
     said, slurm_s = _run(fleet, fleet / "slurm", ["--profile", str(ROOT / "profiles" / "slurm"), "--jobs", "4",
                                                   "--slurm-init-seconds-before-status-checks", "5",
-                                                  "--slurm-keep-successful-logs"] + _status_command())
+                                                  "--slurm-keep-successful-logs"] + status)
     _, local_s = _run(fleet, fleet / "local", ["--cores", "2"])
-    print(f"\nfleet of {len(NAMES)}: through Slurm {slurm_s:.0f} s, locally with --cores 2 {local_s:.0f} s")
+    print(f"\nfleet of {len(NAMES)}: through Slurm {slurm_s:.0f} s (status by {'squeue' if status else 'sacct'}),"
+          f" locally with --cores 2 {local_s:.0f} s")
 
     # Every job went through sbatch, with the profile's resources.
     assert "SLURM run ID" in said
