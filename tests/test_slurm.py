@@ -8,6 +8,7 @@ Marked `slurm`, so the default run leaves it out; it skips, saying why, where th
 """
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -21,6 +22,7 @@ pytestmark = pytest.mark.slurm
 
 SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile")]
 NAMES = ("sat_a", "sat_b", "sat_c")
+TIMEOUT_S = 1800                      # each run; here 2 to 8 minutes
 # Shorter chains than the default config's: the comparison is of numbers, not of convergence.
 FAST = """\
 sampler: {walkers: 16, burn_steps: 50, initial_steps: 50, chunk_steps: 50, min_tau_multiple: 1, max_steps: 100,
@@ -36,16 +38,22 @@ def _slurm_missing():
         import snakemake_executor_plugin_slurm  # noqa: F401
     except ImportError:
         return "snakemake-executor-plugin-slurm is not installed: pip install -e '.[cluster]'"
-    run = subprocess.run(["sinfo", "-h", "-t", "idle,mixed", "-o", "%n"], capture_output=True, text=True, check=False)
+    run = subprocess.run(["sinfo", "-h", "-N", "-o", "%n %T"], capture_output=True, text=True, check=False)
     if run.returncode != 0:
         return f"sinfo failed (is slurmctld running?): {run.stderr.strip()}"
-    if not run.stdout.strip():
-        return "no Slurm node is idle: " + subprocess.run(["sinfo"], capture_output=True, text=True, check=False).stdout
+    # `sinfo -t idle` would list a drained node too (IDLE+DRAIN); %T says "drained" for it.
+    if not any(line.split()[1] in ("idle", "mixed") for line in run.stdout.splitlines() if len(line.split()) == 2):
+        return "no Slurm node is idle: " + (run.stdout.strip() or "sinfo lists no node")
     return None
 
 
-def _status_command():
-    """The plugin queries job states with sacct, which needs accounting (slurmdbd); without it, squeue."""
+@pytest.fixture(scope="session")
+def status_options():
+    """Skips where there is no Slurm (before the fleet is made); else the plugin's status options.
+    It queries job states with sacct, which needs accounting (slurmdbd); without it, squeue."""
+    missing = _slurm_missing()
+    if missing:
+        pytest.skip(missing)
     run = subprocess.run(["sacct", "-n", "-X", "-o", "JobID"], capture_output=True, text=True, check=False)
     return [] if run.returncode == 0 else ["--slurm-status-command", "squeue"]
 
@@ -67,20 +75,26 @@ def _run(fleet, work, options):
     # The jobs run this checkout's gyrocal: sbatch passes the environment on (--export=ALL).
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT / "src"), os.environ.get("PYTHONPATH")]))}
     start = time.monotonic()
-    run = subprocess.run(SNAKEMAKE + options + ["-d", str(work), "--configfile", str(fleet / "fast.yaml"),
-                                                "--config", f"campaigns={fleet / 'fleet'}"],
-                         cwd=work, env=env, capture_output=True, text=True, check=False)
+    try:
+        run = subprocess.run(SNAKEMAKE + options + ["-d", str(work), "--configfile", str(fleet / "fast.yaml"),
+                                                    "--config", f"campaigns={fleet / 'fleet'}"],
+                             cwd=work, env=env, capture_output=True, text=True, check=False, timeout=TIMEOUT_S)
+    except subprocess.TimeoutExpired as hung:
+        # A job the status query never sees end (sacct without accounting), or pending forever, would
+        # hang Snakemake, which ignores SIGTERM while it waits; subprocess kills it. Its jobs go too.
+        said = "".join(b.decode() if isinstance(b, bytes) else (b or "") for b in (hung.stdout, hung.stderr))
+        run_id = re.search(r"SLURM run ID: (\S+)", said)
+        if run_id:
+            subprocess.run(["scancel", "--name", run_id.group(1)], check=False)
+        pytest.fail(f"snakemake did not finish in {TIMEOUT_S} s:\n{said[-3000:]}")
     elapsed = time.monotonic() - start
     (work / "snakemake.out").write_text(run.stdout + run.stderr)
     assert run.returncode == 0, (run.stdout + run.stderr)[-4000:]
     return run.stdout + run.stderr, elapsed
 
 
-def test_a_fleet_of_three_through_slurm_gives_the_local_runs_numbers_byte_for_byte(fleet):
-    missing = _slurm_missing()
-    if missing:
-        pytest.skip(missing)
-    status = _status_command()
+def test_a_fleet_of_three_through_slurm_gives_the_local_runs_numbers_byte_for_byte(status_options, fleet):
+    status = status_options
     said, slurm_s = _run(fleet, fleet / "slurm", ["--profile", str(ROOT / "profiles" / "slurm"), "--jobs", "4",
                                                   "--slurm-init-seconds-before-status-checks", "5",
                                                   "--slurm-keep-successful-logs"] + status)
