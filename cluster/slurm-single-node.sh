@@ -4,7 +4,8 @@
 #
 #   bash cluster/slurm-single-node.sh               # install if needed, start, wait for the node to be idle
 #   bash cluster/slurm-single-node.sh --accounting  # the same with job accounting: slurmdbd and MariaDB
-#   bash cluster/slurm-single-node.sh stop          # stop the Slurm and munge daemons
+#   bash cluster/slurm-single-node.sh stop          # stop the Slurm and munge daemons (MariaDB, if
+#                                                   # --accounting started it: /etc/init.d/mariadb stop)
 #   bash cluster/slurm-single-node.sh status        # the daemons' pids, and sinfo
 #
 # Run as root. Idempotent: daemons already running are left running (a changed slurm.conf
