@@ -11,34 +11,26 @@ and the largest error in log-likelihood units. The sampler's accept decisions co
 log densities, so an error far below 1 changes nothing but rounding.
 """
 
-import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 import yaml
+from simulated import baseline_fit
 
 ROOT = Path(__file__).resolve().parents[1]
 GRIDS = [(11, 7.0), (9, 7.0), (7, 8.0), (5, 8.0)]
 
 
 def main():
-    from gyrocal import classic, posterior, preprocess, simulate, telemetry
-    from gyrocal.estimate import linearize_all, point_estimate
+    from gyrocal import posterior
+    from gyrocal.estimate import linearize_all
     from gyrocal.likelihood import campaign_stats
-    from gyrocal.noise import noise_knowledge, variances
-    from gyrocal.spec import baseline
-    from gyrocal.steps.posterior import model_priors
+    from gyrocal.noise import variances
 
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
-    with tempfile.TemporaryDirectory() as tmp:
-        simulate.run(ROOT / "config/scenarios/mom.yaml", tmp)
-        campaign = telemetry.read_campaign(Path(tmp) / "campaign")
-    maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
-    spec = baseline(campaign.channels)
-    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
-    est = point_estimate(maneuvers, spec, stated, classic.classic_vector(classic.classic_table(maneuvers, spec), spec))
-    priors = model_priors(est, cfg["priors"])
+    fitted = baseline_fit(ROOT / "config/scenarios/mom.yaml", cfg)
+    maneuvers, est, priors, spec = fitted.maneuvers, fitted.estimate, fitted.priors, fitted.estimate.spec
     _, noises = linearize_all(maneuvers, est)
     ratios = est.log_sigma[1:] - est.log_sigma[0]
     ratio_sd = posterior.ratio_curvature(noises, ratios, np.sqrt(2.0) * priors.log_sigma_sd[0])

@@ -15,8 +15,8 @@ import tempfile
 import time
 from pathlib import Path
 
-import numpy as np
 import yaml
+from simulated import baseline_fit, evaluations_per_s
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
@@ -42,39 +42,19 @@ def snakemake_run():
 def sampler_figures():
     from snakemake.utils import validate
 
-    from gyrocal import classic, estimate, inferencedata, posterior, preprocess, simulate, telemetry
-    from gyrocal.likelihood import campaign_stats, conditional_posterior
-    from gyrocal.noise import noise_knowledge, variances
-    from gyrocal.spec import baseline
-    from gyrocal.steps import posterior as posterior_step
+    from gyrocal import inferencedata, posterior
 
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     validate(cfg, str(ROOT / "workflow/schemas/config.schema.yaml"))
-    with tempfile.TemporaryDirectory() as tmp:
-        simulate.run(ROOT / "config/scenarios/mom.yaml", tmp)
-        campaign = telemetry.read_campaign(Path(tmp) / "campaign")
-    maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
-    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
-    spec = baseline(campaign.channels)
-    theta0 = classic.classic_vector(classic.classic_table(maneuvers, spec), spec)
-    est = estimate.point_estimate(maneuvers, spec, stated, theta0)
-    priors = posterior_step.model_priors(est, cfg["priors"])
+    fitted = baseline_fit(ROOT / "config/scenarios/mom.yaml", cfg)
+    maneuvers, est, priors, spec = fitted.maneuvers, fitted.estimate, fitted.priors, fitted.estimate.spec
     start = time.perf_counter()
     post = posterior.sample(maneuvers, est, priors, cfg["sampler"], cfg["grid"], cfg["seed"])
     sampling_s = time.perf_counter() - start
     ess = inferencedata.summarize(inferencedata.posterior_dataset(post.ensemble_draws(), est.theta, spec),
                                   inferencedata.posterior_dataset(post.walker_draws(), est.theta, spec),
                                   spec.labels, cfg["convergence"])["ess_bulk"].min()
-    noises = post.noises
-    logpost = posterior.LogPosterior(post.grid, est.theta, priors)
-    stats = campaign_stats(noises, variances(est.log_sigma))
-    mean, _ = conditional_posterior(stats, priors.mean - est.theta, priors.sd)
-    x = np.concatenate([mean, est.log_sigma]) + np.random.default_rng(0).normal(0, 1e-6, (64, len(mean) + 3))
-    calls = 2000
-    t0 = time.perf_counter()
-    for _ in range(calls):
-        logpost(x)
-    evals_per_s = calls * len(x) / (time.perf_counter() - t0)
+    evals_per_s = evaluations_per_s(post, est, priors, 2000)
     return evals_per_s, ess, sampling_s, post.result
 
 

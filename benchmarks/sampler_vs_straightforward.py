@@ -53,7 +53,6 @@ straightforward evaluation, which no MCMC run reaches.
 import argparse
 import functools
 import logging
-import tempfile
 import time
 import warnings
 from dataclasses import dataclass
@@ -65,6 +64,7 @@ import numpy as np
 import yaml
 from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
+from simulated import baseline_fit, evaluations_per_s
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIOS = {"mom": ROOT / "config/scenarios/mom.yaml", "tiny": ROOT / "tests/data/tiny.yaml"}
@@ -92,19 +92,8 @@ class Campaign:
 
 def prepare(name: str, cfg: dict) -> Campaign:
     """Simulate the scenario, slice its maneuvers and compute gyrocal's WLS point estimate."""
-    from gyrocal import classic, estimate, preprocess, simulate, telemetry
-    from gyrocal.noise import noise_knowledge
-    from gyrocal.spec import baseline
-    from gyrocal.steps.posterior import model_priors
-    with tempfile.TemporaryDirectory() as tmp:
-        simulate.run(SCENARIOS[name], tmp)
-        campaign = telemetry.read_campaign(Path(tmp) / "campaign")
-    maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
-    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
-    spec = baseline(campaign.channels)
-    theta0 = classic.classic_vector(classic.classic_table(maneuvers, spec), spec)
-    est = estimate.point_estimate(maneuvers, spec, stated, theta0)
-    return Campaign(name, maneuvers, stated, est, model_priors(est, cfg["priors"]))
+    fitted = baseline_fit(SCENARIOS[name], cfg)
+    return Campaign(name, fitted.maneuvers, fitted.stated, fitted.estimate, fitted.priors)
 
 
 # --- gyrocal -------------------------------------------------------------------------------
@@ -143,15 +132,7 @@ def gyrocal_figures(c: Campaign, cfg: dict) -> Figures:
                                       spec.labels, cfg["convergence"]).set_index("label").loc[spec.labels]
     r = post.result
     evaluations = r.chains.shape[0] * r.walkers * (2 * (r.burn // 2) + r.steps)
-    logpost = posterior.LogPosterior(post.grid, est.theta, c.priors)
-    mean, _ = conditional_posterior(campaign_stats(post.noises, variances(est.log_sigma)), c.priors.mean - est.theta,
-                                    c.priors.sd)
-    x = np.concatenate([mean, est.log_sigma]) + np.random.default_rng(0).normal(0, 1e-6, (64, len(mean) + 3))
-    calls = 500
-    t0 = time.perf_counter()
-    for _ in range(calls):
-        logpost(x)
-    evals_per_s = calls * len(x) / (time.perf_counter() - t0)
+    evals_per_s = evaluations_per_s(post, est, c.priors, 500)
     note = (f"{r.chains.shape[0]} ensembles x {r.walkers} walkers x {r.steps} steps (+{2 * (r.burn // 2)} burn-in), "
             f"max r_hat {summary['r_hat'].max():.3f}, run long enough: {r.converged_length}")
     _, cov = conditional_posterior(campaign_stats(post.noises, variances(est.log_sigma + [0.0, 0.0, np.log(0.01)])),

@@ -1,9 +1,11 @@
 """Cost against telemetry length: prints figures, asserts nothing.
 
-    python benchmarks/scaling.py [--factors 1 2 4 8]
+    python benchmarks/scaling.py [--factors 1 2 4 8] [--longer]
 
 The default MOM-like scenario is flown k times over (its six maneuvers repeated, each copy
-its own maneuver), so the campaign holds k times the samples at the same rates. Each
+its own maneuver), so the campaign holds k times the samples at the same rates; with
+``--longer``, each of its six maneuvers holds k times as long instead (a cost that grows with
+one maneuver's length shows there, not in the number of maneuvers). Each
 stage of the pipeline runs through the library in this one process, and its wall time
 is printed per k with its ratio to k = 1 and the log-log slope between the smallest and
 largest k (1 is linear). The sampler runs a fixed number of steps, so its figure is the
@@ -28,6 +30,13 @@ def repeated(scenario: dict, k: int) -> dict:
     """The scenario's maneuvers flown ``k`` times, in order, each copy with its own id."""
     out = copy.deepcopy(scenario)
     out["maneuvers"] = [{**m, "id": f"{m['id']}_{i}"} for i in range(k) for m in scenario["maneuvers"]]
+    return out
+
+
+def longer(scenario: dict, k: int) -> dict:
+    """The scenario with each maneuver's holds ``k`` times as long (same maneuvers, same rates)."""
+    out = copy.deepcopy(scenario)
+    out["maneuver_defaults"]["hold_s"] = k * scenario["maneuver_defaults"]["hold_s"]
     return out
 
 
@@ -69,13 +78,14 @@ def stage_times(scenario: dict, cfg: dict) -> dict:
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--factors", type=int, nargs="+", default=[1, 2, 4, 8])
+    parser.add_argument("--longer", action="store_true", help="k times longer holds, not k times the maneuvers")
     args = parser.parse_args()
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     from gyrocal.simulate import load_scenario
     scenario = load_scenario(ROOT / "config/scenarios/mom.yaml")
     rows = {}
     for k in args.factors:
-        rows[k] = stage_times(repeated(scenario, k), cfg)
+        rows[k] = stage_times((longer if args.longer else repeated)(scenario, k), cfg)
         print(f"k={k}: {rows[k][1]} star-tracker samples, {sum(rows[k][0].values()):.1f} s in all", flush=True)
     first, last = args.factors[0], args.factors[-1]
     print(f"\n{'stage':45s}" + "".join(f"{f'{k}x (s)':>10s}" for k in args.factors) + f"{'ratio':>8s}{'slope':>7s}")

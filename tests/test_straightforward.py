@@ -6,7 +6,8 @@ import sys
 import numpy as np
 from scipy.optimize import least_squares
 
-from gyrocal import errormodel, posterior, preprocess, steps, telemetry
+from gyrocal import errormodel, posterior, preprocess, telemetry
+from gyrocal.noise import noise_knowledge
 from gyrocal.spec import baseline
 from gyrocal.units import rad_s_to_deg_h
 
@@ -24,7 +25,7 @@ def test_straightforward_errors_follow_gyrocal_linearisation(tiny, config):
     parameter."""
     campaign = telemetry.read_campaign(tiny[0])
     maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
-    stated = steps.noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, config["noise"])
+    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, config["noise"])
     spec = baseline(campaign.channels)
     truth = truth_vector(campaign.channels, tiny[1])
     theta = spec.core_vector(truth)

@@ -1,0 +1,55 @@
+"""What several benchmarks start from: a simulated scenario, cut into maneuvers, with the
+baseline model's WLS point estimate and the configured priors."""
+
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+
+@dataclass
+class Fitted:
+    campaign: object
+    maneuvers: list
+    stated: dict
+    estimate: object
+    priors: object
+
+
+def baseline_fit(scenario_path, cfg: dict) -> Fitted:
+    """Simulate ``scenario_path``, slice its maneuvers, and fit the baseline model (classic start,
+    REML noise, WLS) as the pipeline would."""
+    from gyrocal import classic, estimate, preprocess, simulate, telemetry
+    from gyrocal.noise import noise_knowledge
+    from gyrocal.spec import baseline
+    from gyrocal.steps.posterior import model_priors
+
+    with tempfile.TemporaryDirectory() as tmp:
+        simulate.run(scenario_path, tmp)
+        campaign = telemetry.read_campaign(Path(tmp) / "campaign")
+    maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
+    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
+    spec = baseline(campaign.channels)
+    theta0 = classic.classic_vector(classic.classic_table(maneuvers, spec), spec)
+    est = estimate.point_estimate(maneuvers, spec, stated, theta0)
+    return Fitted(campaign, maneuvers, stated, est, model_priors(est, cfg["priors"]))
+
+
+def evaluations_per_s(post, estimate, priors, calls: int) -> float:
+    """Log-posterior evaluations per second of gyrocal's sampler, in batches of 64 walkers about
+    the conditional posterior mean (what emcee's vectorised calls look like)."""
+    import time
+
+    import numpy as np
+
+    from gyrocal import posterior
+    from gyrocal.likelihood import campaign_stats, conditional_posterior
+    from gyrocal.noise import variances
+
+    logpost = posterior.LogPosterior(post.grid, estimate.theta, priors)
+    mean, _ = conditional_posterior(campaign_stats(post.noises, variances(estimate.log_sigma)),
+                                    priors.mean - estimate.theta, priors.sd)
+    x = np.concatenate([mean, estimate.log_sigma]) + np.random.default_rng(0).normal(0, 1e-6, (64, len(mean) + 3))
+    start = time.perf_counter()
+    for _ in range(calls):
+        logpost(x)
+    return calls * len(x) / (time.perf_counter() - start)
