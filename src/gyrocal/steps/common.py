@@ -19,8 +19,11 @@ REFUSED = "gyrocal: the campaign was refused:"
 
 def start(log_path):
     """Set up a workflow step's process: gyrocal's log and Python's warnings go to the step's
-    log file, and figures render headless (Agg, set before any step imports matplotlib)."""
+    log file, and figures render headless (Agg), also where the step's module has imported
+    matplotlib already and a display is at hand."""
     os.environ["MPLBACKEND"] = "Agg"
+    if "matplotlib" in sys.modules:
+        sys.modules["matplotlib"].use("Agg")
     logging.basicConfig(filename=log_path, level=logging.INFO, force=True,
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     logging.captureWarnings(True)

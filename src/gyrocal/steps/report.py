@@ -24,10 +24,12 @@ def run(models, model_files, npz_paths, table_paths, input_json, comparison_csv,
     calibrations = {m: pd.read_csv(p) for m, p in zip(models, model_files["calibration"])}
     maneuvers = load_maneuvers(npz_paths)
     est = PointEstimate.load(files["point"])
+    with az.rc_context(rc={"data.load": "eager"}):  # in memory: the figures are drawn by forked processes
+        posterior = az.from_netcdf(str(files["posterior"]))
     ctx = review.build_context(
         model, maneuvers, [pd.read_csv(p) for p in table_paths], est, read_json(files["diagnostics"]),
         read_json(files["sampler"]), read_json(files["correction"]), files["correction"], pd.read_csv(files["fit"]),
-        az.from_netcdf(str(files["posterior"])), table, read_json(input_json),
+        posterior, table, read_json(input_json),
         read_json(truth_json)["parameters"] if truth_json else None, cfg, calibrations, processes)
     write_text(review.render(ctx), out_html)
     write_json(review.verdict(ctx), out_verdict)
