@@ -277,8 +277,9 @@ CLIP_BAND = 0.05
 def saturation_findings(sensed: Sensed, sf_bound, findings: Findings) -> bool:
     """A gyro that reaches its range clips: where its rate sits near its peak, the reference turns
     faster than the gyro says, in the gyro's direction, by more than any scale error and more
-    than `DETECTION_SD` times the reference's noise over those samples (on an axis that barely
-    turns, the "peak" is noise). Such a maneuver is refused, with the count of clipped samples;
+    than `DETECTION_SD` times the noise of as many independent reference intervals (on an axis
+    that barely turns, the "peak" is noise; conservative, since over consecutive intervals the
+    reference's noise partly cancels). Such a maneuver is refused, with the count of clipped samples;
     it is never fitted silently. Returns whether it clipped."""
     data = sensed.data
     rate = np.abs(sensed.body / data.dt[:, None])
