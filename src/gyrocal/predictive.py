@@ -88,13 +88,12 @@ def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dthet
     def q_apply(differenced):
         return _undifference_transpose(cho_solve_banded((chol, True), differenced), width)
 
-    q_g = q_apply(noise.rhs[:, p:p + g])
-    q_data = q_apply(noise.rhs[:, [-1]])[:, 0]
-    q_x = q_apply(noise.rhs[:, :p])
+    q_all = q_apply(noise.rhs)
+    q_g = q_all[:, p:p + g]
     g_und = nuisance_design(lin).reshape(n, g)
     gqg_inv = np.linalg.inv(g_und.T @ q_g)
-    p_data = q_data - q_g @ (gqg_inv @ (g_und.T @ q_data))
-    p_x = q_x - q_g @ (gqg_inv @ (g_und.T @ q_x))
+    projected = np.delete(q_all, np.s_[p:p + g], axis=1)
+    projected -= q_g @ (gqg_inv @ (g_und.T @ projected))
     n_blocks = block_of_row.max() + 1
     first_row = np.searchsorted(block_of_row, np.arange(n_blocks + 1))
     edges = recursion_bounds(np.unique(first_row), chol.shape[0] - 1)
@@ -107,9 +106,8 @@ def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dthet
             p_bb = q_bb - q_g[rows] @ gqg_inv @ q_g[rows].T
             factor = np.linalg.cholesky(p_bb)
             logdet = 2 * np.sum(np.log(np.diag(factor)))
-            w_data = solve_triangular(factor, p_data[rows], lower=True)
-            w_x = solve_triangular(factor, p_x[rows], lower=True)
-            quad = np.sum((w_data[:, None] - w_x @ dtheta.T) ** 2, axis=0)
+            w = solve_triangular(factor, projected[rows], lower=True)
+            quad = np.sum((w[:, -1:] - w[:, :p] @ dtheta.T) ** 2, axis=0)
             out[:, b] = 0.5 * (logdet - (rows.stop - rows.start) * np.log(2 * np.pi * scale)) - 0.5 * quad / scale
     return out
 
