@@ -230,3 +230,8 @@ def resolve(model_name: str, names, plugins: dict) -> list:
     if missing:
         raise ValueError(f"model {model_name}: every model builds on the paper's baseline; add {missing}")
     return [known[n] for n in names]
+
+
+def known(plugin_paths) -> dict:
+    """The library's effects and the plugins' (each plugin file loaded once), by name."""
+    return {**LIBRARY, **load_plugins(plugin_paths or [])}

@@ -220,7 +220,7 @@ def plan(scenario: dict, cfg: dict, model: str = "baseline", name: str = "") -> 
     ``cfg`` (the gyrocal config: models, plugins, priors, noise defaults, diagnostics)."""
     if model not in cfg["models"]:
         raise ValueError(f"model {model!r} is not in the config's models: {sorted(cfg['models'])}")
-    known = {**effects.LIBRARY, **effects.load_plugins(cfg.get("plugins") or [])}
+    known = effects.known(cfg.get("plugins"))
     plugins = {k: e for k, e in known.items() if k not in effects.LIBRARY}
     maneuvers = planned_maneuvers(scenario)
     spec = ModelSpec.build(model, effects.resolve(model, cfg["models"][model], plugins), maneuvers[0].channels)

@@ -42,9 +42,7 @@ def refusal():
         sys.exit(f"{REFUSED}\n{exc}")
 
 
-def known_effects(plugin_paths) -> dict:
-    """The library's effects and the plugins' (each plugin file loaded once), by name."""
-    return {**effects.LIBRARY, **effects.load_plugins(plugin_paths or [])}
+known_effects = effects.known
 
 
 def load_maneuvers(npz_paths) -> list:
