@@ -10,7 +10,7 @@ from scipy.spatial.transform import Rotation
 
 from . import channels as ch
 from . import errormodel, kinematics
-from .preprocess import MOVING_RATE_FRACTION, ManeuverData, body_increments
+from .preprocess import MOVING_RATE_FRACTION, ManeuverData, body_increments, error_angles, propagate_set
 from .spec import ModelSpec
 from .units import AXES, AXIS_INDEX
 
@@ -36,7 +36,21 @@ def missing_holds(data: ManeuverData) -> list:
     return [name for name, mask in (("before", before), ("after", after)) if mask.sum() < MIN_HOLD_SAMPLES]
 
 
-def classic(data: ManeuverData) -> pd.DataFrame:
+def hold_bias(data: ManeuverData, channel_set, before, after) -> ch.ChannelParams:
+    """Zero parameters but for the residual biases of ``channel_set``, from the drift of its error
+    over both holds: the body is inertial there, so the error angle (eq. 4) drifts at minus the
+    bias of each axis's channel. One slope per axis, one offset per hold, by least squares."""
+    params = ch.ChannelParams.zeros(data.channels)
+    err = error_angles(data, channel_set, params)
+    held = before | after
+    design = np.column_stack([before, after, data.st_time - data.st_time[0]])[held].astype(float)
+    slope = np.linalg.lstsq(design, err[held], rcond=None)[0][2]
+    names = [c.name for c in data.channels]
+    params.bias_rad_s[[names.index(name) for name in channel_set]] = -slope
+    return params
+
+
+def classic(data: ManeuverData, bias_from_holds: bool = False) -> pd.DataFrame:
     """The paper's method on one maneuver, every channel set (values SI).
 
     For the channel on the rotated axis a, ``sf = -(mean error after - mean error
@@ -47,7 +61,9 @@ def classic(data: ManeuverData) -> pd.DataFrame:
     the scale factor and reduces to it for small rotations. The hold averages are
     differenced in the inertial frame, where the initial attitude offset stays put.
     A maneuver without both holds, or one that turns both ways, gets no row: the method does
-    not apply to it.
+    not apply to it. The paper trusts the bias known before the maneuver (zero residual bias);
+    with ``bias_from_holds`` each channel set's residual bias is first estimated from the holds
+    (`hold_bias`), so that it is not read as a scale factor.
     """
     if data.direction == "both" or missing_holds(data):
         return pd.DataFrame(columns=["maneuver", "set", "channel", "parameter", "value", "angle_rad"])
@@ -59,9 +75,8 @@ def classic(data: ManeuverData) -> pd.DataFrame:
     end = np.flatnonzero(after)[-1]
     rows = []
     for s, channel_set in enumerate(data.sets):
-        inc = body_increments(data, channel_set, zeros)
-        attitudes = kinematics.propagate(Rotation.from_quat(data.attitude0_quat), inc)
-        at_st = kinematics.attitude_at(data.gyro_time, attitudes, inc, data.st_time)
+        params = hold_bias(data, channel_set, before, after) if bias_from_holds else zeros
+        inc, attitudes, at_st = propagate_set(data, channel_set, params)
         inertial_err = at_st.apply(kinematics.error_angles_rad(at_st, st_rot))
         mid = kinematics.compose(attitudes[:-1], Rotation.from_rotvec(0.5 * inc))
         unit = np.zeros((len(inc), 3, 3))
@@ -82,10 +97,10 @@ def classic(data: ManeuverData) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
-def classic_table(maneuvers, spec: ModelSpec) -> pd.DataFrame:
+def classic_table(maneuvers, spec: ModelSpec, bias_from_holds: bool = False) -> pd.DataFrame:
     """`classic` over every maneuver in the parameters' units; a parameter seen twice is
     averaged. Columns: channel, parameter, unit, value, n."""
-    parts = [part for part in (classic(d) for d in maneuvers) if len(part)]
+    parts = [part for part in (classic(d, bias_from_holds) for d in maneuvers) if len(part)]
     if not parts:
         return pd.DataFrame(columns=["channel", "parameter", "unit", "value", "n"])
     table = pd.concat(parts, ignore_index=True)
