@@ -273,3 +273,18 @@ def test_a_gyro_clipped_below_the_turn_rate_is_refused_with_its_count():
     findings = consistency.Findings()
     assert consistency.saturation_findings(sensed_turn(clip_rad_s=0.4), 0.02, findings)
     assert "2000 gyro samples about roll" in findings.errors[0] and "1.250 times as fast" in findings.errors[0]
+
+
+def test_a_maneuver_too_short_for_the_leave_one_block_out_predictive_is_refused_naming_it():
+    """Each LOO block is predicted from the rest of its maneuver: a maneuver of one block (or one
+    whose rest holds a handful of samples) used to crash in a Cholesky factorisation; it is
+    refused with its span and the fix."""
+    from gyrocal.estimate import check_blocks
+    enough = types.SimpleNamespace(id="yaw_pos", st_time=np.arange(0.0, 70.0))
+    one_block = types.SimpleNamespace(id="roll_neg", st_time=np.arange(0.0, 59.0))
+    nearly = types.SimpleNamespace(id="pitch_pos", st_time=np.arange(0.0, 69.0))
+    check_blocks([enough], 60.0)
+    with pytest.raises(EstimateError, match=r"roll_neg spans 58 s \(59 samples, 0 outside.*shorter than the maneuver"):
+        check_blocks([enough, one_block], 60.0)
+    with pytest.raises(EstimateError, match=r"pitch_pos spans 68 s \(69 samples, 9 outside"):
+        check_blocks([nearly], 60.0)

@@ -188,6 +188,28 @@ def check_physical(maneuvers, est: PointEstimate, bound_si):
         f"1 expected): check its data and labels (gyrocal validate) and the noise knowledge")
 
 
+MIN_REST_SAMPLES = 10
+"""Star-tracker samples of a maneuver that must remain when any one leave-one-block-out block is
+left out: fewer cannot pin down the maneuver's nuisance (initial attitude and biases)."""
+
+
+def check_blocks(maneuvers, block_s: float):
+    """Stop before sampling when a maneuver is too short for the leave-one-block-out predictive:
+    each ``block_s`` block is predicted from the rest of its maneuver alone, which must then keep
+    `MIN_REST_SAMPLES` (a single block would leave nothing, and the factorisation would fail)."""
+    short = []
+    for d in maneuvers:
+        counts = np.bincount(np.floor((d.st_time - d.st_time[0]) / block_s).astype(int))
+        if len(d.st_time) - counts.max() < MIN_REST_SAMPLES:
+            short.append(f"{d.id} spans {d.st_time[-1] - d.st_time[0]:.0f} s ({len(d.st_time)} samples, "
+                         f"{len(d.st_time) - counts.max()} outside its largest block)")
+    if short:
+        raise EstimateError(
+            f"too short for the leave-one-block-out predictive (blocks of sampler.block_s = {block_s:g} s, each "
+            f"predicted from the rest of its maneuver, which needs at least {MIN_REST_SAMPLES} star-tracker samples): "
+            f"{'; '.join(short)}. Lengthen its holds, or make sampler.block_s shorter than the maneuver")
+
+
 def linearize_all(maneuvers, estimate: PointEstimate):
     """Linearisations and noise structures of every maneuver about a point estimate."""
     lins = [estimate.linearize(maneuvers, m) for m in range(len(maneuvers))]

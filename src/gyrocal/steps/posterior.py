@@ -3,7 +3,7 @@
 import pandas as pd
 
 from .. import inferencedata, posterior
-from ..estimate import PointEstimate, check_noise, check_physical
+from ..estimate import PointEstimate, check_blocks, check_noise, check_physical
 from ..outputs import atomic, write_csv, write_json
 from .common import known_effects, load_maneuvers
 
@@ -23,6 +23,7 @@ def run(npz_paths, point_npz, plugin_paths, priors_cfg, prior_from, sampler_cfg,
     maneuvers = load_maneuvers(npz_paths)
     est = PointEstimate.load(point_npz, known_effects(plugin_paths))
     priors = model_priors(est, priors_cfg, prior_from)
+    check_blocks(maneuvers, sampler_cfg["block_s"])
     check_noise(maneuvers, est)
     check_physical(maneuvers, est, priors.bound)
     post = posterior.sample(maneuvers, est, priors, sampler_cfg, grid_cfg, seed)
