@@ -48,26 +48,10 @@ def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
     """Every workflow step in the order the rules run them, each given the config the rule gives it."""
     from gyrocal import telemetry
     from gyrocal.outputs import MODEL_FILES
-    from gyrocal.steps import calibrate, classic, compare, diagnostics, point_estimate, posterior, preprocess, report, validate
+    from gyrocal.steps import compare, report
+    from gyrocal.study import calibrate_steps
     ids = [m.id for m in telemetry.read_meta(campaign_dir)["maneuvers"]]
-    validate.run(campaign_dir, out / "input.json")
-    for m in ids:
-        preprocess.run(campaign_dir, out / "input.json", m, out / f"preprocess/{m}.npz", out / f"preprocess/{m}.csv",
-                       out / f"preprocess/{m}.png")
-    npz = [out / f"preprocess/{m}.npz" for m in ids]
-    classic.run(npz, out / "classic.csv")
-    plugins = cfg["plugins"]
-    for model in models:
-        d = out / model
-        point_estimate.run(npz, out / "input.json", out / "classic.csv", model, cfg["models"][model],
-                           cfg["noise"], plugins, d / "point_estimate.npz")
-        posterior.run(npz, d / "point_estimate.npz", plugins, cfg["priors"], cfg["prior_from"] or None,
-                      cfg["sampler"], cfg["grid"], cfg["convergence"], cfg["seed"], d / "posterior.nc",
-                      d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json", d / "elpd_maneuvers.csv")
-        calibrate.run(d / "point_estimate.npz", d / "posterior_summary.csv", npz, d / "calibration.csv",
-                      d / "correction.json")
-        diagnostics.run(npz, d / "point_estimate.npz", d / "posterior_summary.csv", d / "fit.csv", plugins,
-                        cfg["diagnostics"], d / "diagnostics.json")
+    npz = calibrate_steps(campaign_dir, out, cfg, models)
     compare.run(list(models), [out / m / "posterior.nc" for m in models],
                 [out / m / "diagnostics.json" for m in models],
                 [out / m / "posterior_summary.csv" for m in models],

@@ -157,11 +157,16 @@ def truth_parameters(spec: ModelSpec, truth: ch.ChannelParams) -> dict:
     return {c: {k: round(float(v), 9) for k, v in entry.items()} for c, entry in out.items()}
 
 
+def scenario_channels(scenario: dict) -> tuple:
+    """The gyro channels a scenario flies."""
+    return tuple(ch.Channel(n, int(v["dtg"]), v["axis"]) for n, v in scenario["channels"].items())
+
+
 def simulate(scenario: dict, seed=None):
     """Simulate a campaign; returns ``(Campaign, truth_dict)``."""
     seed = scenario["seed"] if seed is None else seed
     rng = np.random.default_rng(seed)
-    channels = tuple(ch.Channel(n, int(v["dtg"]), v["axis"]) for n, v in scenario["channels"].items())
+    channels = scenario_channels(scenario)
     spec = baseline(channels)
     truth = spec.params_from_contract(scenario["truth"])
     gyro_cfg, st_cfg, eff = scenario["gyro"], scenario["star_tracker"], scenario["effects"]

@@ -9,7 +9,8 @@ from .common import read_json
 
 def run(campaign_dir, input_json, maneuver_id, out_npz, out_csv, out_png):
     """Slice one maneuver, leaving out the star-tracker outliers that validation listed;
-    propagate every channel set nominally, save table and figure."""
+    propagate every channel set nominally, save table and figure (none when ``out_png`` is None:
+    the validation study reads no figure)."""
     info = read_json(input_json)
     campaign = telemetry.read_campaign(campaign_dir)
     if info["mounting"]:
@@ -19,6 +20,8 @@ def run(campaign_dir, input_json, maneuver_id, out_npz, out_csv, out_png):
     table = preprocess.error_table(data)
     write_with(data.save, out_npz)
     write_csv(table, out_csv)
+    if out_png is None:
+        return
     m = campaign.maneuver(maneuver_id)
     fig = plots.maneuver_figure(table, f"{campaign.name}: {m.id} ({m.turn}), nominal parameters")
     write_with(lambda handle: plots.save(fig, handle), out_png)

@@ -1,0 +1,137 @@
+"""The validation study's arithmetic, checked against known truths on small synthetic inputs."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gyrocal import channels as ch
+from gyrocal import study, validation
+
+
+def test_truth_is_drawn_from_the_configured_prior_within_its_bounds():
+    spec = study.prior_spec(ch.MOM_CHANNELS, {"sf_sd_ppm": 100.0, "mis_bound_arcsec": 150.0})
+    rng = np.random.default_rng(3)
+    draws = [study.draw_truth(spec, rng) for _ in range(400)]
+    sf = np.array([d["dtg2_yaw"]["sf_pos"] for d in draws])
+    mis = np.array([d["dtg2_yaw"]["mis_roll"] for d in draws])
+    assert abs(sf.std() - 100.0) < 10.0 and abs(sf.mean()) < 15.0
+    assert np.abs(mis).max() <= 150.0 and mis.std() < 100.0  # truncated at the bound, not at the 1000" sd
+    assert set(draws[0]) == {c.name for c in ch.MOM_CHANNELS}
+
+
+def test_ranks_of_a_calibrated_posterior_are_uniform():
+    """Truth and draws from the same normal: every rank 0..L equally likely."""
+    rng = np.random.default_rng(5)
+    ranks = np.concatenate([study.sbc_rank(rng.normal(size=(99, 4)), rng.normal(size=4), rng) for _ in range(500)])
+    counts = validation.sbc_histogram(ranks, 99)
+    assert counts.sum() == 2000 and validation.uniformity_p(counts) > 0.001
+    narrow = np.concatenate([study.sbc_rank(0.5 * rng.normal(size=(99, 4)), rng.normal(size=4), rng)
+                             for _ in range(500)])
+    assert validation.uniformity_p(validation.sbc_histogram(narrow, 99)) < 1e-6  # overconfident: U-shaped
+
+
+def test_ties_share_their_rank_at_random():
+    draws = np.zeros((9, 1))
+    ranks = [int(study.sbc_rank(draws, np.zeros(1), np.random.default_rng(s))[0]) for s in range(200)]
+    assert min(ranks) == 0 and max(ranks) == 9
+
+
+def test_thinned_draws_are_an_autocorrelation_time_apart():
+    steps, walkers, kept = 400, 64, 250
+    step_of = np.linspace(0, steps * walkers - 1, kept).astype(int) // walkers
+    draws = np.broadcast_to(step_of[None, :, None], (4, kept, 2)).astype(float)
+    thin = study.thinned_draws(draws, steps, walkers, tau_steps=5.0, per_chain=25)
+    assert thin.shape == (100, 2)
+    picked = thin[:25, 0]
+    assert np.all(np.diff(picked) >= 5) and np.all(np.abs(picked - (np.arange(25) + 0.5) * 16) <= 2)
+    with pytest.raises(ValueError, match="autocorrelation"):
+        study.thinned_draws(draws, steps, walkers, tau_steps=20.0, per_chain=25)
+
+
+def test_efficient_estimator_band_holds_one():
+    lo, hi = validation.efficiency_interval(200)
+    assert lo < 1 < hi and lo > 0.85 and hi < 1.2
+
+
+def _records(errors, sd, truth=0.0):
+    """Synthetic records of one parameter: posterior mean = truth + error, normal quantiles of sd."""
+    from scipy.stats import norm
+    out = []
+    for i, e in enumerate(errors):
+        q = {c: truth + e + norm.ppf(p) * sd for c, p in zip(study.QUANTILE_COLUMNS, study.QUANTILES)}
+        out.append({"group": "clean", "magnitude": 0.0, "index": i, "parameters": [
+            {"model": "baseline", "label": "a.sf_pos", "channel": "a", "parameter": "sf_pos", "unit": "ppm",
+             "core": True, "truth": truth, "wls": truth + e, "mean": truth + e, "sd": sd, **q, "sbc_rank": 0,
+             "sbc_draws": 99, "crlb_sd": sd, "converged": True, "classic_paper": truth + 3 * e,
+             "classic_holds": truth + 1.5 * e}]})
+    return out
+
+
+def test_coverage_and_accuracy_of_a_calibrated_estimator():
+    rng = np.random.default_rng(11)
+    params = validation.parameter_table(_records(rng.normal(0, 2.0, 4000), 2.0))
+    cov = validation.coverage(validation.clean_baseline(params)).set_index("level")
+    for level in (0.5, 0.9, 0.95):
+        assert cov.loc[level, "rate_lo"] < level < cov.loc[level, "rate_hi"]
+    acc = validation.accuracy(params).iloc[0]
+    assert acc["efficiency"] == pytest.approx(1.0, abs=0.06)
+    assert acc["paper_over_posterior"] == pytest.approx(3.0) and acc["holds_over_posterior"] == pytest.approx(1.5)
+    assert validation.pooled_efficiency(params) == pytest.approx(acc["efficiency"])
+
+
+def test_overconfident_intervals_undercover():
+    rng = np.random.default_rng(12)
+    params = validation.parameter_table(_records(rng.normal(0, 2.0, 2000), 1.0))
+    cov = validation.coverage(validation.clean_baseline(params)).set_index("level")
+    assert cov.loc[0.95, "rate_hi"] < 0.8
+
+
+def test_binomial_interval_matches_clopper_pearson():
+    assert validation.binomial_interval(0, 200)[1] == pytest.approx(1 - 0.025 ** (1 / 200), rel=1e-6)
+    lo, hi = validation.binomial_interval(190, 200)
+    assert lo < 0.95 < hi
+
+
+def test_error_rates_compare_the_checks_with_their_null():
+    rng = np.random.default_rng(13)
+    n = 2000
+    models = pd.DataFrame({"group": "clean", "model": "baseline", "misfit": False, "candidates": 8,
+                           "failed:structure": False,
+                           "top_log10_p": np.log10(rng.uniform(size=(n, 8)).min(axis=1)),
+                           "whiteness_z": rng.normal(size=n)})
+    rates = validation.error_rates(models, {"structure_log10_p_min": -6.0, "whiteness_z_max": 5.0}).set_index("test")
+    for test in ("structure, top p < 0.05", "whiteness |z| > 1.96"):
+        assert rates.loc[test, "rate_lo"] < rates.loc[test, "nominal"] < rates.loc[test, "rate_hi"]
+    assert rates.loc["misfit (configured thresholds)", "nominal"] == pytest.approx(8e-6 + 5.7e-7, rel=0.01)
+
+
+def test_study_workflow_runs_end_to_end_on_tiny_campaigns(tmp_path):
+    """Two clean campaigns and one with a bias drift through the study's Snakefile: every table is
+    written, the truths come back, and the drift is caught by the baseline and recovered by its model
+    (flown at 4 prior sd, so the prior pulls the posterior mean toward zero: between it and the WLS)."""
+    import json
+    import subprocess
+    import sys
+
+    import yaml
+
+    from conftest import DATA, ROOT
+    cfg = yaml.safe_load((ROOT / "config" / "study.yaml").read_text())
+    cfg.update(scenario=str(DATA / "tiny.yaml"), results=str(tmp_path / "study"), clean=2, chunk=2, repeats=1,
+               effects={"bias_drift": {"simulator_key": "bias_drift_deg_h_per_h", "magnitudes": [2.0],
+                                       "model": "bias_drift"}})
+    cfg["calibration"] = str(ROOT / cfg["calibration"])
+    (tmp_path / "study.yaml").write_text(yaml.safe_dump(cfg))
+    subprocess.run([sys.executable, "-m", "snakemake", "-s", str(ROOT / "workflow/study/Snakefile"), "--cores", "2",
+                    "--configfile", str(tmp_path / "study.yaml"), "-q", "--directory", str(tmp_path)], check=True)
+    out = tmp_path / "study"
+    params = pd.read_csv(out / "parameters.csv")
+    assert len(params[params["group"] == "clean"]) == 2 * 24
+    detection = pd.read_csv(out / "detection.csv").iloc[0]
+    assert detection["misfit"] == 1.0 and detection["ranked_first"] == 1.0
+    drift = params[(params["model"] == "bias_drift") & ~params["core"]]
+    assert len(drift) == 6 and np.all(np.abs(drift["wls"] - 2.0) < 3 * drift["crlb_sd"])
+    assert np.all((drift["mean"] > 0) & (drift["mean"] < drift["wls"]))
+    assert json.loads((out / "summary.json").read_text())["campaigns"] == 3
+    for name in ("accuracy", "coverage", "sbc", "detection"):
+        assert (out / f"{name}.png").stat().st_size > 1000
