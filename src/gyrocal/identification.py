@@ -17,6 +17,11 @@ from .spec import ModelSpec
 DETECTION_SD = 5.0
 """A value counts as beyond a physical bound once it exceeds it by this many of its standard errors."""
 
+CORRELATION_MAX = 0.9
+"""Two parameters whose predicted posterior correlation exceeds this (in magnitude) are ones the
+data (or a plan) cannot separate: they pin down their combination, not each."""
+
+
 INFORMATION_RATIO_MIN = 0.01
 """Below this ratio of the data's information to the prior's, a parameter is prior-only: the data
 would narrow its interval by less than half a percent."""
@@ -47,3 +52,12 @@ def uninformed(stats: Stats, spec: ModelSpec) -> dict:
     return {spec.labels[i]: (f"the data carry {ratio[i]:.2g} of its prior's information: is its regressor "
                              "constant over the maneuvers, or a copy of the bias?")
             for i in np.flatnonzero((ratio < INFORMATION_RATIO_MIN) & spec.free)}
+
+
+def confounded_pairs(cov: np.ndarray, free: np.ndarray, labels, threshold: float = CORRELATION_MAX) -> list:
+    """``(label_i, label_j, correlation)`` of the free parameters correlated beyond ``threshold``."""
+    sd = np.sqrt(np.diag(cov))
+    corr = cov / np.outer(sd, sd)
+    i, j = np.triu_indices(len(cov), 1)
+    hit = free[i] & free[j] & (np.abs(corr[i, j]) > threshold)
+    return [(labels[a], labels[b], float(corr[a, b])) for a, b in zip(i[hit], j[hit])]

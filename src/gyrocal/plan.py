@@ -23,13 +23,10 @@ from scipy.optimize import brentq
 
 from . import effects, errormodel, identification, noise, preprocess, simulate
 from .diagnostics import COLLINEAR_FRACTION
+from .identification import CORRELATION_MAX, confounded_pairs
 from .likelihood import Stats, campaign_stats
 from .spec import ModelSpec
 from .units import AXES
-
-CORRELATION_MAX = 0.9
-"""Two parameters whose predicted posterior correlation exceeds this (in magnitude) are ones the
-plan cannot separate: the data pin down their combination, not each."""
 
 DETECTION_POWER = 0.9
 """An effect counts as detectable at the magnitude the structure test flags this often."""
@@ -93,15 +90,6 @@ def crlb_sd(A: np.ndarray, free: np.ndarray, prior_sd_si: np.ndarray) -> np.ndar
     blind = np.linalg.norm(vectors[:, null], axis=1) > 1e-6
     out[idx] = np.where(blind, np.inf, np.sqrt(var) * scale)
     return out
-
-
-def confounded_pairs(cov: np.ndarray, free: np.ndarray, labels, threshold: float = CORRELATION_MAX) -> list:
-    """``(label_i, label_j, correlation)`` of the free parameters correlated beyond ``threshold``."""
-    sd = np.sqrt(np.diag(cov))
-    corr = cov / np.outer(sd, sd)
-    i, j = np.triu_indices(len(cov), 1)
-    hit = free[i] & free[j] & (np.abs(corr[i, j]) > threshold)
-    return [(labels[a], labels[b], float(corr[a, b])) for a, b in zip(i[hit], j[hit])]
 
 
 def _schur(A, base, cand):

@@ -18,7 +18,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from . import __version__, modelchoice, plots, preprocess, telemetry
+from . import __version__, identification, modelchoice, plots, preprocess, telemetry
 from .calibration import core_rows, posterior_mean_params
 from .classic import hold_windows
 from .units import AXES, PAPER_AXES, paper_term, rad_to_arcsec
@@ -217,6 +217,8 @@ def build_context(model, maneuvers, tables, est, diagnostics, sampler, correctio
     drawn = draw_all(jobs, processes)
     figures = {d.id: drawn[2 * m] + drawn[2 * m + 1] for m, d in enumerate(maneuvers)}
     posterior_figs = "".join(drawn[2 * len(maneuvers):-1])
+    draws = idata.posterior["channel_param"].sel(parameter=list(spec.labels)).to_numpy()
+    pairs = identification.confounded_pairs(np.cov(draws.reshape(-1, len(spec)).T), spec.free, spec.labels)
     convergence = calibration[["channel", "parameter", "unit", "mean", "sd", "r_hat", "ess_bulk"]].round(
         {"mean": 2, "sd": 2, "r_hat": 4, "ess_bulk": 0})
     accounting = pd.DataFrame([{"maneuver": d.id, **d.counts} for d in maneuvers])
@@ -229,6 +231,7 @@ def build_context(model, maneuvers, tables, est, diagnostics, sampler, correctio
         "simulated": truth is not None,
         "tables": paper_tables(calibration, channels, maneuvers[0].sets[0], truth),
         "maneuver_figures": figures, "posterior_figures": posterior_figs, "convergence": convergence,
+        "confounded": pd.DataFrame(pairs, columns=["parameter", "with", "posterior correlation"]).round(3),
         "diagnostics": diagnostics, "comparison": comparison.round(3),
         "comparison_figure": drawn[-1],
         "correction": correction_doc, "correction_path": str(correction_path),
@@ -290,6 +293,11 @@ def render(ctx: dict) -> str:
         parts.append(f"<h3>{html.escape(m)}</h3>{figs}")
     parts.append("<h2>The posterior</h2>")
     parts.append(_table(ctx["convergence"], "convergence"))
+    parts.append("<h3>Pairs the data cannot separate</h3><p class='small'>Parameters whose posterior correlation "
+                 f"exceeds {identification.CORRELATION_MAX} in magnitude: the maneuvers pin down their combination, "
+                 "not each; their intervals are as wide as that confounding.</p>")
+    parts.append(_table(ctx["confounded"], "confounded") if len(ctx["confounded"]) else
+                 "<p id='confounded'>None: every pair is told apart.</p>")
     parts.append(ctx["posterior_figures"])
     parts.append("<h2>What the residuals point to</h2>")
     parts.append(f"<p>Misfit: <b class='{'fail' if ctx['diagnostics']['misfit'] else 'pass'}'>"
