@@ -36,6 +36,18 @@ def test_inverse_recovers_body_rate_from_any_spanning_set(params, channel_set):
     assert np.allclose(back, w * 0.1, rtol=0, atol=1e-15)
 
 
+def test_the_branch_follows_what_the_channel_senses_so_the_inverse_is_exact_near_zero_own_rate(params):
+    """A channel whose own axis barely turns while another does senses mostly the misalignment's share
+    of that rate; forward and inverse take the branch from that sensed rate and agree exactly."""
+    rng = np.random.default_rng(4)
+    w = np.column_stack([rng.normal(0, 1e-6, 400), rng.normal(0, 1e-6, 400), np.full(400, 0.003)])
+    sensed = w @ ch.response_rows(params).T
+    own = w[:, ch.input_axes(params.channels)]
+    assert np.mean(np.sign(sensed) != np.sign(own)) > 0.1  # the case the branch on omega_a got wrong
+    back = ch.solve_body(ch.measure(w, params), params)
+    assert np.allclose(back, w, rtol=0, atol=1e-15)
+
+
 def test_inverse_with_all_six_channels_is_least_squares(params):
     raw = np.random.default_rng(3).normal(0, 0.01, (100, 3))
     w = np.sign(raw) * (0.002 + np.abs(raw))

@@ -4,7 +4,9 @@ For channel c with input axis a::
 
     omega_c = (1 + s_c) * (omega_a + sum_b m_cb * omega_b) + b_c
 
-with ``s_c = sf_pos`` when ``omega_a > 0`` and ``sf_neg`` when ``omega_a < 0``.
+with ``s_c = sf_pos`` when the rate the channel senses, ``omega_a + sum_b m_cb * omega_b``, is
+positive and ``sf_neg`` when it is negative: the branch follows the channel's own output, which is
+all the onboard correction sees (`correction`) and all the inverse (`solve_body`) can use.
 Everything here is in SI: scale factors dimensionless, misalignments in rad,
 bias in rad/s. The same relations hold for increments over an interval ``dt``.
 """
@@ -123,7 +125,7 @@ def measure(body: np.ndarray, params: ChannelParams, dt_s=None, extra_scale=None
     """
     body = np.atleast_2d(np.asarray(body, dtype=float))
     sensed = body @ response_rows(params).T
-    positive = body[:, input_axes(params.channels)] > 0
+    positive = sensed > 0
     scale = 1.0 + np.where(positive, params.sf_pos, params.sf_neg)
     if extra_scale is not None:
         scale = scale + extra_scale
