@@ -40,6 +40,7 @@ def test_default_campaign_review_says_go_with_the_papers_tables(mom_run):
     for table in ("table1", "table2", "table3", "checks", "ranking", "comparison", "before-after", "accounting"):
         assert f'id="{table}"' in text or f"id='{table}'" in text
     assert "truth -1712" in text and "mc12" in text and "mis_roll" in text
+    assert "<p id='confounded'>None: every pair is told apart.</p>" in text
     all_channels = text[text.index('id="table2"'):text.index("The model against the measurements")]
     assert all_channels.count("OUTSIDE") <= 2       # at least 22 of the 24 intervals cover the truth
 
@@ -67,6 +68,9 @@ def test_a_plan_that_cannot_tell_two_effects_apart_gives_no_go_naming_both(tmp_p
     why = why[:why.index("</tr>")]
     assert "the data cannot tell baseline from nonlinear" in why
     assert "under nonlinear, dtg" in why and "sf_nonlinearity: a second rotation rate in each direction" in why
+    # the two yaw channels, both read against the one star tracker with its boresight near yaw
+    confounded = text[text.index("Pairs the data cannot separate"):text.index("What the residuals point to")]
+    assert 'id="confounded"' in confounded and "<td>dtg2_yaw.sf_pos</td>\n      <td>dtg3_yaw.sf_pos</td>" in confounded
 
 
 @pytest.mark.browser
