@@ -195,8 +195,9 @@ def run(base_scenario_path, cfg: dict, study_cfg: dict, index: int, group: str, 
     if group != "clean":
         effect = study_cfg["effects"][group]
         hidden = {effect["simulator_key"]: float(magnitude)}
-        hidden_units = {group: float(magnitude) * float(effect.get("to_model_unit", 1.0))}
-        models.append(effect["model"])
+        hidden_units = {group: float(magnitude)}
+        if effect["model"]:
+            models.append(effect["model"])
     scenario = campaign_scenario(base, truth, hidden, f"study_{group}_{index}", seed)
     model_cfg = {**cfg, "models": {"baseline": list(effects.BASELINE),
                                    **{m: list(effects.BASELINE) + [group] for m in models[1:]}}}
