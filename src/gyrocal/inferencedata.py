@@ -81,9 +81,7 @@ def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
     p = post.n_params
     n_chain, n_draw = kept.shape[:2]
     flat = kept.reshape(-1, kept.shape[-1])
-    dtheta, log_sigma = flat[:, :p], flat[:, p:]
-    ratios = np.mean(log_sigma[:, 1:] - log_sigma[:, :1], axis=0)
-    scale2 = np.exp(2 * log_sigma[:, 0])
+    dtheta, ratios, scale2 = predictive.split_draws(flat, p)
     n_pred = min(sampler_cfg["predictive_draws"], n_draw)
     pred_rows = (np.arange(n_chain)[:, None] * n_draw + np.arange(n_pred)[None]).ravel()
     rng = np.random.default_rng([seed, 99])

@@ -6,6 +6,8 @@ residual is formed in the inertial frame and rotated into body axes, and noise
 replicates come from the banded covariance of `noise`.
 """
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.linalg import cho_solve_banded, solve_triangular
 
@@ -55,11 +57,25 @@ def undifference_body(lin: Linearization, differenced: np.ndarray) -> np.ndarray
     return np.einsum("mji,dmsj->dmsi", lin.st_matrix, inertial)
 
 
+def sample_blocks(st_time, block_s) -> np.ndarray:
+    """Block number of each star-tracker sample: ``block_s`` seconds from the maneuver's first."""
+    return np.floor((st_time - st_time[0]) / block_s).astype(int)
+
+
 def block_index(lin: Linearization, st_time, block_s) -> np.ndarray:
     """Block number of each whitened row (time-major, then set, then axis)."""
-    blocks = np.floor((st_time - st_time[0]) / block_s).astype(int)
     per_time = lin.z.shape[1] * 3
-    return np.repeat(blocks, per_time)
+    return np.repeat(sample_blocks(st_time, block_s), per_time)
+
+
+def split_draws(flat: np.ndarray, n_params: int):
+    """``(dtheta, ratios, scale)`` of draws ``[dtheta (P), log sigma_cross, log sigma_about, log arw]``:
+    the pointwise terms are whitened once, at the draws' mean noise ratios (a factor per draw would
+    repeat the banded inversion per draw), while ``scale = sigma_cross^2`` is each draw's own (it
+    enters in closed form)."""
+    dtheta, log_sigma = flat[:, :n_params], flat[:, n_params:]
+    ratios = np.mean(log_sigma[:, 1:] - log_sigma[:, :1], axis=0)
+    return dtheta, ratios, np.exp(2 * log_sigma[:, 0])
 
 
 def _undifference_transpose(x: np.ndarray, block: int) -> np.ndarray:
@@ -69,8 +85,32 @@ def _undifference_transpose(x: np.ndarray, block: int) -> np.ndarray:
     return out
 
 
-def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dtheta, scale, block_of_row):
-    """(D, n_blocks) ``log p(block | all other data, draw)`` with the nuisance integrated out.
+@dataclass
+class BlockConditional:
+    """One block's density given every other row of its maneuver, as a whitened linear system.
+
+    ``log p(y_b | y_-b, dtheta, scale) = 1/2 logdet - n_b/2 log(2 pi scale) - 1/2 |r - W dtheta|^2 / scale``
+    with ``W = w[:, :P]`` and ``r = w[:, -1]``: quadratic in the draw, so its curvature in the
+    parameters (``W' W / scale``) is exact, which `looexact` uses to explain p_loo.
+    """
+
+    block: int
+    logdet: float
+    """``log |Prec_bb|`` at unit scale."""
+    w: np.ndarray
+    """(n_b, P + 1) ``F^-1 (Prec [X, y])_b`` with ``F F' = Prec_bb``, Prec the precision of the
+    undifferenced series with the nuisance projected out: the design's columns, then the data's."""
+
+    def loglik(self, dtheta: np.ndarray, scale) -> np.ndarray:
+        """(D,) the density's log at each row of ``dtheta`` with its ``scale`` (sigma_cross^2)."""
+        p = dtheta.shape[1]
+        quad = np.sum((self.w[:, -1:] - self.w[:, :p] @ dtheta.T) ** 2, axis=0)
+        return 0.5 * (self.logdet - len(self.w) * np.log(2 * np.pi * scale)) - 0.5 * quad / scale
+
+
+def block_conditionals(lin: Linearization, whitened: WhitenedManeuver, block_of_row):
+    """Yield a `BlockConditional` per non-empty block: ``log p(block | all other data, draw)``
+    with the nuisance integrated out.
 
     For a Gaussian with precision P, ``log p(y_b | y_-b) = 1/2 log|P_bb| - n_b/2 log 2 pi
     - 1/2 (P r)_b' P_bb^-1 (P r)_b``, and ``P r`` is linear in the draw; with a flat-prior
@@ -78,8 +118,7 @@ def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dthet
     ``T' C^-1 T`` with C the banded covariance of the differenced series, so ``Q_bb``
     needs ``C^-1`` over the block and the ``width`` rows after it: `selectedinverse`
     gives those in time linear in the telemetry length. The noise ratios are those
-    ``whitened`` was factored at; the scale (sigma_cross^2) is per draw. These are the
-    pointwise terms PSIS-LOO needs (one-step-ahead terms are not).
+    ``whitened`` was factored at (unit sigma_cross).
     """
     chol, noise = whitened.chol, whitened.noise
     width = lin.z.shape[1] * 3
@@ -98,7 +137,6 @@ def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dthet
     first_row = np.searchsorted(block_of_row, np.arange(n_blocks + 1))
     edges = recursion_bounds(np.unique(first_row), chol.shape[0] - 1)
     home = np.searchsorted(edges, first_row[:-1], side="right") - 1
-    out = np.zeros((len(dtheta), n_blocks))
     for start, z in inverse_windows(chol, edges):
         for b in np.flatnonzero((edges[home] == start) & (first_row[1:] > first_row[:-1])):
             rows = slice(first_row[b], first_row[b + 1])
@@ -106,9 +144,16 @@ def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dthet
             p_bb = q_bb - q_g[rows] @ gqg_inv @ q_g[rows].T
             factor = np.linalg.cholesky(p_bb)
             logdet = 2 * np.sum(np.log(np.diag(factor)))
-            w = solve_triangular(factor, projected[rows], lower=True)
-            quad = np.sum((w[:, -1:] - w[:, :p] @ dtheta.T) ** 2, axis=0)
-            out[:, b] = 0.5 * (logdet - (rows.stop - rows.start) * np.log(2 * np.pi * scale)) - 0.5 * quad / scale
+            yield BlockConditional(int(b), logdet, solve_triangular(factor, projected[rows], lower=True))
+
+
+def leave_block_out_loglik(lin: Linearization, whitened: WhitenedManeuver, dtheta, scale, block_of_row):
+    """(D, n_blocks) ``log p(block | all other data, draw)`` with the nuisance integrated out
+    (`block_conditionals`); the scale (sigma_cross^2) is per draw. These are the pointwise
+    terms PSIS-LOO needs (one-step-ahead terms are not)."""
+    out = np.zeros((len(dtheta), block_of_row.max() + 1))
+    for term in block_conditionals(lin, whitened, block_of_row):
+        out[:, term.block] = term.loglik(dtheta, scale)
     return out
 
 
