@@ -135,3 +135,11 @@ def test_study_workflow_runs_end_to_end_on_tiny_campaigns(tmp_path):
     assert json.loads((out / "summary.json").read_text())["campaigns"] == 3
     for name in ("accuracy", "coverage", "sbc", "detection"):
         assert (out / f"{name}.png").stat().st_size > 1000
+
+
+def test_detection_counts_a_signature_that_names_the_same_physics():
+    models = pd.DataFrame({"group": "st_latency", "model": "baseline", "magnitude": 0.01,
+                           "misfit": [True, True, False], "top": ["acceleration", "st_latency", "acceleration"]})
+    row = validation.detection(models, {"st_latency": ["acceleration"]}).iloc[0]
+    assert row["ranked_first"] == pytest.approx(1 / 3) and row["named_first"] == 1.0
+    assert row["detected_and_first"] == pytest.approx(2 / 3)

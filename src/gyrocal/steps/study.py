@@ -19,7 +19,7 @@ def read_records(paths) -> list:
     return [r for p in paths for r in json.loads(Path(p).read_text())]
 
 
-def summarize(record_paths, scenario_path, cfg, out_dir):
+def summarize(record_paths, scenario_path, cfg, study_cfg, out_dir):
     """Every table and figure of the study into ``out_dir`` (docs/validation.md lists them)."""
     from .. import plan, plots, validation, validationplots
     records = read_records(record_paths)
@@ -39,7 +39,8 @@ def summarize(record_paths, scenario_path, cfg, out_dir):
         "coverage_per_parameter": validation.coverage(clean, by=["label"]),
         "sbc": validation.sbc(params, models),
         "error_rates": validation.error_rates(models, cfg["diagnostics"]),
-        "detection": validation.detection(models),
+        "detection": validation.detection(models, {name: effect.get("signatures", [])
+                                                   for name, effect in study_cfg["effects"].items()}),
         "extended_coverage": validation.extended_coverage(params),
         "plan_check": validation.plan_check(params, predicted),
         "campaigns": models,
