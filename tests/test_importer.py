@@ -49,6 +49,29 @@ def test_import_writes_a_campaign_per_the_contract(tmp_path):
     assert second.t_start == pytest.approx(again.maneuvers[0].t_end + 0.01)
 
 
+def test_a_reference_interval_keeps_every_nth_reference_row_and_counts_the_rest(tmp_path):
+    t, quat, _ = repoimu_like(tmp_path / "Trial_A.csv")
+    out = tmp_path / "campaign"
+    campaign, counts = importer.import_files("repoimu", out, [tmp_path / "Trial_A.csv"], reference_interval_s=0.5)
+    again = telemetry.read_campaign(out)
+    kept = list(range(0, 400, 50)) + [399]
+    assert np.allclose(again.st_time, t[kept] - t[0])
+    assert len(again.gyro_time) == 400
+    assert counts["Trial_A"]["reference_kept"] == 9
+    assert counts["Trial_A"]["reference_dropouts"] == 1  # row 50 is kept, row 51 is not
+    valid = again.st_valid == 1
+    assert np.allclose(again.st_quat[valid], quat[kept][valid], atol=1e-9)
+    assert "reference kept every 0.5 s: 9 samples, 391 left out between them" in importer.report(campaign, counts, out)
+
+
+def test_a_negative_reference_interval_is_refused(tmp_path):
+    mapping = importer.read_mapping("repoimu")
+    mapping["reference"]["sample_interval_s"] = -1
+    (tmp_path / "mine.yaml").write_text(yaml.safe_dump(mapping))
+    with pytest.raises(telemetry.TelemetryError, match="sample_interval_s must be a number of seconds >= 0"):
+        importer.read_mapping(tmp_path / "mine.yaml")
+
+
 def test_a_users_own_format_needs_a_mapping_not_code(tmp_path):
     t = 0.1 * np.arange(50)
     quat = Rotation.from_rotvec(np.outer(0.02 * np.arange(50), [0, 0, 1.0])).as_quat()

@@ -18,6 +18,9 @@ def main(argv=None):
     imp.add_argument("mapping", help="a shipped mapping (repoimu) or a mapping file (.yaml)")
     imp.add_argument("outdir")
     imp.add_argument("files", nargs="+", help="one maneuver per file, named after its stem")
+    imp.add_argument("--reference-interval", type=float, default=None, metavar="S",
+                     help="keep the reference only every S seconds (0: every row); default: the mapping's "
+                          "reference.sample_interval_s")
     val = sub.add_parser("validate", help="check a campaign directory against the contract")
     val.add_argument("directory")
     cmp_ = sub.add_parser("compare-campaigns", help="compare two calibration.csv parameter by parameter")
@@ -42,7 +45,7 @@ def main(argv=None):
                   f"and {args.outdir}/truth.json")
         elif args.command == "import":
             from .importer import import_files, report
-            print(report(*import_files(args.mapping, args.outdir, args.files), args.outdir))
+            print(report(*import_files(args.mapping, args.outdir, args.files, args.reference_interval), args.outdir))
         elif args.command == "validate":
             from .consistency import read_checked, summary
             print(summary(*read_checked(args.directory)))

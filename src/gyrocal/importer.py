@@ -8,6 +8,11 @@ times are shifted so the maneuvers follow each other, one sample step apart (or 
 code. gyrocal ships the mappings in ``gyrocal/mappings/`` (``repoimu``: the RepoIMU
 T-stick recordings).
 
+A reference faster than its noise is white (a motion-capture system filters its attitude over
+several of its samples) can be kept only every ``reference.sample_interval_s`` seconds, as a
+star tracker at a few Hz would give it, while the gyro keeps every row: the rows in between
+are left out of ``star_tracker.csv`` and counted in the import report, never dropped silently.
+
 Rates become increments by the trapezoidal rule, ``(w[k-1] + w[k]) / 2 * dt``: a sampled
 rate is an instantaneous value, and the trapezoid integrates a rate that varies linearly
 between samples with no lag; ``w[k] * dt`` would lag half a sample, 5 ms at 100 Hz, which is
@@ -74,6 +79,10 @@ def read_mapping(name_or_path) -> dict:
     units = RATE_UNITS if gyro["quantity"] == "rate" else ANGLE_UNITS
     if gyro.get("unit") not in units:
         raise TelemetryError(f"{path}: gyro.unit of a {gyro['quantity']} must be one of {sorted(units)}")
+    interval = mapping["reference"].get("sample_interval_s")
+    if interval is not None and not (isinstance(interval, (int, float)) and interval >= 0):
+        raise TelemetryError(f"{path}: reference.sample_interval_s must be a number of seconds >= 0 "
+                             "(0: every row)")
     for name, axis in gyro.get("axes", {}).items():
         if axis not in AXES:
             raise TelemetryError(f"{path}: gyro.axes.{name} must be one of {list(AXES)}")
@@ -127,7 +136,22 @@ def maneuver_axis(imported: Imported, axes: list) -> str:
     return axes[int(np.argmax(turned))]
 
 
-def build_campaign(files, mapping, name: str) -> tuple:
+def reference_rows(time, interval_s) -> np.ndarray:
+    """Which rows of one file keep their reference sample when it is wanted only every
+    ``interval_s`` seconds: the first row, then every row ``round(interval_s / median step)``
+    after it, and the last row (so the reference spans the whole maneuver). ``0`` or ``None``:
+    every row."""
+    keep = np.ones(len(time), dtype=bool)
+    if not interval_s:
+        return keep
+    every = max(1, round(interval_s / float(np.median(np.diff(time)))))
+    keep[:] = False
+    keep[::every] = True
+    keep[-1] = True
+    return keep
+
+
+def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tuple:
     """The campaign of ``files`` (one maneuver each, end to end) and what was counted per file."""
     gyro = mapping["gyro"]
     names = list(gyro["columns"])
@@ -135,6 +159,9 @@ def build_campaign(files, mapping, name: str) -> tuple:
     channels = tuple(Channel(n, None, a) for n, a in zip(names, axes))
     gap = mapping.get("gap_s")
     direction = (mapping.get("maneuver") or {}).get("direction", "both")
+    interval = mapping["reference"].get("sample_interval_s") if reference_interval_s is None else reference_interval_s
+    if interval is not None and interval < 0:
+        raise TelemetryError(f"a reference sample interval must be >= 0 s (0: every row), got {interval:g}")
     parts, maneuvers, counts = [], [], {}
     offset = 0.0
     for f in files:
@@ -144,29 +171,33 @@ def build_campaign(files, mapping, name: str) -> tuple:
                                  f"and '_'")
         shift = offset - imp.time[0]
         time = imp.time + shift
-        parts.append((time, imp))
+        keep = reference_rows(time, interval)
+        parts.append((time, imp, keep))
         maneuvers.append(Maneuver(imp.stem, maneuver_axis(imp, axes), direction, float(time[0]), float(time[-1])))
-        counts[imp.stem] = {"rows": len(time), "reference_dropouts": int((~imp.valid).sum()),
+        counts[imp.stem] = {"rows": len(time), "reference_dropouts": int((~imp.valid[keep]).sum()),
+                            "reference_kept": int(keep.sum()), "reference_interval_s": float(interval or 0.0),
                             "time_shift_s": float(shift)}
         offset = time[-1] + (float(np.median(np.diff(time))) if gap is None else float(gap))
-    time = np.concatenate([t for t, _ in parts])
-    quat = np.concatenate([imp.quat for _, imp in parts])
-    valid = np.concatenate([imp.valid for _, imp in parts]).astype(int)
-    increments = np.concatenate([imp.increments for _, imp in parts])
+    time = np.concatenate([t for t, _, _ in parts])
+    st_time = np.concatenate([t[keep] for t, _, keep in parts])
+    quat = np.concatenate([imp.quat[keep] for _, imp, keep in parts])
+    valid = np.concatenate([imp.valid[keep] for _, imp, keep in parts]).astype(int)
+    increments = np.concatenate([imp.increments for _, imp, _ in parts])
     columns = {n: increments[:, i] for i, n in enumerate(names)}
     for key in parts[0][1].extras:
-        columns[key] = np.concatenate([imp.extras[key] for _, imp in parts])
+        columns[key] = np.concatenate([imp.extras[key] for _, imp, _ in parts])
     campaign = Campaign(name=name, channels=channels, star_tracker=dict(mapping.get("star_tracker") or {}),
-                        gyro=dict(mapping.get("gyro_noise") or {}), maneuvers=tuple(maneuvers), st_time=time,
+                        gyro=dict(mapping.get("gyro_noise") or {}), maneuvers=tuple(maneuvers), st_time=st_time,
                         st_quat=quat, st_valid=valid, gyro_time=time, gyro_columns=columns)
     return campaign, counts
 
 
-def import_files(mapping_name, outdir, files) -> tuple:
-    """``gyrocal import``: read ``files`` through a mapping and write the campaign to ``outdir``."""
+def import_files(mapping_name, outdir, files, reference_interval_s=None) -> tuple:
+    """``gyrocal import``: read ``files`` through a mapping and write the campaign to ``outdir``;
+    ``reference_interval_s`` overrides the mapping's ``reference.sample_interval_s`` (0: every row)."""
     mapping = read_mapping(mapping_name)
     name = default_name(outdir)
-    campaign, counts = build_campaign(files, mapping, name)
+    campaign, counts = build_campaign(files, mapping, name, reference_interval_s)
     write_campaign(campaign, outdir)
     return campaign, counts
 
@@ -177,6 +208,11 @@ def report(campaign, counts, outdir) -> str:
              f"extras {', '.join(campaign.extras()) or 'none'}"]
     for m in campaign.maneuvers:
         c = counts[m.id]
-        lines.append(f"  {m.id:<24} {m.direction} {m.axis:<6} {c['rows']} rows, {c['reference_dropouts']} reference "
-                     f"dropouts (all-zero quaternions, flagged invalid), times shifted by {c['time_shift_s']:+.2f} s")
+        kept = ""
+        if c["reference_kept"] < c["rows"]:
+            kept = (f", reference kept every {c['reference_interval_s']:g} s: {c['reference_kept']} samples, "
+                    f"{c['rows'] - c['reference_kept']} left out between them (the gyro keeps every row)")
+        lines.append(f"  {m.id:<24} {m.direction} {m.axis:<6} {c['rows']} rows{kept}, {c['reference_dropouts']} "
+                     f"reference dropouts (all-zero quaternions, flagged invalid), times shifted by "
+                     f"{c['time_shift_s']:+.2f} s")
     return "\n".join(lines)
