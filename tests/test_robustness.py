@@ -94,6 +94,21 @@ def test_neighbour_residual_is_zero_on_a_line_and_isolates_a_spike():
     assert np.allclose(np.delete(r, 7, axis=0), 0.0)
 
 
+def test_the_reference_noise_seen_by_the_checks_does_not_grow_when_the_reference_is_thinned(tiny, tmp_path):
+    """The rotation checks' noise is the noise of one reference sample (tiny: 5 arcsec across the
+    boresight, 20 about it), whatever the interval between samples; the reference's own
+    interval rotations, which the checks once took for it, are the motion per interval."""
+    thinned = tmp_path / "thinned"
+    mutations.corrupted_copy(tiny[0], thinned, lambda d: (d / "star_tracker.csv").write_text(
+        "".join(line for i, line in enumerate((d / "star_tracker.csv").read_text().splitlines(True)) if i % 5 < 1)))
+    for directory, step in ((tiny[0], 1.0), (thinned, 5.0)):
+        campaign = consistency.read_campaign(directory)
+        for m in campaign.maneuvers:
+            sensed = consistency.sense(consistency.preprocess.slice_maneuver(campaign, m.id))
+            assert np.median(sensed.dt) == pytest.approx(step)
+            assert 4.0 < consistency.rad_to_arcsec(consistency.reference_noise_rad(sensed)) < 30.0
+
+
 def test_robust_covariance_recovers_the_bulk_despite_gross_outliers():
     rng = np.random.default_rng(5)
     cov = np.array([[4.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 9.0]])

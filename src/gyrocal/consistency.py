@@ -191,6 +191,22 @@ def _limits(channels):
     return bounds["sf_pos"], mis, sds["sf_pos"]
 
 
+def reference_noise_rad(sensed: Sensed) -> float:
+    """The noise of one reference sample as the data show it (rad, a robust sd over the three
+    axes): the smaller of two upper bounds. One is the spread of the sensors' error angles
+    about the interpolation of their neighbours (`neighbour_residual`), where a bias, a scale
+    error and a steady rate cancel; it holds at any sample interval, but a gyro fault (a unit
+    slip) inflates it. The other is the spread of the reference's own interval rotations, which
+    no gyro fault touches; it is the noise only where the reference barely turns between
+    samples, and otherwise the motion per interval, which grows with the interval (thinned to
+    1 s, a hand-held reference turns tens of degrees per interval) though the noise does not."""
+    data, d_st = sensed.data, sensed.d_st
+    err = neighbour_residual(preprocess.error_angles(data, data.sets[0], ch.ChannelParams.zeros(data.channels)))
+    between = 1.4826 * np.median(np.abs(err[1:-1]))
+    own = 1.4826 * np.median(np.abs(d_st - np.median(d_st, axis=0))) / np.sqrt(2)
+    return float(min(between, own) + 1e-12)
+
+
 def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Findings) -> bool:
     """Angle, axis, direction and units of one maneuver's rotation, gyro against star tracker;
     whether it is consistent."""
@@ -199,8 +215,7 @@ def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Find
     sf_bound, mis_bound, sf_sd = limits
     d_st, dt, d_gyro = sensed.d_st, sensed.dt, sensed.d_gyro
     where = f"maneuver {m.id} ({m.turn})"
-    noise_rad = float(np.median(np.abs(d_st - np.median(d_st, axis=0))) * 1.4826 + 1e-12)
-    min_angle = noise_rad / sf_sd
+    min_angle = reference_noise_rad(sensed) / sf_sd
     blocked_dt, blocked_gyro, blocked_st = _blocked(dt, d_gyro, d_st)
     fit = fit_rotation(blocked_gyro, blocked_st, blocked_dt, a)
     gyro_excursion = np.ptp(np.cumsum(d_gyro, axis=0), axis=0)
@@ -404,7 +419,7 @@ def clock_findings(sensed: Sensed, findings: Findings):
             "synchronised, and is each time the end of its sample?")
         return
     d_st = sensed.d_st
-    noise_rad = 1.4826 * np.median(np.abs(np.diff(d_st, axis=0))) / np.sqrt(2) + 1e-15
+    noise_rad = reference_noise_rad(sensed)
     peak_rate = np.max(np.abs(d_st[:, AXIS_INDEX[data.axis]]) / sensed.dt)
     if abs(offset) * peak_rate > DETECTION_SD * noise_rad:
         findings.warnings.append(
