@@ -80,7 +80,27 @@ def test_a_window_without_holds_is_a_warning_and_classic_gives_no_number(tiny, t
     assert classic.classic(preprocess.slice_maneuver(campaign, "yaw_pos")).empty
 
 
-def test_a_clean_campaign_has_no_warning_and_no_outlier(tiny):
+def test_a_maneuver_without_holds_reports_the_error_between_its_first_and_last_reference_samples(tiny, tmp_path):
+    """The report's before/after table once indexed an empty hold (the RepoIMU trials with the
+    reference every 1 s reached it and crashed). Corrected with the truth, the error left by
+    the rotation (scale errors of about 1000 ppm over 90 deg: hundreds of arcsec) shrinks to
+    the noise."""
+    from gyrocal import preprocess, report
+
+    from conftest import truth_vector
+    directory = tmp_path / "campaign"
+    mutations.corrupted_copy(tiny[0], directory, mutations.no_hold)
+    campaign, _ = consistency.read_checked(directory)
+    data = preprocess.slice_maneuver(campaign, "yaw_pos")
+    truth = truth_vector(data.channels, tiny[1])
+    n = len(truth.channels)
+    nominal = type(truth)(truth.channels, np.zeros(n), np.zeros(n), np.zeros((n, 3)), truth.bias_rad_s)
+    table = report.correction_effect([data], [truth], [nominal])
+    in_loop = table[table["in loop"]].iloc[0]
+    assert in_loop["before norm"] > 100.0 and in_loop["after norm"] < 60.0
+
+
+
     _, findings = consistency.read_checked(tiny[0])
     assert findings.warnings == [] and findings.outliers == []
 

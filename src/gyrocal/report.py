@@ -102,10 +102,16 @@ def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> di
 def correction_effect(maneuvers, params_by_maneuver, nominal_by_maneuver) -> pd.DataFrame:
     """Attitude error left at the end of every maneuver and channel set, before the
     correction (nominal parameters) and after it (the estimate); both with the estimated
-    biases removed, so what differs is the uplinked scale factors and misalignments."""
+    biases removed, so what differs is the uplinked scale factors and misalignments. A maneuver
+    with no reference sample in a hold (one that turns throughout, or a sparse reference)
+    takes its first or last reference sample instead."""
     rows = []
     for data, params, nominal in zip(maneuvers, params_by_maneuver, nominal_by_maneuver):
         before_mask, after_mask = hold_windows(data)
+        if not before_mask.any():
+            before_mask = np.arange(len(data.st_time)) == 0
+        if not after_mask.any():
+            after_mask = np.arange(len(data.st_time)) == len(data.st_time) - 1
         for s, channel_set in enumerate(data.sets):
             before = preprocess.end_of_rotation_error(data, channel_set, nominal, before_mask, after_mask)
             after = preprocess.end_of_rotation_error(data, channel_set, params, before_mask, after_mask)
