@@ -13,6 +13,7 @@ what the data's own noise allows, is listed and kept out of the fit.
 """
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -132,6 +133,14 @@ class Sensed:
     dt: np.ndarray
     """(M-1,) star-tracker sample intervals (s)."""
 
+    @cached_property
+    def departures(self) -> np.ndarray:
+        """(M, 3) each sample's error angle between the sensors (eq. 4, nominal parameters, rad)
+        less the interpolation of its neighbours (`neighbour_residual`): the reference's noise
+        estimate and the outlier screen both start from it."""
+        zeros = ch.ChannelParams.zeros(self.data.channels)
+        return neighbour_residual(preprocess.error_angles(self.data, self.data.sets[0], zeros))
+
 
 def sense(data) -> Sensed:
     """Both sensors' rotations of one maneuver, for every check of it."""
@@ -200,9 +209,8 @@ def reference_noise_rad(sensed: Sensed) -> float:
     no gyro fault touches; it is the noise only where the reference barely turns between
     samples, and otherwise the motion per interval, which grows with the interval (thinned to
     1 s, a hand-held reference turns tens of degrees per interval) though the noise does not."""
-    data, d_st = sensed.data, sensed.d_st
-    err = neighbour_residual(preprocess.error_angles(data, data.sets[0], ch.ChannelParams.zeros(data.channels)))
-    between = 1.4826 * np.median(np.abs(err[1:-1]))
+    d_st = sensed.d_st
+    between = 1.4826 * np.median(np.abs(sensed.departures[1:-1]))
     own = 1.4826 * np.median(np.abs(d_st - np.median(d_st, axis=0))) / np.sqrt(2)
     return float(min(between, own) + 1e-12)
 
@@ -459,9 +467,7 @@ def outlier_distances(sensed: Sensed):
     nine regressors are fitted on the inliers and taken out, so only what the motion cannot
     explain remains.
     """
-    data, body = sensed.data, sensed.body
-    zeros = ch.ChannelParams.zeros(data.channels)
-    err = neighbour_residual(preprocess.error_angles(data, data.sets[0], zeros))
+    data, body, err = sensed.data, sensed.body, sensed.departures
     rate = body / data.dt[:, None]
     k, frac = data.st_interval()
     motion = neighbour_residual(np.concatenate([cumulative_at_st(body, k, frac), rate[k],
