@@ -79,10 +79,7 @@ def read_mapping(name_or_path) -> dict:
     units = RATE_UNITS if gyro["quantity"] == "rate" else ANGLE_UNITS
     if gyro.get("unit") not in units:
         raise TelemetryError(f"{path}: gyro.unit of a {gyro['quantity']} must be one of {sorted(units)}")
-    interval = mapping["reference"].get("sample_interval_s")
-    if interval is not None and not (isinstance(interval, (int, float)) and interval >= 0):
-        raise TelemetryError(f"{path}: reference.sample_interval_s must be a number of seconds >= 0 "
-                             "(0: every row)")
+    _check_interval(mapping["reference"].get("sample_interval_s"), f"{path}: reference.sample_interval_s")
     for name, axis in gyro.get("axes", {}).items():
         if axis not in AXES:
             raise TelemetryError(f"{path}: gyro.axes.{name} must be one of {list(AXES)}")
@@ -136,6 +133,12 @@ def maneuver_axis(imported: Imported, axes: list) -> str:
     return axes[int(np.argmax(turned))]
 
 
+def _check_interval(interval_s, where: str):
+    """A reference sample interval is ``None`` or a number of seconds >= 0 (0: every row)."""
+    if interval_s is not None and not (isinstance(interval_s, (int, float)) and interval_s >= 0):
+        raise TelemetryError(f"{where} must be a number of seconds >= 0 (0: every row), got {interval_s!r}")
+
+
 def reference_rows(time, interval_s) -> np.ndarray:
     """Which rows of one file keep their reference sample when it is wanted only every
     ``interval_s`` seconds: the first row, then every row ``round(interval_s / median step)``
@@ -160,8 +163,7 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
     gap = mapping.get("gap_s")
     direction = (mapping.get("maneuver") or {}).get("direction", "both")
     interval = mapping["reference"].get("sample_interval_s") if reference_interval_s is None else reference_interval_s
-    if interval is not None and interval < 0:
-        raise TelemetryError(f"a reference sample interval must be >= 0 s (0: every row), got {interval:g}")
+    _check_interval(interval, "the reference sample interval")
     parts, maneuvers, counts = [], [], {}
     offset = 0.0
     for f in files:
