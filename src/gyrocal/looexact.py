@@ -39,7 +39,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import logsumexp
 
-from . import classic, comparison, effects, noise, predictive, telemetry
+from . import classic, comparison, effects, noise, predictive, study
 from .estimate import PointEstimate
 from .likelihood import maneuver_stats
 from .preprocess import ManeuverData
@@ -185,27 +185,9 @@ def scale_moments(flat: np.ndarray, n_params: int) -> tuple:
 
 
 def run_steps(campaign_dir, out, cfg: dict, model: str = "baseline") -> list:
-    """gyrocal's steps up to the posterior on one campaign directory, in the order of the
-    workflow's rules and each given its rule's config sections (as ``tests/conftest``'s
-    ``run_campaign``); the model's outputs land in ``out/<model>/``. Returns the preprocessed
-    maneuver files."""
-    from .steps import classic as classic_step
-    from .steps import point_estimate, posterior, preprocess, validate
-    out = Path(out)
-    ids = [m.id for m in telemetry.read_meta(campaign_dir)["maneuvers"]]
-    validate.run(campaign_dir, out / "input.json")
-    for m in ids:
-        preprocess.run(campaign_dir, out / "input.json", m, out / f"preprocess/{m}.npz", out / f"preprocess/{m}.csv",
-                       out / f"preprocess/{m}.png")
-    npz = [out / f"preprocess/{m}.npz" for m in ids]
-    classic_step.run(npz, out / "classic.csv")
-    d = out / model
-    point_estimate.run(npz, out / "input.json", out / "classic.csv", model, cfg["models"][model], cfg["noise"],
-                       cfg["plugins"], d / "point_estimate.npz")
-    posterior.run(npz, d / "point_estimate.npz", cfg["plugins"], cfg["priors"], cfg["prior_from"] or None,
-                  cfg["sampler"], cfg["grid"], cfg["convergence"], cfg["seed"], d / "posterior.nc",
-                  d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json", d / "elpd_maneuvers.csv")
-    return npz
+    """gyrocal's steps up to the posterior on one campaign directory (`study.calibrate_steps`);
+    the model's outputs land in ``out/<model>/``. Returns the preprocessed maneuver files."""
+    return study.calibrate_steps(campaign_dir, out, cfg, [model], through="posterior")
 
 
 def campaign_without(campaign_dir, out_dir, t_lo: float, t_hi: float) -> tuple:

@@ -64,9 +64,10 @@ def campaign_scenario(base: dict, truth: dict, hidden: dict, name: str, seed: in
     return out
 
 
-def calibrate_steps(campaign_dir, out, cfg: dict, models, figures=True) -> list:
+def calibrate_steps(campaign_dir, out, cfg: dict, models, figures=True, through="diagnostics") -> list:
     """Run gyrocal's steps on one campaign, in the order the workflow's rules run them, each given
-    the config its rule is given, up to each model's diagnostics. Returns the preprocessed files."""
+    the config its rule is given, up to each model's diagnostics (``through="posterior"``: up to
+    its posterior). Returns the preprocessed files."""
     out = Path(out)
     ids = [m.id for m in telemetry.read_meta(campaign_dir)["maneuvers"]]
     validate.run(campaign_dir, out / "input.json")
@@ -83,6 +84,8 @@ def calibrate_steps(campaign_dir, out, cfg: dict, models, figures=True) -> list:
         posterior.run(npz, d / "point_estimate.npz", plugins, cfg["priors"], cfg["prior_from"] or None,
                       cfg["sampler"], cfg["grid"], cfg["convergence"], cfg["seed"], d / "posterior.nc",
                       d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json", d / "elpd_maneuvers.csv")
+        if through == "posterior":
+            continue
         calibrate.run(d / "point_estimate.npz", d / "posterior_summary.csv", npz, d / "calibration.csv",
                       d / "correction.json")
         diagnostics.run(npz, d / "point_estimate.npz", d / "posterior_summary.csv", d / "fit.csv", plugins,
