@@ -9,11 +9,22 @@ later attitude by ``R_{k+1/2} d phi_k``. Hence, to first order,
     z_j = chi0 + S_j (p_true - p0) + gyro random walk + R_j v_j,
 
 with ``chi0`` the initial attitude error and ``v_j`` the star-tracker noise.
+
+The columns ``S_j`` are built from the measured increments, which carry the gyro's random
+walk. That noise is the residual's own, so the score ``S' W z`` at the truth would not be
+zero on average (an errors-in-variables bias, largest in the channel-set difference where
+the star-tracker noise cancels). The per-interval columns are therefore averaged over
+`COLUMN_WINDOW_INTERVALS` star-tracker intervals (`smoothed_columns`): the noise they
+share with any one interval's residual falls by that factor, while their running sums,
+which the holds see, are unchanged. The columns then act as instruments: the estimate
+solves ``S' W z = 0`` with ``S`` nearly free of the residual's noise (docs/validation.md,
+"The structure test's excess").
 """
 
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import uniform_filter1d
 from scipy.spatial.transform import Rotation
 
 from . import channels as ch
@@ -21,6 +32,12 @@ from . import kinematics
 from .effects import ManeuverView
 from .preprocess import ManeuverData
 from .spec import ModelSpec
+
+COLUMN_WINDOW_INTERVALS = 5
+"""Star-tracker intervals the model's columns are averaged over: the ARW they share with one
+interval's residual falls to 1/5 (at 1 Hz, the score test's mean at the truth fell from 5.98
+to 1.47 against 1.38 with noise-free columns); at the rotations' ends the columns are delayed
+by at most half the window."""
 
 
 @dataclass
@@ -144,6 +161,7 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
         columns += [-np.einsum("kai,ki->ka", m_inv, regressors[:, :, j]) for j in range(regressors.shape[2])]
         mid = kinematics.compose(attitudes[:-1], Rotation.from_rotvec(0.5 * phi))
         inertial = np.einsum("kij,kjp->kip", mid.as_matrix(), np.stack(columns, axis=2))
+        inertial = smoothed_columns(inertial, data.dt, data.st_time)
         at_st_jac = cumulative_at_st(inertial, k, frac)
         at_st = kinematics.attitude_at(data.gyro_time, attitudes, phi, data.st_time)
         e = kinematics.error_angles_rad(at_st, st_rot)
@@ -160,6 +178,20 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
     st_dt = np.diff(np.concatenate([[data.gyro_time[0]], data.st_time]))
     shared = _shared_walk(len(sets), st_dt)
     return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, shared, body)
+
+
+def smoothed_columns(per_interval: np.ndarray, dt_s: np.ndarray, st_time_s: np.ndarray) -> np.ndarray:
+    """Per-gyro-interval columns (K, ...) averaged over `COLUMN_WINDOW_INTERVALS`
+    star-tracker intervals (an odd number of gyro intervals, centred); the sum over the
+    maneuver is kept, so each column's running total changes only within half a window."""
+    if len(st_time_s) < 2:
+        return per_interval
+    st_interval_s = float(np.median(np.diff(st_time_s)))
+    width = int(round(COLUMN_WINDOW_INTERVALS * st_interval_s / float(np.median(dt_s))))
+    width += 1 - width % 2
+    if width <= 1:
+        return per_interval
+    return uniform_filter1d(per_interval, size=width, axis=0, mode="reflect")
 
 
 def cumulative_at_st(per_interval: np.ndarray, k: np.ndarray, frac: np.ndarray) -> np.ndarray:
