@@ -149,6 +149,27 @@ def test_selected_inverse_windows_equal_the_dense_inverse(sizes):
     assert seen == list(edges[-2::-1])
 
 
+def test_smoothed_columns_equal_a_centred_moving_average_over_five_reference_intervals():
+    """Gyro at 0.2 s, star tracker at 0.6 s: a centred mean over 15 samples, the edges mirrored
+    (d c b a | a b c d), so the maneuver's sum is kept and a step's running total changes
+    only within half a window of the step."""
+    rng = np.random.default_rng(4)
+    k = 60
+    columns = rng.normal(size=(k, 3, 2))
+    columns[20:40] += 5.0
+    dt = np.full(k, 0.2)
+    out = errormodel.smoothed_columns(columns, dt, np.arange(0.6, 12.0, 0.6))
+    padded = np.concatenate([columns[6::-1], columns, columns[:-8:-1]])
+    dense = np.array([padded[i:i + 15].mean(axis=0) for i in range(k)])
+    assert out == pytest.approx(dense, abs=1e-12)
+    assert out.sum(axis=0) == pytest.approx(columns.sum(axis=0), abs=1e-10)
+    step = np.zeros((k, 1))
+    step[20:40] = 1.0
+    moved = np.cumsum(errormodel.smoothed_columns(step, dt, np.arange(0.6, 12.0, 0.6)), axis=0) - np.cumsum(step, axis=0)
+    assert np.abs(moved[:13]).max() < 1e-12 and np.abs(moved[26:33]).max() < 1e-12 and np.abs(moved[46:]).max() < 1e-12
+    assert moved[20, 0] == pytest.approx(1.4)
+
+
 def test_ratio_grid_reproduces_cubic_polynomials_exactly():
     grid = RatioGrid.__new__(RatioGrid)
     grid.nodes, grid.start, grid.step = 9, np.array([-1.0, 2.0]), np.array([0.25, 0.5])
