@@ -187,7 +187,7 @@ def smoothed_columns(per_interval: np.ndarray, dt_s: np.ndarray, st_time_s: np.n
     if len(st_time_s) < 2:
         return per_interval
     st_interval_s = float(np.median(np.diff(st_time_s)))
-    width = int(round(COLUMN_WINDOW_INTERVALS * st_interval_s / float(np.median(dt_s))))
+    width = round(COLUMN_WINDOW_INTERVALS * st_interval_s / float(np.median(dt_s)))
     width += 1 - width % 2
     if width <= 1:
         return per_interval
