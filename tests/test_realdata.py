@@ -48,6 +48,15 @@ def test_the_fast_trial_is_refused_for_clipping(tmp_path):
         consistency.read_checked(out)
 
 
+def test_the_fast_trial_with_the_reference_every_second_is_refused_as_undersampled(tmp_path):
+    """At 1 s the fast trial turns up to 336 deg between reference samples: the checks say the
+    reference is too sparse (they blamed the channel columns), and at what interval it is not."""
+    out = tmp_path / "fast_1s"
+    importer.import_files("repoimu", out, [DATA / "TStick_Test05_Trial1.csv"], reference_interval_s=1.0)
+    with pytest.raises(TelemetryError, match=r"ambiguous there.*peak rate, 424 deg/s, keep the reference at least every 0.21 s"):
+        consistency.read_checked(out)
+
+
 def test_the_reference_quaternions_are_unit_and_scalar_last(xyz):
     campaign, _ = consistency.read_checked(xyz)
     assert np.allclose(np.linalg.norm(campaign.st_quat, axis=1), 1.0, atol=1e-6)

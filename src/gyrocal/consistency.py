@@ -293,6 +293,32 @@ def _diagnose(campaign, sensed: Sensed, a, sf_bound, mis_bound) -> str:
     return ""
 
 
+MAX_TURN_BETWEEN_REFERENCE_DEG = 90.0
+"""The checks compare rotations between reference samples, which are ambiguous beyond half a
+turn; a clipped or mis-scaled gyro understates the turn, so they ask for half that."""
+
+
+def sampling_findings(sensed: Sensed, findings: Findings) -> bool:
+    """Whether the reference is sampled too sparsely for this maneuver's motion: where the gyro
+    turns more than `MAX_TURN_BETWEEN_REFERENCE_DEG` between two reference samples, the
+    reference's own rotation there may be wrapped by whole turns, so neither the rotation nor
+    the clipping check could be trusted (they would blame the channels or the units). Refused,
+    with the interval that would resolve the motion."""
+    turn_deg = np.rad2deg(np.linalg.norm(sensed.d_gyro, axis=1))
+    worst = int(np.argmax(turn_deg))
+    if turn_deg[worst] <= MAX_TURN_BETWEEN_REFERENCE_DEG:
+        return False
+    peak_deg_s = np.rad2deg(np.max(np.linalg.norm(sensed.body, axis=1) / sensed.data.dt))
+    beyond = int(np.sum(turn_deg > MAX_TURN_BETWEEN_REFERENCE_DEG))
+    findings.errors.append(
+        f"maneuver {sensed.data.id}: the gyro turns {turn_deg[worst]:.0f} deg between the reference samples at "
+        f"{sensed.data.st_time[worst]:.6g} s and {sensed.data.st_time[worst + 1]:.6g} s ({beyond} "
+        f"intervals beyond {MAX_TURN_BETWEEN_REFERENCE_DEG:.0f} deg): the reference's rotation between samples is ambiguous "
+        f"there, so the rotation and clipping checks cannot be made. At the gyro's peak rate, {peak_deg_s:.0f} deg/s, keep "
+        f"the reference at least every {MAX_TURN_BETWEEN_REFERENCE_DEG / peak_deg_s:.2g} s (gyrocal import --reference-interval)")
+    return True
+
+
 CLIP_BAND = 0.05
 """Gyro samples within this share of a maneuver's peak rate are tested for clipping."""
 
@@ -514,7 +540,8 @@ def check(campaign: Campaign) -> Findings:
             findings.errors.append(str(exc))
             continue
         sensed = sense(data)
-        if saturation_findings(sensed, limits[0], findings) or not rotation_findings(campaign, sensed, limits, findings):
+        if (sampling_findings(sensed, findings) or saturation_findings(sensed, limits[0], findings)
+                or not rotation_findings(campaign, sensed, limits, findings)):
             continue
         clock_findings(sensed, findings)
         missing = classic.missing_holds(data)
