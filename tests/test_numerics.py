@@ -187,6 +187,21 @@ def test_ratio_grid_reproduces_cubic_polynomials_exactly():
     assert not grid.weights(np.array([[-1.0, 2.0], [5.0, 3.0]]))[1].any()
 
 
+def test_ratio_grid_over_a_flat_profile_stays_where_the_covariance_can_be_factored():
+    """Where the ratios' profile is flat the grid spans their prior (sd 2.12 with noise_log_sd
+    1.5): +-8 sd would put a node at e^17 times the star tracker's noise, where the banded
+    Cholesky of this maneuver fails from e^10 (a RepoIMU trial crashed there); the grid stops at
+    e^8 either way."""
+    nz = noise.build(tiny_linearization(), BORESIGHT)
+    with pytest.raises(np.linalg.LinAlgError):
+        nz.factor(variances([0.0, 10.0, -10.0]))
+    center = np.array([-2.5, -1.7])
+    grid = RatioGrid([nz], center, np.full(2, 2.12), 7, 8.0)
+    assert grid.start == pytest.approx(center - 8.0) and grid.step == pytest.approx(np.full(2, 16.0 / 6))
+    narrow = RatioGrid([nz], center, np.full(2, 0.1), 7, 8.0)
+    assert narrow.start == pytest.approx(center - 0.8) and np.isfinite(narrow.values).all()
+
+
 def test_ratio_grid_interpolation_converges_at_fourth_order_to_the_direct_statistics():
     """Off-grid statistics against `campaign_stats` evaluated there: halving the step cuts the
     error about 16-fold (cubic Lagrange); at 21 nodes over +-3 sd it is below 3e-6."""

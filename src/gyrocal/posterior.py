@@ -40,17 +40,26 @@ class Priors:
                    np.full(3, float(noise_log_sd)))
 
 
+MAX_HALF_WIDTH_LOG_RATIO = 8.0
+"""The grid spans at most this either way of each ratio's estimate (a factor e^8 = 3 000 in the
+noise): where the ratios' profile is flat and the grid falls back on their prior (sd 2.1 with
+``noise_log_sd`` 1.5), +-8 sd would reach e^17, where the covariance is numerically singular
+(a 30-sample maneuver's banded Cholesky fails from e^10; a RepoIMU trial's posterior crashed)."""
+
+
 class RatioGrid:
     """Unit-scale sufficient statistics on a grid over the two noise ratios.
 
     Ratios are ``log(sigma_about/sigma_cross)`` and ``log(arw/sigma_cross)``; at each
-    node the statistics are computed with ``sigma_cross = 1``.
+    node the statistics are computed with ``sigma_cross = 1``. The grid spans ``half_width_sd``
+    sd either way, at most `MAX_HALF_WIDTH_LOG_RATIO`.
     """
 
     def __init__(self, noises, center, sd, nodes: int, half_width_sd: float):
         self.nodes = nodes
-        self.start = center - half_width_sd * sd
-        self.step = 2 * half_width_sd * sd / (nodes - 1)
+        half_width = np.minimum(half_width_sd * np.asarray(sd, dtype=float), MAX_HALF_WIDTH_LOG_RATIO)
+        self.start = center - half_width
+        self.step = 2 * half_width / (nodes - 1)
         n_par = noises[0].n_params
         self.n_params = n_par
         values = []
