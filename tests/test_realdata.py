@@ -9,10 +9,11 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
-from conftest import ROOT, run_campaign
 
 from gyrocal import consistency, importer
 from gyrocal.telemetry import TelemetryError
+
+from conftest import ROOT, run_campaign
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "repoimu"
 pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason=f"the RepoIMU recordings are not at {DATA} "
