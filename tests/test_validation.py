@@ -24,10 +24,21 @@ def test_ranks_of_a_calibrated_posterior_are_uniform():
     rng = np.random.default_rng(5)
     ranks = np.concatenate([study.sbc_rank(rng.normal(size=(99, 4)), rng.normal(size=4), rng) for _ in range(500)])
     counts = validation.sbc_histogram(ranks, 99)
-    assert counts.sum() == 2000 and validation.uniformity_p(counts) > 0.001
+    assert counts.sum() == 2000 and validation.uniformity_p(counts, 99) > 0.001
     narrow = np.concatenate([study.sbc_rank(0.5 * rng.normal(size=(99, 4)), rng.normal(size=4), rng)
                              for _ in range(500)])
-    assert validation.uniformity_p(validation.sbc_histogram(narrow, 99)) < 1e-6  # overconfident: U-shaped
+    assert validation.uniformity_p(validation.sbc_histogram(narrow, 99), 99) < 1e-6  # overconfident: U-shaped
+
+
+def test_uniform_ranks_pass_the_uniformity_test_when_the_bins_hold_unequal_numbers_of_ranks():
+    """100 draws give 101 ranks, so the first of 10 bins holds 11 of them: every rank 0..100 seen
+    1 000 times must give p = 1 (against equal bins it gave p ~ 1e-15)."""
+    ranks = np.repeat(np.arange(101), 1000)
+    counts = validation.sbc_histogram(ranks, 100)
+    assert counts.tolist() == [11000] + [10000] * 9
+    assert validation.sbc_bin_shares(100) == pytest.approx([0.11 * 100 / 101] + [10 / 101] * 9)
+    assert validation.uniformity_p(counts, 100) == pytest.approx(1.0)
+    assert validation.uniformity_p(validation.sbc_histogram(np.repeat(np.arange(100), 1000), 99), 99) == pytest.approx(1.0)
 
 
 def test_ties_share_their_rank_at_random():

@@ -113,9 +113,17 @@ def sbc_histogram(ranks: np.ndarray, draws: int, bins: int = SBC_BINS) -> np.nda
     return np.bincount(np.asarray(ranks, dtype=int) * bins // (draws + 1), minlength=bins)
 
 
-def uniformity_p(counts: np.ndarray) -> float:
-    """Chi-square test of a rank histogram against uniform."""
-    return float(sps.chisquare(counts).pvalue)
+def sbc_bin_shares(draws: int, bins: int = SBC_BINS) -> np.ndarray:
+    """Share of the ``draws + 1`` equally likely ranks in each bin of `sbc_histogram`: unequal
+    where ``bins`` does not divide ``draws + 1`` (100 draws: the first bin holds 11 ranks, the
+    others 10)."""
+    return np.bincount(np.arange(draws + 1) * bins // (draws + 1), minlength=bins) / (draws + 1)
+
+
+def uniformity_p(counts: np.ndarray, draws: int) -> float:
+    """Chi-square test of a rank histogram against uniform ranks ``0..draws``."""
+    counts = np.asarray(counts)
+    return float(sps.chisquare(counts, counts.sum() * sbc_bin_shares(draws, len(counts))).pvalue)
 
 
 def sbc(params: pd.DataFrame, models: pd.DataFrame) -> pd.DataFrame:
@@ -128,12 +136,15 @@ def sbc(params: pd.DataFrame, models: pd.DataFrame) -> pd.DataFrame:
     rows = []
     for label, part in g.groupby("label", sort=False):
         counts = sbc_histogram(part["sbc_rank"], draws)
-        rows.append({"quantity": label, "n": len(part), "p": uniformity_p(counts), **_bins(counts)})
+        rows.append({"quantity": label, "n": len(part), "draws": draws, "p": uniformity_p(counts, draws),
+                     **_bins(counts)})
     clean = models[(models["group"] == "clean") & (models["model"] == "baseline")]
     counts = sbc_histogram(clean["loglik_sbc_rank"], draws)
-    rows.append({"quantity": "log-likelihood", "n": len(clean), "p": uniformity_p(counts), **_bins(counts)})
+    rows.append({"quantity": "log-likelihood", "n": len(clean), "draws": draws, "p": uniformity_p(counts, draws),
+                 **_bins(counts)})
     counts = sbc_histogram(g["sbc_rank"], draws)
-    rows.append({"quantity": "all channel parameters", "n": len(g), "p": uniformity_p(counts), **_bins(counts)})
+    rows.append({"quantity": "all channel parameters", "n": len(g), "draws": draws, "p": uniformity_p(counts, draws),
+                 **_bins(counts)})
     frame = pd.DataFrame(rows)
     frame["p_bonferroni"] = np.minimum(1.0, frame["p"] * len(frame))
     return frame

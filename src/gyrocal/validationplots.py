@@ -3,7 +3,7 @@
 import matplotlib.pyplot as plt
 import numpy as np
 
-from .validation import ESTIMATORS, SBC_BINS
+from .validation import ESTIMATORS, SBC_BINS, sbc_bin_shares
 
 
 def accuracy_figure(table):
@@ -53,9 +53,10 @@ def sbc_figure(table):
     bins = [f"bin{i}" for i in range(SBC_BINS)]
     for ax, row in zip(axes.ravel(), table.itertuples()):
         counts = np.array([getattr(row, b) for b in bins])
-        expected = row.n / SBC_BINS
-        band = 2.576 * np.sqrt(expected * (1 - 1 / SBC_BINS))
-        ax.axhspan(expected - band, expected + band, color="0.85")
+        share = sbc_bin_shares(int(row.draws))
+        expected = row.n * share
+        band = 2.576 * np.sqrt(expected * (1 - share))
+        ax.bar(np.arange(SBC_BINS), 2 * band, bottom=expected - band, width=1.0, color="0.85")
         ax.bar(np.arange(SBC_BINS), counts, width=0.9)
         ax.set_title(f"{row.quantity}\np = {row.p:.2g}", fontsize=7)
         ax.tick_params(labelsize=6)
