@@ -255,7 +255,7 @@ def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Find
             f"{where}: the star tracker and the gyros both rotate mostly about {st_axis} "
             f"({np.rad2deg(fit.excursion_rad[fit.axis]):.1f} deg), not {m.axis}: is the maneuver's axis label wrong?")
         return False
-    hint = _diagnose(campaign, sensed, a, sf_bound, mis_bound)
+    hint = _diagnose(campaign, sensed, a, sf_bound, mis_bound) or undersampled(sensed)
     if hint:
         findings.errors.append(f"{where}: {hint}")
         return False
@@ -298,25 +298,23 @@ MAX_TURN_BETWEEN_REFERENCE_DEG = 90.0
 turn; a clipped or mis-scaled gyro understates the turn, so they ask for half that."""
 
 
-def sampling_findings(sensed: Sensed, findings: Findings) -> bool:
-    """Whether the reference is sampled too sparsely for this maneuver's motion: where the gyro
-    turns more than `MAX_TURN_BETWEEN_REFERENCE_DEG` between two reference samples, the
-    reference's own rotation there may be wrapped by whole turns, so neither the rotation nor
-    the clipping check could be trusted (they would blame the channels or the units). Refused,
-    with the interval that would resolve the motion."""
+def undersampled(sensed: Sensed) -> str:
+    """Why the reference is sampled too sparsely for this maneuver's motion, or "": where the
+    gyro turns more than `MAX_TURN_BETWEEN_REFERENCE_DEG` between two reference samples, the
+    reference's own rotation there may be wrapped by whole turns. Asked only once the rotation
+    check has failed and no unit slip explains it (a slip also makes the gyro's turn look
+    large); the answer gives the interval the gyro's peak rate needs."""
     turn_deg = np.rad2deg(np.linalg.norm(sensed.d_gyro, axis=1))
     worst = int(np.argmax(turn_deg))
     if turn_deg[worst] <= MAX_TURN_BETWEEN_REFERENCE_DEG:
-        return False
+        return ""
     peak_deg_s = np.rad2deg(np.max(np.linalg.norm(sensed.body, axis=1) / sensed.data.dt))
     beyond = int(np.sum(turn_deg > MAX_TURN_BETWEEN_REFERENCE_DEG))
-    findings.errors.append(
-        f"maneuver {sensed.data.id}: the gyro turns {turn_deg[worst]:.0f} deg between the reference samples at "
-        f"{sensed.data.st_time[worst]:.6g} s and {sensed.data.st_time[worst + 1]:.6g} s ({beyond} "
-        f"intervals beyond {MAX_TURN_BETWEEN_REFERENCE_DEG:.0f} deg): the reference's rotation between samples is ambiguous "
-        f"there, so the rotation and clipping checks cannot be made. At the gyro's peak rate, {peak_deg_s:.0f} deg/s, keep "
-        f"the reference at least every {MAX_TURN_BETWEEN_REFERENCE_DEG / peak_deg_s:.2g} s (gyrocal import --reference-interval)")
-    return True
+    return (f"the gyro turns {turn_deg[worst]:.0f} deg between the reference samples at {sensed.data.st_time[worst]:.6g} s "
+            f"and {sensed.data.st_time[worst + 1]:.6g} s ({beyond} intervals beyond {MAX_TURN_BETWEEN_REFERENCE_DEG:.0f} "
+            "deg): the reference's rotation between samples is ambiguous there, so its rotation cannot be checked "
+            f"against the gyro's. At the gyro's peak rate, {peak_deg_s:.0f} deg/s, keep the reference at least every "
+            f"{MAX_TURN_BETWEEN_REFERENCE_DEG / peak_deg_s:.2g} s (gyrocal import --reference-interval)")
 
 
 CLIP_BAND = 0.05
@@ -540,8 +538,7 @@ def check(campaign: Campaign) -> Findings:
             findings.errors.append(str(exc))
             continue
         sensed = sense(data)
-        if (sampling_findings(sensed, findings) or saturation_findings(sensed, limits[0], findings)
-                or not rotation_findings(campaign, sensed, limits, findings)):
+        if saturation_findings(sensed, limits[0], findings) or not rotation_findings(campaign, sensed, limits, findings):
             continue
         clock_findings(sensed, findings)
         missing = classic.missing_holds(data)
