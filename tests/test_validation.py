@@ -41,6 +41,15 @@ def test_uniform_ranks_pass_the_uniformity_test_when_the_bins_hold_unequal_numbe
     assert validation.uniformity_p(validation.sbc_histogram(np.repeat(np.arange(100), 1000), 99), 99) == pytest.approx(1.0)
 
 
+def test_each_study_campaign_samples_its_posterior_with_its_own_seed():
+    """One sampler seed for every campaign made their draws nearly the same (SBC ranks not
+    independent); each now has its own, reproducibly, apart from its simulation seed."""
+    seeds = [study.sampler_seed(1, i) for i in range(200)]
+    assert len(set(seeds)) == 200 and seeds == [study.sampler_seed(1, i) for i in range(200)]
+    assert not {1 * 100003 + i for i in range(200)} & set(seeds)
+    assert study.sampler_seed(2, 0) != seeds[0]
+
+
 def test_ties_share_their_rank_at_random():
     draws = np.zeros((9, 1))
     ranks = [int(study.sbc_rank(draws, np.zeros(1), np.random.default_rng(s))[0]) for s in range(200)]
