@@ -36,8 +36,8 @@ from .spec import ModelSpec
 COLUMN_WINDOW_INTERVALS = 5
 """Star-tracker intervals the model's columns are averaged over: the ARW they share with one
 interval's residual falls to 1/5 (at 1 Hz, the score test's mean at the truth fell from 5.98
-to 1.47 against 1.38 with noise-free columns); at the rotations' ends the columns are delayed
-by at most half the window."""
+to 1.47 against 1.38 with noise-free columns); around each change of rate a column's running
+total is spread over half a window either side."""
 
 
 @dataclass
