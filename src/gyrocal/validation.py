@@ -133,25 +133,20 @@ def sbc(params: pd.DataFrame, models: pd.DataFrame) -> pd.DataFrame:
     """
     g = clean_baseline(params)
     draws = int(g["sbc_draws"].iloc[0])
-    rows = []
-    for label, part in g.groupby("label", sort=False):
-        counts = sbc_histogram(part["sbc_rank"], draws)
-        rows.append({"quantity": label, "n": len(part), "draws": draws, "p": uniformity_p(counts, draws),
-                     **_bins(counts)})
+    rows = [_sbc_row(label, part["sbc_rank"], draws) for label, part in g.groupby("label", sort=False)]
     clean = models[(models["group"] == "clean") & (models["model"] == "baseline")]
-    counts = sbc_histogram(clean["loglik_sbc_rank"], draws)
-    rows.append({"quantity": "log-likelihood", "n": len(clean), "draws": draws, "p": uniformity_p(counts, draws),
-                 **_bins(counts)})
-    counts = sbc_histogram(g["sbc_rank"], draws)
-    rows.append({"quantity": "all channel parameters", "n": len(g), "draws": draws, "p": uniformity_p(counts, draws),
-                 **_bins(counts)})
+    rows.append(_sbc_row("log-likelihood", clean["loglik_sbc_rank"], draws))
+    rows.append(_sbc_row("all channel parameters", g["sbc_rank"], draws))
     frame = pd.DataFrame(rows)
     frame["p_bonferroni"] = np.minimum(1.0, frame["p"] * len(frame))
     return frame
 
 
-def _bins(counts) -> dict:
-    return {f"bin{i}": int(c) for i, c in enumerate(counts)}
+def _sbc_row(quantity: str, ranks, draws: int) -> dict:
+    """One row of the SBC table: the rank histogram of ``quantity`` and its uniformity p-value."""
+    counts = sbc_histogram(ranks, draws)
+    return {"quantity": quantity, "n": len(ranks), "draws": draws, "p": uniformity_p(counts, draws),
+            **{f"bin{i}": int(c) for i, c in enumerate(counts)}}
 
 
 def error_rates(models: pd.DataFrame, thresholds: dict) -> pd.DataFrame:
