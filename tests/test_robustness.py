@@ -314,7 +314,8 @@ def test_a_gyro_clipped_below_the_turn_rate_is_refused_with_its_count():
 def test_a_reference_too_sparse_for_the_turn_is_named_with_the_interval_it_needs(every):
     """At 0.5 rad/s (28.6 deg/s) a reference every 1 s sees 29 deg turns, checked as usual; every 4 s
     it sees 115 deg, where its own rotation could be wrapped by whole turns: named, asking for a
-    sample at least every 90 / 28.6 = 3.1 s."""
+    sample at least every 90 / 28.6 = 3.1 s. A gyro turning 115 deg within each of its own
+    0.1 s samples (a unit slip) is not blamed on the reference."""
     gyro_time = np.arange(0, 200.05, 0.1)
     body = np.tile([0.05, 0.0, 0.0], (len(gyro_time) - 1, 1))
     st_time = gyro_time[::every]
@@ -326,6 +327,9 @@ def test_a_reference_too_sparse_for_the_turn_is_named_with_the_interval_it_needs
     else:
         assert "turns 115 deg between the reference samples at 0 s and 4 s (50 intervals" in why
         assert "peak rate, 29 deg/s, keep the reference at least every 3.1 s" in why
+    slip = body * 40
+    assert consistency.undersampled(consistency.Sensed(data, slip, slip.reshape(-1, every, 3).sum(axis=1),
+                                                       d_gyro, np.diff(st_time))) == ""
 
 
 def test_a_maneuver_too_short_for_the_leave_one_block_out_predictive_is_refused_naming_it():

@@ -303,12 +303,16 @@ def undersampled(sensed: Sensed) -> str:
     gyro turns more than `MAX_TURN_BETWEEN_REFERENCE_DEG` between two reference samples, the
     reference's own rotation there may be wrapped by whole turns. Asked only once the rotation
     check has failed and no unit slip explains it (a slip also makes the gyro's turn look
-    large); the answer gives the interval the gyro's peak rate needs."""
+    large); the answer gives the interval the gyro's peak rate needs. A gyro that turns that far
+    within one of its own samples is not told to wait for a denser reference: its own data are
+    suspect (a cumulative angle, a unit), and the generic rotation message stands."""
     turn_deg = np.rad2deg(np.linalg.norm(sensed.d_gyro, axis=1))
     worst = int(np.argmax(turn_deg))
     if turn_deg[worst] <= MAX_TURN_BETWEEN_REFERENCE_DEG:
         return ""
     peak_deg_s = np.rad2deg(np.max(np.linalg.norm(sensed.body, axis=1) / sensed.data.dt))
+    if MAX_TURN_BETWEEN_REFERENCE_DEG / peak_deg_s < np.median(sensed.data.dt):
+        return ""
     beyond = int(np.sum(turn_deg > MAX_TURN_BETWEEN_REFERENCE_DEG))
     return (f"the gyro turns {turn_deg[worst]:.0f} deg between the reference samples at {sensed.data.st_time[worst]:.6g} s "
             f"and {sensed.data.st_time[worst + 1]:.6g} s ({beyond} intervals beyond {MAX_TURN_BETWEEN_REFERENCE_DEG:.0f} "
