@@ -158,14 +158,14 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
         core = [i for i, p in enumerate(spec.parameters[:spec.n_core]) if p.owner in channel_set]
         columns = [terms[spec.parameters[i].owner, spec.parameters[i].name] for i in core]
         columns += [bias_columns[:, :, i] for i in range(3)]
-        columns += [-np.einsum("kai,ki->ka", m_inv, regressors[:, :, j]) for j in range(regressors.shape[2])]
+        body_columns = np.concatenate([np.stack(columns, axis=2), -(m_inv @ regressors)], axis=2)
         mid = kinematics.compose(attitudes[:-1], Rotation.from_rotvec(0.5 * phi))
-        inertial = np.einsum("kij,kjp->kip", mid.as_matrix(), np.stack(columns, axis=2))
+        inertial = mid.as_matrix() @ body_columns
         inertial = smoothed_columns(inertial, data.dt, data.st_time)
         at_st_jac = cumulative_at_st(inertial, k, frac)
         at_st = kinematics.attitude_at(data.gyro_time, attitudes, phi, data.st_time)
         e = kinematics.error_angles_rad(at_st, st_rot)
-        st_columns = np.einsum("mab,mbe->mae", at_st.as_matrix(), star_reg)
+        st_columns = at_st.as_matrix() @ star_reg
         body[:, s] = e - star_reg @ extra_values
         z[:, s] = at_st.apply(e) - st_columns @ extra_values
         n = len(core)

@@ -113,12 +113,13 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
         for m, d in enumerate(maneuvers):
             lin = errormodel.linearize(d, spec, theta, biases[m])
             nz = noises[m]
-            r = noise.difference(lin.z - chi0[m]).reshape(-1)
+            r = noise.difference(lin.z - chi0[m]).reshape(nz.n, 1)
             nuis = noise.difference(noise.nuisance_design(lin)).reshape(nz.n, -1)
             j_theta = -noise.difference(lin.design[..., free]).reshape(nz.n, -1)
-            res.append(nz.whiten(chols[m], r))
-            shared.append(nz.whiten(chols[m], j_theta))
-            own.append(-nz.whiten(chols[m], nuis))
+            white = nz.whiten(chols[m], np.asfortranarray(np.concatenate([r, j_theta, nuis], axis=1)))
+            res.append(white[:, 0])
+            shared.append(white[:, 1:1 + n_par])
+            own.append(-white[:, 1 + n_par:])
         cache.clear()
         cache[key] = (np.concatenate(res), sparse.hstack([sparse.csr_array(np.vstack(shared)),
                                                           sparse.block_diag(own, format="csr")], format="csr"))

@@ -104,7 +104,8 @@ class ManeuverNoise:
     components: dict
     """name -> (kd+1, n) lower band storage, per unit variance."""
     rhs: np.ndarray
-    """(n, P + G + 1): differenced design, nuisance design and data, flattened."""
+    """(n, P + G + 1): differenced design, nuisance design and data, flattened; column-major,
+    as LAPACK's banded solve takes it (a row-major copy costs it half as much again)."""
     n_params: int
     n_nuisance: int
 
@@ -217,9 +218,9 @@ def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -
     components = {k: _banded_lower(diag[k], lower[k], depth) for k in COMPONENTS}
     nuis = difference(nuisance_design(lin))
     n = m_samples * block
-    rhs = np.concatenate([
+    rhs = np.asfortranarray(np.concatenate([
         difference(lin.design).reshape(n, -1),
         nuis.reshape(n, -1),
         difference(lin.z).reshape(n, 1),
-    ], axis=1)
+    ], axis=1))
     return ManeuverNoise(lin.maneuver, components, rhs, lin.design.shape[-1], nuis.shape[-1])

@@ -79,13 +79,12 @@ class RatioGrid:
         f = t - i
         w1 = np.stack([-f * (f - 1) * (f - 2) / 6, (f + 1) * (f - 1) * (f - 2) / 2,
                        -(f + 1) * f * (f - 2) / 2, (f + 1) * f * (f - 1) / 6], axis=-1)
-        weights = np.zeros((len(ratios), self.nodes**2))
-        rows = np.arange(len(ratios))
-        for a in range(4):
-            for b in range(4):
-                idx = (i[:, 0] + a - 1) * self.nodes + (i[:, 1] + b - 1)
-                weights[rows, idx] += w1[:, 0, a] * w1[:, 1, b]
-        return weights, inside
+        weights = np.zeros((len(ratios), self.nodes, self.nodes))
+        offsets = np.arange(-1, 3)
+        rows = np.arange(len(ratios))[:, None, None]
+        weights[rows, (i[:, 0, None] + offsets)[:, :, None], (i[:, 1, None] + offsets)[:, None, :]] = (
+            w1[:, 0, :, None] * w1[:, 1, None, :])
+        return weights.reshape(len(ratios), -1), inside
 
     def stats(self, ratios: np.ndarray):
         """Interpolated unit-scale ``A, b, c, logdet`` per row of ``ratios``."""
@@ -110,7 +109,7 @@ class LogPosterior:
         d, log_sigma = x[:, :p], x[:, p:]
         A, b, c, logdet, inside = self.grid.stats(log_sigma[:, 1:] - log_sigma[:, :1])
         scale = np.exp(2 * log_sigma[:, 0])
-        quad = np.einsum("wi,wij,wj->w", d, A, d) - 2 * np.einsum("wi,wi->w", b, d) + c
+        quad = (d[:, None, :] @ A @ d[:, :, None])[:, 0, 0] - 2 * np.sum(b * d, axis=1) + c
         loglik = -0.5 * (quad / scale + logdet + self.grid.n * (np.log(scale) + LOG_2PI))
         theta = self.theta_hat + d
         pr = self.priors
