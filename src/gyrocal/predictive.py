@@ -45,16 +45,16 @@ class WhitenedManeuver:
 def residuals_body(lin: Linearization, dtheta: np.ndarray, beta: np.ndarray) -> np.ndarray:
     """(D, M, S, 3) star tracker minus model, in body axes (rad), per draw."""
     nuis = nuisance_design(lin)
-    fitted = np.einsum("msip,dp->dmsi", lin.design, dtheta) + np.einsum("msig,dg->dmsi", nuis, beta)
-    resid = lin.z[None] - fitted
-    return np.einsum("mji,dmsj->dmsi", lin.st_matrix, resid)
+    fitted = lin.design.reshape(-1, dtheta.shape[1]) @ dtheta.T + nuis.reshape(-1, beta.shape[1]) @ beta.T
+    resid = lin.z[None] - fitted.T.reshape((len(dtheta),) + lin.z.shape)
+    return resid @ lin.st_matrix[None]  # row vectors times R: R^T r, inertial to body
 
 
 def undifference_body(lin: Linearization, differenced: np.ndarray) -> np.ndarray:
     """(D, M, S, 3) body-axis series from differenced inertial series (D, n)."""
     m, s = lin.z.shape[:2]
     inertial = np.cumsum(differenced.reshape(len(differenced), m, s, 3), axis=1)
-    return np.einsum("mji,dmsj->dmsi", lin.st_matrix, inertial)
+    return inertial @ lin.st_matrix[None]
 
 
 def sample_blocks(st_time, block_s) -> np.ndarray:
