@@ -1,5 +1,7 @@
 rule diagnostics:
-    """Misfit checks of the residuals against the noise model, and what could explain them."""
+    """Misfit checks of the residuals against the noise model, and what could explain them.
+    Ahead of calibrate when both wait for a core: compare needs diagnostics, not calibrate."""
+    priority: 1
     input:
         maneuvers=maneuver_files("npz"),
         point=f"{RESULTS}/{{model}}/point_estimate.npz",
