@@ -297,3 +297,18 @@ def test_chi2_log_sf_stays_finite_and_exact_where_scipy_underflows(x, df):
     i = np.arange(df // 2)
     exact = -x / 2 + logsumexp(i * np.log(x / 2) - gammaln(i + 1))
     assert chi2_log_sf(x, df) == pytest.approx(exact, rel=1e-9)
+
+
+def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time():
+    import emcee
+
+    from gyrocal.posterior import _autocorr_times
+
+    rng = np.random.default_rng(3)
+    noise_draws = rng.standard_normal((200, 6, 3))
+    chain = np.zeros_like(noise_draws)
+    for t in range(1, len(chain)):
+        chain[t] = np.array([0.2, 0.6, 0.9]) * chain[t - 1] + noise_draws[t]
+    reference = emcee.autocorr.integrated_time(chain, quiet=True)
+    np.testing.assert_allclose(_autocorr_times(chain), reference, rtol=1e-12)
+    assert reference[0] < reference[1] < reference[2]
