@@ -312,3 +312,6 @@ def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time(
     reference = emcee.autocorr.integrated_time(chain, quiet=True)
     np.testing.assert_allclose(_autocorr_times(chain), reference, rtol=1e-12)
     assert reference[0] < reference[1] < reference[2]
+    chain[:, 2, 1] = 3.7  # one walker stuck: that parameter's time is undefined, and only that one
+    times = _autocorr_times(chain)
+    assert np.isnan(times[1]) and np.isfinite(times[[0, 2]]).all()

@@ -85,7 +85,7 @@ class RatioGrid:
         rows = np.arange(len(ratios))[:, None, None]
         weights[rows, (i[:, 0, None] + offsets)[:, :, None], (i[:, 1, None] + offsets)[:, None, :]] = (
             w1[:, 0, :, None] * w1[:, 1, None, :])
-        return weights.reshape(len(ratios), -1), inside
+        return weights.reshape(len(ratios), self.nodes**2), inside
 
     def stats(self, ratios: np.ndarray):
         """Interpolated unit-scale ``A, b, c, logdet`` per row of ``ratios``."""
@@ -190,11 +190,14 @@ def _autocorr_times(chain) -> np.ndarray:
     """emcee's integrated autocorrelation time per parameter of a (steps, walkers, dim) chain:
     the walkers' mean autocorrelation and Sokal's window (`emcee.autocorr.auto_window`), with
     every walker and parameter in one FFT (`arviz.autocorr`) where emcee takes one at a time
-    (eight times as fast, the same times to 1e-15). The caller compares the length with them."""
+    (eight times as fast, the same times to 1e-15). A walker that never moves leaves its
+    parameter's time undefined (NaN), as in emcee. The caller compares the length with them."""
     rho = az.autocorr(np.moveaxis(chain, 0, -1), axis=-1).mean(axis=0)
     taus = 2.0 * np.cumsum(rho, axis=-1) - 1.0
     window = [emcee.autocorr.auto_window(t, AUTOCORR_WINDOW_C) for t in taus]
-    return taus[np.arange(len(taus)), window]
+    tau = taus[np.arange(len(taus)), window]
+    tau[np.any(np.ptp(chain, axis=0) == 0, axis=0)] = np.nan
+    return tau
 
 
 def _sampler(logpost, walkers, dim, proposal, seed):
