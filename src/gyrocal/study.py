@@ -79,7 +79,7 @@ def calibrate_steps(campaign_dir, out, cfg: dict, models, figures=True, through=
     plugins = cfg["plugins"]
     for model in models:
         d = out / model
-        point_estimate.run(npz, out / "input.json", out / "classic.csv", model, cfg["models"][model],
+        point_estimate.run(npz, out / "input.json", model, cfg["models"][model],
                            cfg["noise"], plugins, d / "point_estimate.npz")
         posterior.run(npz, d / "point_estimate.npz", plugins, cfg["priors"], cfg["prior_from"] or None,
                       cfg["sampler"], cfg["grid"], cfg["convergence"], cfg["seed"], d / "posterior.nc",

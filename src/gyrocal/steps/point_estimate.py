@@ -2,9 +2,7 @@
 
 import logging
 
-import pandas as pd
-
-from .. import classic, effects
+from .. import classic, effects, spec
 from ..estimate import point_estimate
 from ..noise import noise_knowledge, stated_scales
 from ..outputs import write_with
@@ -14,14 +12,16 @@ from .common import load_maneuvers, read_json
 log = logging.getLogger("gyrocal")
 
 
-def run(npz_paths, input_json, classic_csv, model, model_effects, noise_cfg, plugin_paths, out_npz):
+def run(npz_paths, input_json, model, model_effects, noise_cfg, plugin_paths, out_npz):
     """The full-trajectory WLS of one model, started from the classic estimate; saved
-    with the model's specification and the noise knowledge it used."""
+    with the model's specification and the noise knowledge it used. The classic estimate is
+    computed here (a tenth of a second), so the classic rule's job is off the critical path."""
     maneuvers = load_maneuvers(npz_paths)
     fx = effects.resolve(model, model_effects, effects.load_plugins(plugin_paths or []))
     model_spec = ModelSpec.build(model, fx, maneuvers[0].channels)
     stated = noise_knowledge(read_json(input_json), noise_cfg)
-    theta0 = classic.classic_vector(pd.read_csv(classic_csv), model_spec)
+    table = classic.classic_table(maneuvers, spec.baseline(maneuvers[0].channels))
+    theta0 = classic.classic_vector(table, model_spec)
     est = point_estimate(maneuvers, model_spec, stated, theta0, noise_cfg["estimate_scales"])
     for p in est.spec.parameters:
         if p.prior_only:
