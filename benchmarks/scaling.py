@@ -63,7 +63,7 @@ def stage_times(scenario: dict, cfg: dict) -> dict:
     maneuvers = timed("preprocess", lambda: [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers])
     spec = baseline(campaign.channels)
     stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
-    theta0 = timed("classic", lambda: classic.classic_vector(classic.classic_table(maneuvers, spec), spec))
+    theta0 = timed("classic", lambda: classic.classic_start(maneuvers, spec))
     est = timed("point estimate (REML + WLS)", lambda: point_estimate(maneuvers, spec, stated, theta0))
     priors = model_priors(est, cfg["priors"])
     sampler_cfg = {**cfg["sampler"], "initial_steps": 100, "min_tau_multiple": 0, "max_steps": 100}

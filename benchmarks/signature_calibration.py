@@ -32,7 +32,7 @@ def ranked(base, cfg, index, seed):
     maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
     spec = baseline(campaign.channels)
     stated = noise.noise_knowledge({"star_tracker": scenario["star_tracker"], "gyro": scenario["gyro"]}, cfg["noise"])
-    est = point_estimate(maneuvers, spec, stated, classic.classic_vector(classic.classic_table(maneuvers, spec), spec))
+    est = point_estimate(maneuvers, spec, stated, classic.classic_start(maneuvers, spec))
     return {r["name"]: r["log10_p"] for r in diagnostics.rank(maneuvers, est, [], ())[0]}
 
 

@@ -29,7 +29,7 @@ def baseline_fit(scenario_path, cfg: dict) -> Fitted:
     maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
     stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
     spec = baseline(campaign.channels)
-    theta0 = classic.classic_vector(classic.classic_table(maneuvers, spec), spec)
+    theta0 = classic.classic_start(maneuvers, spec)
     est = estimate.point_estimate(maneuvers, spec, stated, theta0)
     return Fitted(campaign, maneuvers, stated, est, model_priors(est, cfg["priors"]))
 

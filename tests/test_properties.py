@@ -99,7 +99,7 @@ def calibrate(directory):
     outliers = [o.time_s for o in findings.outliers]
     maneuvers = [preprocess.slice_maneuver(campaign, m.id, outliers) for m in campaign.maneuvers]
     spec = baseline(campaign.channels)
-    theta0 = classic.classic_vector(classic.classic_table(maneuvers, spec), spec)
+    theta0 = classic.classic_start(maneuvers, spec)
     stated = {"sigma_cross_arcsec": 5.0, "sigma_about_arcsec": 20.0, "arw_deg_sqrt_h": 0.003,
               "boresight_body": [0.3, 0.0, 0.954]}
     est = point_estimate(maneuvers, spec, stated, theta0)

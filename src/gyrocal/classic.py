@@ -112,6 +112,12 @@ def classic_table(maneuvers, spec: ModelSpec, bias_from_holds: bool = False) -> 
     return table[["channel", "parameter", "unit", "value", "n"]]
 
 
+def classic_start(maneuvers, spec: ModelSpec) -> np.ndarray:
+    """The classic estimate as the spec's SI vector (zero where it says nothing): the start of
+    the full-trajectory WLS."""
+    return classic_vector(classic_table(maneuvers, spec), spec)
+
+
 def classic_vector(table: pd.DataFrame, spec: ModelSpec) -> np.ndarray:
     """A `classic_table` as the spec's SI vector; parameters it lacks are zero."""
     theta = np.zeros(len(spec))

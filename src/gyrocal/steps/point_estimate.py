@@ -2,7 +2,7 @@
 
 import logging
 
-from .. import classic, effects, spec
+from .. import classic, effects
 from ..estimate import point_estimate
 from ..noise import noise_knowledge, stated_scales
 from ..outputs import write_with
@@ -20,9 +20,8 @@ def run(npz_paths, input_json, model, model_effects, noise_cfg, plugin_paths, ou
     fx = effects.resolve(model, model_effects, effects.load_plugins(plugin_paths or []))
     model_spec = ModelSpec.build(model, fx, maneuvers[0].channels)
     stated = noise_knowledge(read_json(input_json), noise_cfg)
-    table = classic.classic_table(maneuvers, spec.baseline(maneuvers[0].channels))
-    theta0 = classic.classic_vector(table, model_spec)
-    est = point_estimate(maneuvers, model_spec, stated, theta0, noise_cfg["estimate_scales"])
+    est = point_estimate(maneuvers, model_spec, stated, classic.classic_start(maneuvers, model_spec),
+                         noise_cfg["estimate_scales"])
     for p in est.spec.parameters:
         if p.prior_only:
             log.warning("%s is prior-only: %s", p.label, p.prior_only)
