@@ -159,6 +159,21 @@ def st_outliers(d, sizes_arcsec=(350, 450, 550, 650, 800), seed=3):
     return rows
 
 
+def st_excursion(d, size_arcsec=2000.0, duration_s=2.0):
+    """A reference excursion: for ``duration_s`` in the middle of the first maneuver the star
+    tracker's attitude sits ``size_arcsec`` off about its cross axis, then comes back (a motion-
+    capture marker swap, a filter holding a wrong attitude). Returns the lines it turned."""
+    from scipy.spatial.transform import Rotation
+    st = _read(d, "star_tracker.csv")
+    m = _meta(d)["maneuvers"][0]
+    middle = 0.5 * (m["t_start"] + m["t_end"])
+    rows = np.flatnonzero((st.time >= middle) & (st.time < middle + duration_s))
+    q = Rotation.from_quat(st.loc[rows, ["q1", "q2", "q3", "q4"]].to_numpy(dtype=float))
+    st.loc[rows, ["q1", "q2", "q3", "q4"]] = (q * Rotation.from_rotvec([np.deg2rad(size_arcsec / 3600), 0, 0])).as_quat()
+    _write(st, d, "star_tracker.csv")
+    return [int(r) + 2 for r in rows]
+
+
 def yaml_edit(old, new):
     def mutate(d):
         text = (d / "campaign.yaml").read_text()

@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal import cli, consistency
+from gyrocal import cli, consistency, preprocess
 from gyrocal.estimate import EstimateError
 from gyrocal.steps import posterior as posterior_step
 
@@ -85,7 +85,7 @@ def test_a_maneuver_without_holds_reports_the_error_between_its_first_and_last_r
     reference every 1 s reached it and crashed). Corrected with the truth, the error left by
     the rotation (scale errors of about 1000 ppm over 90 deg: hundreds of arcsec) shrinks to
     the noise."""
-    from gyrocal import preprocess, report
+    from gyrocal import report
 
     from conftest import truth_vector
     directory = tmp_path / "campaign"
@@ -100,7 +100,7 @@ def test_a_maneuver_without_holds_reports_the_error_between_its_first_and_last_r
     assert in_loop["before norm"] > 100.0 and in_loop["after norm"] < 60.0
 
 
-
+def test_a_clean_campaign_raises_no_warning_outlier_or_excursion(tiny):
     _, findings = consistency.read_checked(tiny[0])
     assert findings.warnings == [] and findings.outliers == []
 
@@ -178,6 +178,32 @@ def test_five_outliers_move_no_estimate_by_more_than_half_an_sd(outlier_run, tin
     dirty = pd.read_csv(out / "baseline/calibration.csv")
     shift = np.abs(dirty["mean"] - clean["mean"]) / clean["sd"]
     assert shift.max() < 0.5
+
+
+def test_a_reference_excursion_is_listed_as_one_and_left_out(tiny, tmp_path):
+    directory = tmp_path / "campaign"
+    lines = mutations.corrupted_copy(tiny[0], directory, mutations.st_excursion)
+    campaign, findings = consistency.read_checked(directory)
+    away = [o for o in findings.outliers if o.kind == "excursion"]
+    assert sorted(o.line for o in away) == lines and len(lines) == 2
+    assert all(1500 < o.size_arcsec < 2500 for o in away)
+    assert [o for o in findings.outliers if o.kind == "outlier"] == []
+    m = campaign.maneuvers[0].id
+    data = preprocess.slice_maneuver(campaign, m, [o.time_s for o in findings.outliers])
+    assert data.counts["st_outliers"] == 2
+
+
+def test_an_excursion_comes_back_inside_the_maneuver_within_its_time_and_jumps():
+    t = np.arange(12.0)
+    beyond = np.zeros(12, dtype=bool)
+    beyond[[3, 4, 5]] = True
+    jumps = beyond.copy()
+    assert list(np.flatnonzero(consistency.excursion_runs(beyond, jumps, t, 5.0))) == [3, 4, 5]
+    assert not consistency.excursion_runs(beyond, jumps, t, 2.5).any()
+    assert not consistency.excursion_runs(beyond, np.zeros(12, dtype=bool), t, 5.0).any()
+    beyond[[0, 1, 11]] = True
+    jumps[[0, 1, 11]] = True
+    assert list(np.flatnonzero(consistency.excursion_runs(beyond, jumps, t, 5.0))) == [3, 4, 5]
 
 
 @pytest.fixture(scope="module")

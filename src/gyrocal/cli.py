@@ -1,4 +1,5 @@
-"""The ``gyrocal`` command: simulate, import or validate a campaign; compare two calibrations; plan a campaign."""
+"""The ``gyrocal`` command: simulate, import or validate a campaign; compare two calibrations; plan a campaign;
+measure a gyro's noise at rest."""
 
 import argparse
 import sys
@@ -27,6 +28,9 @@ def main(argv=None):
     cmp_.add_argument("first")
     cmp_.add_argument("second")
     cmp_.add_argument("--z-max", type=float, default=3.0, help="agreement limit on |z| (default 3)")
+    aln = sub.add_parser("allan", help="the gyro noise of a static recording: Allan deviation and angle random walk")
+    aln.add_argument("mapping", help="a shipped mapping (repoimu) or a mapping file (.yaml)")
+    aln.add_argument("file", help="a recording with the gyros at rest")
     pln = sub.add_parser("plan", help="predict what a planned campaign (a scenario YAML) will tell, before flying it")
     pln.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="one scenario, or two to compare side by side")
     pln.add_argument("--out", default=".", help="where plan.csv, plan_detection.csv and plan.png go (default .)")
@@ -54,6 +58,11 @@ def main(argv=None):
             text, agree = compare_files(args.first, args.second, args.z_max)
             print(text)
             return 0 if agree else 1
+        elif args.command == "allan":
+            from .allan import static_report
+            from .importer import read_file, read_mapping
+            mapping = read_mapping(args.mapping)
+            print(static_report(read_file(args.file, mapping), list(mapping["gyro"]["columns"]), args.file))
         elif args.command == "plan":
             import matplotlib
             matplotlib.use("Agg")

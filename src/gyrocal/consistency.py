@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 
 import numpy as np
+from scipy.ndimage import median_filter
 from scipy.spatial.transform import Rotation
 from scipy.special import chdtr, chdtri, gammaincinv
 
@@ -39,7 +40,17 @@ OUTLIER_REACH = 3
 
 OUTLIER_MAX_RUN = 3
 """An outlier stands alone: a wrong star identification or a reference glitch lasts a sample or
-a few. Longer runs beyond the noise are structure for the model, and stay in the fit."""
+a few. Longer runs beyond the noise are excursions (`EXCURSION_MAX_S`) or structure for the
+model, which stays in the fit."""
+
+EXCURSION_MAX_S = 5.0
+"""A reference excursion leaves the trend of the error between the sensors and comes back within
+this time: a motion-capture marker swap, or a star tracker's filter holding a wrong attitude. An
+error of the gyros integrates: it can step, but it cannot come back."""
+
+EXCURSION_TREND_S = 3 * EXCURSION_MAX_S
+"""The error's trend is its running median over this window: an excursion shorter than half of it
+does not move the median."""
 
 MAX_CLOCK_SEARCH_S = 60.0
 """The clock-offset search spans at most this far either way."""
@@ -64,9 +75,12 @@ class Outlier:
     line: int
     """Line of ``star_tracker.csv`` (the header is line 1)."""
     size_arcsec: float
-    """Departure from its neighbours that the motion does not explain (`outlier_distances`)."""
+    """Departure from its neighbours that the motion does not explain (`outlier_distances`), or,
+    in an excursion, from the error's trend (`trend_distances`)."""
     mahalanobis: float
     """The same departure in standard deviations of the data's own noise."""
+    kind: str = "outlier"
+    """``outlier`` (a sample or a few) or ``excursion`` (a run that leaves the trend and comes back)."""
 
 
 @dataclass
@@ -512,6 +526,32 @@ def outlier_distances(sensed: Sensed):
     return resid, d2
 
 
+def trend_distances(sensed: Sensed):
+    """Each star-tracker sample's error between the sensors (eq. 4, nominal parameters, rad, body
+    axes) less its trend, the running median over `EXCURSION_TREND_S`, and its squared Mahalanobis
+    distance under the robust covariance of those deviations. Scale errors, misalignments and
+    biases bend the error slowly and the median follows them; a reference excursion leaves it."""
+    data = sensed.data
+    zeros = ch.ChannelParams.zeros(data.channels)
+    err = preprocess.error_angles(data, data.sets[0], zeros)
+    window = int(min(len(err), max(3, round(EXCURSION_TREND_S / float(np.median(sensed.dt))))))
+    dev = err - median_filter(err, size=(window | 1, 1), mode="nearest")
+    d2 = np.einsum("mi,ij,mj->m", dev, np.linalg.pinv(robust_covariance(dev)), dev)
+    return dev, d2
+
+
+def excursion_runs(beyond, jumps, st_time, max_s: float) -> np.ndarray:
+    """The entries of ``beyond`` (off the trend) in runs that last at most ``max_s``, lie inside the
+    maneuver, so that the error is seen to come back on both sides, and hold a jump (a sample off
+    its neighbours, ``jumps``): a wander of the error leaves its trend too, but smoothly."""
+    edges = np.diff(np.concatenate([[0], beyond.astype(int), [0]]))
+    out = np.zeros(len(beyond), dtype=bool)
+    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+        if a > 0 and b < len(beyond) and st_time[b] - st_time[a - 1] <= max_s and jumps[a:b].any():
+            out[a:b] = True
+    return out
+
+
 def robust_covariance(x, iterations=5, quantile=0.99) -> np.ndarray:
     """Covariance of the bulk of ``x`` (N, p): refit on the points inside the ``quantile`` ellipsoid,
     corrected for the truncation (a normal's tails are cut, not outliers')."""
@@ -553,18 +593,23 @@ def check(campaign: Campaign) -> Findings:
             findings.warnings.append(f"maneuver {m.id}: no inertial hold {' or '.join(missing)} the rotation: "
                                      "the paper's classic method does not apply to it (the full-trajectory "
                                      "fit does)")
-        screened.append((data, *outlier_distances(sensed)))
-    n_total = sum(len(d2) for _, _, d2 in screened)
+        screened.append((data, *outlier_distances(sensed), *trend_distances(sensed)))
+    n_total = sum(len(d2) for _, _, d2, _, _ in screened)
     threshold = chdtri(3, OUTLIER_FALSE_ALARMS / max(n_total, 1))
-    for data, resid, d2 in screened:
+    for data, resid, d2, dev, d2_trend in screened:
         lines = campaign.lines["star_tracker.csv"][np.searchsorted(campaign.st_time, data.st_time)]
         beyond = d2 > threshold
         isolated = isolated_runs(beyond, OUTLIER_MAX_RUN)
+        away = excursion_runs(d2_trend > threshold, beyond, data.st_time, EXCURSION_MAX_S) & ~isolated
         for j in np.flatnonzero(isolated):
             findings.outliers.append(Outlier(data.id, float(data.st_time[j]), int(lines[j]),
                                              float(rad_to_arcsec(np.linalg.norm(resid[j]))),
                                              float(np.sqrt(d2[j]))))
-        structure = int((beyond & ~isolated).sum())
+        for j in np.flatnonzero(away):
+            findings.outliers.append(Outlier(data.id, float(data.st_time[j]), int(lines[j]),
+                                             float(rad_to_arcsec(np.linalg.norm(dev[j]))),
+                                             float(np.sqrt(d2_trend[j])), "excursion"))
+        structure = int((beyond & ~isolated & ~away).sum())
         if structure:
             findings.warnings.append(
                 f"maneuver {data.id}: {structure} star-tracker samples in runs of more than {OUTLIER_MAX_RUN} depart "
@@ -657,9 +702,12 @@ def summary(campaign: Campaign, findings: Findings) -> str:
     for w in findings.warnings:
         lines.append(f"  warning: {w}")
     if findings.outliers:
+        away = sum(o.kind == "excursion" for o in findings.outliers)
         lines.append(f"  star-tracker outliers, left out of the fit: {len(findings.outliers)}"
+                     + (f", {away} of them in excursions (off the error's trend and back within "
+                        f"{EXCURSION_MAX_S:g} s)" if away else "")
                      + (" (the 20 largest; all in input.json)" if len(findings.outliers) > 20 else ""))
         for o in sorted(findings.outliers, key=lambda o: -o.mahalanobis)[:20]:
             lines.append(f"    {o.maneuver:<12} line {o.line:>7}  t = {o.time_s:.2f} s  {o.size_arcsec:8.1f} arcsec "
-                         f"({o.mahalanobis:.1f} sd)")
+                         f"({o.mahalanobis:.1f} sd)" + ("  excursion" if o.kind == "excursion" else ""))
     return "\n".join(lines)

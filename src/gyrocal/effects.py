@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from .preprocess import MOVING_RATE_FRACTION
-from .units import AXES, DEG_H_RAD_S, PPM, arcsec_to_rad
+from .units import AXES, DEG_H_RAD_S, PPM, STANDARD_GRAVITY_M_S2, arcsec_to_rad
 
 
 @dataclass(frozen=True)
@@ -154,6 +154,19 @@ class SfNonlinearity(Effect):
         return {"sf_quadratic": m.rate**2 * m.increments}
 
 
+class GSensitivity(Effect):
+    name = "g_sensitivity"
+    description = "a bias that follows the specific force (the accelerometer's acc_x, acc_y, acc_z columns)"
+    # A MEMS rate gyro's g-sensitivity is of order 0.01-0.1 deg/s/g; a DTG's mass unbalance, deg/h/g.
+    parameters = tuple(Parameter(f"g_{a}", "deg/s/g", np.deg2rad(1.0) / STANDARD_GRAVITY_M_S2, 0.1, 2.0)
+                       for a in "xyz")
+
+    def gyro(self, m):
+        # Extra gyro.csv columns acc_x, acc_y, acc_z: the specific force along body x, y, z (m/s^2).
+        n = len(m.channels)
+        return {f"g_{a}": np.repeat((m.extras[f"acc_{a}"] * m.dt)[:, None], n, axis=1) for a in "xyz"}
+
+
 class StLatency(Effect):
     name = "st_latency"
     description = "time-tag offset of the star tracker behind the gyros (positive: its attitude is late)"
@@ -171,7 +184,7 @@ class StCorrelatedNoise(Effect):
 
 
 LIBRARY = {e.name: e for e in (ScaleFactor(), Misalignment(), Bias(), BiasDrift(), SfNonlinearity(),
-                                StLatency(), StCorrelatedNoise())}
+                                GSensitivity(), StLatency(), StCorrelatedNoise())}
 BASELINE = ("scale_factor", "misalignment", "bias")
 
 

@@ -246,7 +246,8 @@ def build_context(model, maneuvers, tables, est, diagnostics, sampler, correctio
                "after norm (arcsec)": effect_table["after norm"].round(1)}),
         "accounting": accounting, "warnings": info["warnings"],
         "outliers": pd.DataFrame(info["star_tracker_outliers"],
-                                 columns=["maneuver", "time_s", "line", "size_arcsec", "mahalanobis"]).round(2),
+                                 columns=["maneuver", "time_s", "line", "size_arcsec", "mahalanobis", "kind"]
+                                 ).fillna({"kind": "outlier"}).round(2),
         "renormalised": info["rows"]["star_tracker_renormalised"], "mounting": mounting_text(info["mounting"]),
         "checksums": info["checksums_sha256"], "sampler": sampler,
         "config": yaml.safe_dump(cfg, sort_keys=False),
@@ -336,7 +337,10 @@ def render(ctx: dict) -> str:
     parts.append(_table(ctx["accounting"], "accounting"))
     parts.append(f"<h3>Star-tracker outliers left out of the fit ({len(ctx['outliers'])})</h3><p class='small'>"
                  "Samples whose departure from their neighbours the motion cannot explain, beyond what the data's "
-                 "own noise allows (gyrocal.consistency); line is the line of star_tracker.csv.</p>")
+                 "own noise allows (kind outlier), or that leave the trend of the error between the sensors and "
+                 "come back within a few seconds (kind excursion: a glitch of the reference, since a gyro's error "
+                 "integrates and cannot come back); line is the line of star_tracker.csv "
+                 "(gyrocal.consistency).</p>")
     parts.append(_table(ctx["outliers"], "outliers"))
     parts.append(f"<h3>Warnings from validation ({len(ctx['warnings'])})</h3>")
     parts.append("<ul id='warnings'>" + "".join(f"<li>{html.escape(w)}</li>" for w in ctx["warnings"]) + "</ul>")

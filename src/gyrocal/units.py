@@ -14,6 +14,9 @@ DEG_SQRT_H_RAD_SQRT_S = np.deg2rad(1.0) / 60.0
 DEG_H_RAD_S = np.deg2rad(1.0) / 3600.0
 """One deg/h of rate (a gyro bias) in rad/s."""
 
+STANDARD_GRAVITY_M_S2 = 9.80665
+"""One g of specific force in m/s^2 (a g-sensitivity in deg/s/g)."""
+
 AXES = ("roll", "pitch", "yaw")
 """Body axes in index order: x = roll, y = pitch, z = yaw (docs/interface.md section 1)."""
 

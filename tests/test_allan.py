@@ -1,0 +1,39 @@
+"""The Allan deviation of a gyro at rest, and the angle random walk read off it."""
+
+import numpy as np
+import pytest
+
+from gyrocal import allan
+from gyrocal.importer import Imported
+from gyrocal.telemetry import TelemetryError
+from gyrocal.units import DEG_H_RAD_S
+
+
+def white_rate_increments(arw_deg_sqrt_h, dt_s, n, channels=2, seed=1):
+    """Increments of a gyro at rest whose rate is white noise of the given angle random walk."""
+    sd_rad_s = arw_deg_sqrt_h * 60.0 * DEG_H_RAD_S / np.sqrt(dt_s)
+    return np.random.default_rng(seed).normal(0.0, sd_rad_s, (n, channels)) * dt_s
+
+
+def test_the_angle_random_walk_of_white_rate_noise_is_recovered():
+    table = allan.allan_table(white_rate_increments(2.0, 0.01, 200_000), 0.01, ["a", "b"])
+    arw = allan.angle_random_walk(table)
+    assert list(arw.index) == ["a", "b"]
+    assert np.allclose(arw, 2.0, rtol=0.05)
+
+
+def test_the_allan_deviation_is_the_dense_formula_on_a_tiny_record():
+    inc = white_rate_increments(1.0, 0.5, 40, channels=1, seed=4)
+    angle = np.concatenate([[0.0], np.cumsum(inc[:, 0])])
+    m, dt = 2, 0.5
+    second = angle[2 * m:] - 2 * angle[m:-m] + angle[:-2 * m]
+    dense = np.sqrt(np.mean(second**2) / (2 * (m * dt) ** 2)) / DEG_H_RAD_S
+    table = allan.allan_table(inc, dt, ["g"])
+    assert table.loc[m * dt, "g adev_deg_h"] == pytest.approx(dense, rel=1e-12)
+
+
+def test_uneven_intervals_are_refused_naming_the_row():
+    time = np.array([0.0, 0.01, 0.02, 0.05, 0.06])
+    imported = Imported("s", time, np.zeros((5, 4)), np.zeros(5, bool), np.zeros((5, 1)), {})
+    with pytest.raises(TelemetryError, match=r"static\.csv: row 4 .* 0\.03 s where the file's is 0\.01 s"):
+        allan.static_report(imported, ["g"], "static.csv")

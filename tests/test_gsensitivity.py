@@ -1,0 +1,60 @@
+"""The library's g-sensitivity: a bias that follows the accelerometer's specific force."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from gyrocal import effects
+from gyrocal.errormodel import effect_derivatives, view
+from gyrocal.preprocess import slice_maneuver
+from gyrocal.study import calibrate_steps
+from gyrocal.telemetry import read_campaign
+from gyrocal.units import STANDARD_GRAVITY_M_S2
+
+import mutations
+from conftest import config_with
+
+G_Y_DEG_S_G = 0.003
+"""dtg3_roll's true sensitivity to acc_y (11 deg/h/g, a DTG's mass unbalance)."""
+
+
+def with_accelerometer(d):
+    """The gyros turned and tilted: acc_y, acc_z follow a one-minute turn through gravity, and
+    dtg3_roll senses ``G_Y_DEG_S_G`` of acc_y on top of its rate."""
+    gyro = pd.read_csv(d / "gyro.csv")
+    phase = 2 * np.pi * gyro["time"].to_numpy() / 60.0
+    gyro["acc_x"] = 0.3
+    gyro["acc_y"] = STANDARD_GRAVITY_M_S2 * np.sin(phase)
+    gyro["acc_z"] = STANDARD_GRAVITY_M_S2 * np.cos(phase)
+    dt = np.diff(gyro["time"].to_numpy(), prepend=gyro["time"].iloc[0])
+    gyro["dtg3_roll"] += np.deg2rad(G_Y_DEG_S_G) / STANDARD_GRAVITY_M_S2 * gyro["acc_y"] * dt
+    mutations._write(gyro, d, "gyro.csv")
+
+
+def test_its_columns_are_the_specific_force_times_the_interval_on_every_channel(tiny, tmp_path):
+    mutations.corrupted_copy(tiny[0], tmp_path / "c", with_accelerometer)
+    campaign = read_campaign(tmp_path / "c")
+    data = slice_maneuver(campaign, campaign.maneuvers[0].id)
+    columns, _ = effect_derivatives(effects.LIBRARY["g_sensitivity"], view(data))
+    assert sorted(columns) == ["g_x", "g_y", "g_z"]
+    assert columns["g_y"].shape == data.increments.shape
+    for j in range(len(data.channels)):
+        assert np.array_equal(columns["g_y"][:, j], data.extras["acc_y"] * data.dt)
+
+
+def test_without_accelerometer_columns_it_names_the_missing_one(tiny):
+    data = slice_maneuver(read_campaign(tiny[0]), "yaw_pos")
+    with pytest.raises(ValueError, match="g_sensitivity needs 'acc_x'"):
+        effect_derivatives(effects.LIBRARY["g_sensitivity"], view(data))
+
+
+def test_the_posterior_finds_a_known_g_sensitivity_and_no_other(tiny, tmp_path, config):
+    mutations.corrupted_copy(tiny[0], tmp_path / "c", with_accelerometer)
+    model = ["scale_factor", "misalignment", "bias", "g_sensitivity"]
+    calibrate_steps(tmp_path / "c", tmp_path / "out", config_with(config, {"g": model}), ("g",))
+    summary = pd.read_csv(tmp_path / "out" / "g" / "posterior_summary.csv", index_col=0)
+    g = summary[summary.index.str.contains(r"\.g_[xyz]$")]
+    assert len(g) == 18
+    z = (g["mean"] - np.where(g.index == "dtg3_roll.g_y", G_Y_DEG_S_G, 0.0)) / g["sd"]
+    assert np.abs(z).max() < 4.0
+    assert g.loc["dtg3_roll.g_y", "sd"] < G_Y_DEG_S_G / 5
