@@ -58,3 +58,39 @@ def test_the_posterior_finds_a_known_g_sensitivity_and_no_other(tiny, tmp_path, 
     z = (g["mean"] - np.where(g.index == "dtg3_roll.g_y", G_Y_DEG_S_G, 0.0)) / g["sd"]
     assert np.abs(z).max() < 4.0
     assert g.loc["dtg3_roll.g_y", "sd"] < G_Y_DEG_S_G / 5
+
+
+OFFSET_ROLL_ACC_Z_ARCSEC_G = 600.0
+"""The reference's true attitude offset about roll per g of specific force along body z."""
+
+
+def with_gravity_offset(d):
+    """The accelerometer of `with_accelerometer`, the gyros without g-sensitivity, and a reference
+    that sits ``OFFSET_ROLL_ACC_Z_ARCSEC_G`` per g of acc_z off about roll (a mount that sags)."""
+    from scipy.spatial.transform import Rotation
+    gyro = pd.read_csv(d / "gyro.csv")
+    phase = 2 * np.pi * gyro["time"].to_numpy() / 60.0
+    gyro["acc_x"] = 0.3
+    gyro["acc_y"] = STANDARD_GRAVITY_M_S2 * np.sin(phase)
+    gyro["acc_z"] = STANDARD_GRAVITY_M_S2 * np.cos(phase)
+    mutations._write(gyro, d, "gyro.csv")
+    st = pd.read_csv(d / "star_tracker.csv")
+    offset_rad = np.deg2rad(OFFSET_ROLL_ACC_Z_ARCSEC_G / 3600) * np.cos(2 * np.pi * st["time"].to_numpy() / 60.0)
+    columns = ["q1", "q2", "q3", "q4"]
+    turned = Rotation.from_quat(st[columns].to_numpy()) * Rotation.from_rotvec(
+        np.column_stack([offset_rad, np.zeros_like(offset_rad), np.zeros_like(offset_rad)]))
+    st[columns] = turned.as_quat()
+    mutations._write(st, d, "star_tracker.csv")
+
+
+def test_the_posterior_finds_a_known_gravity_offset_of_the_reference(tiny, tmp_path, config):
+    mutations.corrupted_copy(tiny[0], tmp_path / "c", with_gravity_offset)
+    model = ["scale_factor", "misalignment", "bias", "gravity_offset"]
+    calibrate_steps(tmp_path / "c", tmp_path / "out", config_with(config, {"o": model}), ("o",))
+    summary = pd.read_csv(tmp_path / "out" / "o" / "posterior_summary.csv", index_col=0)
+    offset = summary[summary.index.str.startswith("gravity_offset.")]
+    assert len(offset) == 9
+    truth = np.where(offset.index == "gravity_offset.offset_roll_acc_z", OFFSET_ROLL_ACC_Z_ARCSEC_G, 0.0)
+    z = (offset["mean"] - truth) / offset["sd"]
+    assert np.abs(z).max() < 4.0
+    assert offset.loc["gravity_offset.offset_roll_acc_z", "sd"] < OFFSET_ROLL_ACC_Z_ARCSEC_G / 5

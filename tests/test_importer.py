@@ -1,6 +1,8 @@
 """Tabular telemetry through a mapping, and two calibrations compared: on small files whose truth
 is known."""
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -124,3 +126,51 @@ def test_compare_campaigns_verdict_and_exit_code(tmp_path, capsys):
     assert cli.main(["compare-campaigns", str(tmp_path / "a.csv"), str(tmp_path / "c.csv")]) == 1
     out = capsys.readouterr().out
     assert "VERDICT: DISAGREE: 1 of 2" in out and "z = +4.71" in out
+
+
+def triad_calibration(rows, sf):
+    """A calibration table of a gyro triad from each channel's response row ``e_a + m`` (rad) and
+    scale factor (dimensionless), in the units calibration.csv carries."""
+    records = []
+    for i, name in enumerate(["gyro_x", "gyro_y", "gyro_z"]):
+        records += [{"channel": name, "parameter": p, "unit": "ppm", "mean": sf[i] / 1e-6, "sd": 100.0}
+                    for p in ("sf_pos", "sf_neg")]
+        records += [{"channel": name, "parameter": f"mis_{b}", "unit": "arcsec",
+                     "mean": rows[i, j] / rows[i, i] * 206264.80624709636, "sd": 50.0}
+                    for j, b in enumerate(("roll", "pitch", "yaw")) if j != i]
+    return pd.DataFrame(records)
+
+
+def test_a_calibration_turned_into_another_frame_is_the_same_gyro_seen_from_there():
+    """The same gyros, their response rows expressed in a body frame turned by 0.4 deg: turning
+    them back gives the first table's misalignments and scale factors to 1e-6 arcsec and ppm."""
+    rows_a = np.eye(3) + np.deg2rad(np.array([[0, 0.2, -0.1], [0.05, 0, 0.3], [-0.15, 0.1, 0]]))
+    sf_a = np.array([2e-3, -1e-3, 5e-4])
+    turn = Rotation.from_rotvec(np.deg2rad([0.1, -0.2, 0.35]))
+    turned = turn.inv().apply(rows_a * (1 + sf_a)[:, None])
+    own = turned[np.arange(3), np.arange(3)]
+    b = triad_calibration(turned / own[:, None], own - 1.0)
+    back = agreement.into_frame(b, turn)
+    a = triad_calibration(rows_a, sf_a)
+    assert back["mean"].to_numpy() == pytest.approx(a["mean"].to_numpy(), abs=1e-6)
+    assert back["sd"].tolist() == a["sd"].tolist()
+    assert np.abs(b["mean"] - a["mean"])[b["parameter"].str.startswith("mis_")].max() > 300.0
+
+
+def test_compare_campaigns_compares_misalignments_in_one_body_frame(tmp_path, capsys):
+    """Two runs that aligned their references 0.3 deg apart about yaw see the same x gyro's
+    misalignment toward pitch 1080 arcsec apart; turned into one frame they agree."""
+    turn = Rotation.from_rotvec(np.deg2rad([0.0, 0.0, 0.3]))
+    rows = np.eye(3) + np.deg2rad(np.array([[0, 0.1, 0.0], [0.0, 0, 0.0], [0.0, 0.0, 0]]))
+    for run, mounting, frame_rows in (("a", Rotation.identity(), rows), ("b", turn.inv(), turn.inv().apply(rows))):
+        (tmp_path / run / "baseline").mkdir(parents=True)
+        (tmp_path / run / "input.json").write_text(json.dumps({"mounting": {"quat": mounting.as_quat().tolist()}}))
+        own = frame_rows[np.arange(3), np.arange(3)]
+        triad_calibration(frame_rows / own[:, None], own - 1.0).to_csv(tmp_path / run / "baseline" / "calibration.csv",
+                                                                       index=False)
+    a, b = (str(tmp_path / r / "baseline" / "calibration.csv") for r in "ab")
+    raw = agreement.compare(pd.read_csv(a), pd.read_csv(b)).set_index(["channel", "parameter"])
+    assert raw.loc[("gyro_x", "mis_pitch"), "difference"] == pytest.approx(-1080.0, abs=1.0)
+    assert cli.main(["compare-campaigns", a, b]) == 0
+    out = capsys.readouterr().out
+    assert "B turned into A's body frame" in out and "+0, +0, +1080 arcsec" in out and "VERDICT: AGREE" in out

@@ -3,12 +3,59 @@
 The same sensor calibrated twice (two trials, two campaigns) must give answers that differ by
 no more than their intervals allow. For each parameter both ``calibration.csv`` files hold,
 ``z = (mean_B - mean_A) / sqrt(sd_A^2 + sd_B^2)``: independent campaigns, normal posteriors.
+
+Misalignments are relative to the body frame each run aligned its reference to (``mounting:
+estimate``, a coarse alignment from that run's own data). Where the two runs' mountings differ,
+B is first turned into A's body frame, so that the same physical axis is compared.
 """
+
+import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from scipy.spatial.transform import Rotation
+
+from .units import ARCSEC_RAD, AXES, PPM
 
 KEYS = ["channel", "parameter"]
+
+
+def mounting_of(calibration_path) -> Rotation | None:
+    """The reference mounting a run applied (``input.json`` of ``results/<campaign>/``, beside the
+    model folder that holds ``calibration.csv``); None where that file is not there."""
+    info = Path(calibration_path).resolve().parent.parent / "input.json"
+    if not info.is_file():
+        return None
+    mounting = json.loads(info.read_text()).get("mounting") or {}
+    return Rotation.from_quat(mounting["quat"]) if "quat" in mounting else Rotation.identity()
+
+
+def into_frame(table: pd.DataFrame, turn: Rotation) -> pd.DataFrame:
+    """A calibration table with its body frame turned by ``turn`` (taking its body axes into the
+    other run's). Each channel senses ``(1 + s) (e_a + m) . omega``; its row ``e_a + m`` turns
+    exactly, the misalignments become the row's components across over the one along, and the
+    scale factors take the one along. Means and point estimates move; sds and intervals move
+    with the means (a shift of frame does not change what the data told)."""
+    out = table.copy()
+    columns = [c for c in ("mean", "point", "ci95_low", "ci95_high") if c in out]
+    for _, rows in out.groupby("channel"):
+        mis = {p.removeprefix("mis_"): i for i, p in zip(rows.index, rows["parameter"]) if p.startswith("mis_")}
+        own = [a for a in AXES if a not in mis]
+        if len(own) != 1:
+            continue
+        a = AXES.index(own[0])
+        row = np.zeros(3)
+        row[a] = 1.0
+        for b, i in mis.items():
+            row[AXES.index(b)] = out.at[i, "mean"] * ARCSEC_RAD
+        turned = turn.apply(row)
+        shift = {i: turned[AXES.index(b)] / turned[a] / ARCSEC_RAD - out.at[i, "mean"] for b, i in mis.items()}
+        for i in rows.index[rows["parameter"].str.startswith("sf_")]:
+            shift[i] = ((1.0 + out.at[i, "mean"] * PPM) * turned[a] - 1.0) / PPM - out.at[i, "mean"]
+        for i, d in shift.items():
+            out.loc[i, columns] += d
+    return out
 
 
 def compare(first: pd.DataFrame, second: pd.DataFrame) -> pd.DataFrame:
@@ -33,11 +80,21 @@ def compare(first: pd.DataFrame, second: pd.DataFrame) -> pd.DataFrame:
 
 def compare_files(first, second, z_max: float = 3.0) -> tuple:
     """``gyrocal compare-campaigns``: the table as text, a verdict line, and whether they agree."""
-    table = compare(pd.read_csv(first), pd.read_csv(second))
+    a, b = pd.read_csv(first), pd.read_csv(second)
+    out = [f"A = {first}", f"B = {second}"]
+    mount_a, mount_b = mounting_of(first), mounting_of(second)
+    if mount_a is not None and mount_b is not None:
+        turn = mount_a * mount_b.inv()
+        if turn.magnitude() > 0:
+            b = into_frame(b, turn)
+            out.append("B turned into A's body frame: the runs aligned their references differently, by "
+                       + ", ".join(f"{v:+.0f}" for v in turn.as_rotvec() / ARCSEC_RAD)
+                       + " arcsec about roll, pitch, yaw (input.json, mounting)")
+    table = compare(a, b)
     compared = table[~table["prior_only"]]
     worst = compared.loc[compared["z"].abs().idxmax()] if len(compared) else None
     agree = bool(len(compared)) and bool((compared["z"].abs() < z_max).all())
-    out = [f"A = {first}", f"B = {second}", table.round(3).to_string(index=False)]
+    out.append(table.round(3).to_string(index=False))
     if worst is None:
         out.append("VERDICT: nothing to compare (no parameter informed in both)")
     else:

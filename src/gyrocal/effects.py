@@ -101,7 +101,10 @@ class ManeuverView:
         """(K, 3) body rate from the in-loop set (rad/s)."""
         self.acceleration = np.gradient(body_rate_rad_s, self.t_mid, axis=0)
         self.st_time = data.st_time
-        self.st_body_rate = body_rate_rad_s[data.st_interval()[0]]
+        self.st_interval = data.st_interval()[0]
+        """(M,) the gyro interval holding each star-tracker sample: ``x[m.st_interval]`` is a
+        per-interval quantity ``x`` at the star-tracker samples."""
+        self.st_body_rate = body_rate_rad_s[self.st_interval]
         """(M, 3) body rate at the star-tracker samples (rad/s)."""
         self.extras = data.extras
         self.t_center = 0.5 * (data.gyro_time[0] + data.gyro_time[-1])
@@ -167,6 +170,23 @@ class GSensitivity(Effect):
         return {f"g_{a}": np.repeat((m.extras[f"acc_{a}"] * m.dt)[:, None], n, axis=1) for a in "xyz"}
 
 
+class GravityOffset(Effect):
+    name = "gravity_offset"
+    description = ("an attitude offset between reference and gyros that follows the specific force (acc_x, "
+                   "acc_y, acc_z): a mount that gives under gravity, or a reference whose error depends on the pose")
+    parameters = tuple(Parameter(f"offset_{e}_acc_{a}", "arcsec/g", arcsec_to_rad(1.0) / STANDARD_GRAVITY_M_S2,
+                                 3600.0, 36000.0, per_channel=False) for e in AXES for a in "xyz")
+
+    def star_tracker(self, m):
+        out = {}
+        for i, e in enumerate(AXES):
+            for a in "xyz":
+                column = np.zeros((len(m.st_time), 3))
+                column[:, i] = m.extras[f"acc_{a}"][m.st_interval]
+                out[f"offset_{e}_acc_{a}"] = column
+        return out
+
+
 class StLatency(Effect):
     name = "st_latency"
     description = "time-tag offset of the star tracker behind the gyros (positive: its attitude is late)"
@@ -184,7 +204,7 @@ class StCorrelatedNoise(Effect):
 
 
 LIBRARY = {e.name: e for e in (ScaleFactor(), Misalignment(), Bias(), BiasDrift(), SfNonlinearity(),
-                                GSensitivity(), StLatency(), StCorrelatedNoise())}
+                                GSensitivity(), GravityOffset(), StLatency(), StCorrelatedNoise())}
 BASELINE = ("scale_factor", "misalignment", "bias")
 
 
