@@ -98,10 +98,11 @@ def test_cli_plan_on_the_default_campaign_prints_and_writes_the_tables(tmp_path,
     assert len(table) == 24 and set(table["unit"]) == {"ppm", "arcsec"}
     assert table["predicted_sd"].between(1.0, 50.0).all()   # tens of ppm and a few arcsec on MOM
     detection = pd.read_csv(tmp_path / "plan_detection.csv")
-    assert set(detection["effect"]) == {"bias_drift", "sf_nonlinearity", "g_sensitivity", "st_latency",
-                                        "st_correlated_noise"}
-    no_accelerometer = detection.set_index("effect").loc["g_sensitivity"]
-    assert not no_accelerometer["detectable"] and "acc_x" in no_accelerometer["why_not"]
+    assert set(detection["effect"]) == {"bias_drift", "sf_nonlinearity", "g_sensitivity", "gravity_offset",
+                                        "st_latency", "st_correlated_noise"}
+    for needs_accelerometer in ("g_sensitivity", "gravity_offset"):
+        row = detection.set_index("effect").loc[needs_accelerometer]
+        assert not row["detectable"] and "acc_x" in row["why_not"]
     assert (tmp_path / "plan.png").stat().st_size > 0
 
 

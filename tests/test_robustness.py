@@ -188,6 +188,7 @@ def test_a_reference_excursion_is_listed_as_one_and_left_out(tiny, tmp_path):
     assert sorted(o.line for o in away) == lines and len(lines) == 2
     assert all(1500 < o.size_arcsec < 2500 for o in away)
     assert [o for o in findings.outliers if o.kind == "outlier"] == []
+    assert findings.warnings == []
     m = campaign.maneuvers[0].id
     data = preprocess.slice_maneuver(campaign, m, [o.time_s for o in findings.outliers])
     assert data.counts["st_outliers"] == 2
@@ -196,14 +197,16 @@ def test_a_reference_excursion_is_listed_as_one_and_left_out(tiny, tmp_path):
 def test_an_excursion_comes_back_inside_the_maneuver_within_its_time_and_jumps():
     t = np.arange(12.0)
     beyond = np.zeros(12, dtype=bool)
-    beyond[[3, 4, 5]] = True
+    beyond[[4, 5]] = True
+    near = beyond.copy()
+    near[[3, 6]] = True
     jumps = beyond.copy()
-    assert list(np.flatnonzero(consistency.excursion_runs(beyond, jumps, t, 5.0))) == [3, 4, 5]
-    assert not consistency.excursion_runs(beyond, jumps, t, 2.5).any()
-    assert not consistency.excursion_runs(beyond, np.zeros(12, dtype=bool), t, 5.0).any()
-    beyond[[0, 1, 11]] = True
-    jumps[[0, 1, 11]] = True
-    assert list(np.flatnonzero(consistency.excursion_runs(beyond, jumps, t, 5.0))) == [3, 4, 5]
+    assert list(np.flatnonzero(consistency.excursion_runs(near, beyond, jumps, t, 5.0))) == [3, 4, 5, 6]
+    assert not consistency.excursion_runs(near, beyond, jumps, t, 4.5).any()
+    assert not consistency.excursion_runs(near, beyond, np.zeros(12, dtype=bool), t, 5.0).any()
+    assert not consistency.excursion_runs(near, np.zeros(12, dtype=bool), jumps, t, 5.0).any()
+    near[[0, 1, 11]] = beyond[[0, 1, 11]] = jumps[[0, 1, 11]] = True
+    assert list(np.flatnonzero(consistency.excursion_runs(near, beyond, jumps, t, 5.0))) == [3, 4, 5, 6]
 
 
 @pytest.fixture(scope="module")

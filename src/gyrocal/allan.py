@@ -17,7 +17,8 @@ def cluster_times(n: int, dt_s: float, per_decade: int = 4) -> np.ndarray:
     among them (beyond a tenth, too few independent clusters are left)."""
     top = np.log10(max(n * dt_s / 10.0, 2 * dt_s))
     taus = 10.0 ** np.arange(np.log10(dt_s), top, 1.0 / per_decade)
-    return np.unique(np.round(np.append(taus, ARW_TAU_S) / dt_s)) * dt_s
+    clusters = np.unique(np.round(np.append(taus, ARW_TAU_S) / dt_s))
+    return clusters[clusters >= 1] * dt_s
 
 
 def allan_table(increments_rad: np.ndarray, dt_s: float, names) -> pd.DataFrame:
@@ -35,7 +36,8 @@ def allan_table(increments_rad: np.ndarray, dt_s: float, names) -> pd.DataFrame:
 
 
 def angle_random_walk(table: pd.DataFrame) -> pd.Series:
-    """Each channel's angle random walk (deg/sqrt(h)) at `ARW_TAU_S`."""
+    """Each channel's angle random walk (deg/sqrt(h)) at the cluster time nearest `ARW_TAU_S`
+    (the series' name)."""
     arw = table.filter(like="arw_deg_sqrt_h")
     row = arw.iloc[int(np.argmin(np.abs(arw.index.to_numpy() - ARW_TAU_S)))]
     return row.rename(lambda c: c.removesuffix(" arw_deg_sqrt_h"))
@@ -60,7 +62,7 @@ def static_report(imported, names, path) -> str:
              "", table.round(3).to_string(), "",
              "mean rate (turn-on bias, with the Earth's rate), deg/s: "
              + ", ".join(f"{n} {m:+.4f}" for n, m in zip(names, mean)),
-             f"angle random walk at tau = {ARW_TAU_S:g} s, deg/sqrt(h): "
+             f"angle random walk at tau = {arw.name:g} s, deg/sqrt(h): "
              + ", ".join(f"{n} {v:.3f}" for n, v in arw.items()),
              f"state it as  arw_deg_sqrt_h: {float(np.sqrt(np.mean(arw**2))):.2f}   (the channels' RMS; in "
              "campaign.yaml under gyro:, or in the config under noise:)"]

@@ -44,13 +44,20 @@ a few. Longer runs beyond the noise are excursions (`EXCURSION_MAX_S`) or struct
 model, which stays in the fit."""
 
 EXCURSION_MAX_S = 5.0
-"""A reference excursion leaves the trend of the error between the sensors and comes back within
-this time: a motion-capture marker swap, or a star tracker's filter holding a wrong attitude. An
-error of the gyros integrates: it can step, but it cannot come back."""
+"""A reference excursion leaves the trend of the error between the sensors with a jump and comes
+back within this time: a motion-capture marker swap, or a star tracker's filter holding a wrong
+attitude. The jump must be one the motion does not explain (`outlier_distances` takes out what
+scale errors, misalignments, a time offset and a nonlinearity would leave), since a scale error
+over a there-and-back turn also comes back; an unexplained error of the gyros integrates: it
+can step, but it cannot come back."""
 
 EXCURSION_TREND_S = 3 * EXCURSION_MAX_S
 """The error's trend is its running median over this window: an excursion shorter than half of it
 does not move the median."""
+
+EXCURSION_EDGE_CUT = float(2 * gammaincinv(1.5, 0.99))
+"""An excursion extends on either side while its samples stay off the trend beyond this (the
+chi-square 99 % point on three degrees of freedom), so that its edges leave the fit with it."""
 
 MAX_CLOCK_SEARCH_S = 60.0
 """The clock-offset search spans at most this far either way."""
@@ -540,14 +547,16 @@ def trend_distances(sensed: Sensed):
     return dev, d2
 
 
-def excursion_runs(beyond, jumps, st_time, max_s: float) -> np.ndarray:
-    """The entries of ``beyond`` (off the trend) in runs that last at most ``max_s``, lie inside the
-    maneuver, so that the error is seen to come back on both sides, and hold a jump (a sample off
-    its neighbours, ``jumps``): a wander of the error leaves its trend too, but smoothly."""
-    edges = np.diff(np.concatenate([[0], beyond.astype(int), [0]]))
-    out = np.zeros(len(beyond), dtype=bool)
+def excursion_runs(near, beyond, jumps, st_time, max_s: float) -> np.ndarray:
+    """Excursions: runs of ``near`` (off the trend beyond a lower cut, so that an excursion's
+    edges go with it) that hold a sample ``beyond`` the outlier threshold and a jump (a sample off
+    its neighbours, ``jumps``: a wander of the error leaves its trend too, but smoothly), last at
+    most ``max_s``, and lie inside the maneuver, so that the error is seen to come back."""
+    edges = np.diff(np.concatenate([[0], near.astype(int), [0]]))
+    out = np.zeros(len(near), dtype=bool)
     for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
-        if a > 0 and b < len(beyond) and st_time[b] - st_time[a - 1] <= max_s and jumps[a:b].any():
+        if (a > 0 and b < len(near) and st_time[b] - st_time[a - 1] <= max_s
+                and beyond[a:b].any() and jumps[a:b].any()):
             out[a:b] = True
     return out
 
@@ -600,7 +609,8 @@ def check(campaign: Campaign) -> Findings:
         lines = campaign.lines["star_tracker.csv"][np.searchsorted(campaign.st_time, data.st_time)]
         beyond = d2 > threshold
         isolated = isolated_runs(beyond, OUTLIER_MAX_RUN)
-        away = excursion_runs(d2_trend > threshold, beyond, data.st_time, EXCURSION_MAX_S) & ~isolated
+        away = excursion_runs(d2_trend > EXCURSION_EDGE_CUT, d2_trend > threshold, beyond, data.st_time,
+                              EXCURSION_MAX_S) & ~isolated
         for j in np.flatnonzero(isolated):
             findings.outliers.append(Outlier(data.id, float(data.st_time[j]), int(lines[j]),
                                              float(rad_to_arcsec(np.linalg.norm(resid[j]))),
@@ -609,7 +619,8 @@ def check(campaign: Campaign) -> Findings:
             findings.outliers.append(Outlier(data.id, float(data.st_time[j]), int(lines[j]),
                                              float(rad_to_arcsec(np.linalg.norm(dev[j]))),
                                              float(np.sqrt(d2_trend[j])), "excursion"))
-        structure = int((beyond & ~isolated & ~away).sum())
+        beside = np.convolve(away, np.ones(2 * OUTLIER_REACH + 1), mode="same") > 0
+        structure = int((beyond & ~isolated & ~beside).sum())
         if structure:
             findings.warnings.append(
                 f"maneuver {data.id}: {structure} star-tracker samples in runs of more than {OUTLIER_MAX_RUN} depart "

@@ -174,13 +174,19 @@ class GravityOffset(Effect):
     name = "gravity_offset"
     description = ("an attitude offset between reference and gyros that follows the specific force (acc_x, "
                    "acc_y, acc_z): a mount that gives under gravity, or a reference whose error depends on the pose")
+    # About each body axis per the force along the two others: a tilt toward the force. The offset
+    # about an axis per the force along it is left out: with the force turning through the body,
+    # their sum is an offset about the force itself, fixed in the room, which each maneuver's
+    # initial attitude takes up. The force's mean over a maneuver acts as a common rotation of the
+    # triad, which the misalignments also describe: the report's model check names what moves.
     parameters = tuple(Parameter(f"offset_{e}_acc_{a}", "arcsec/g", arcsec_to_rad(1.0) / STANDARD_GRAVITY_M_S2,
-                                 3600.0, 36000.0, per_channel=False) for e in AXES for a in "xyz")
+                                 3600.0, 36000.0, per_channel=False)
+                       for i, e in enumerate(AXES) for a in "xyz" if a != "xyz"[i])
 
     def star_tracker(self, m):
         out = {}
         for i, e in enumerate(AXES):
-            for a in "xyz":
+            for a in "xyz".replace("xyz"[i], ""):
                 column = np.zeros((len(m.st_time), 3))
                 column[:, i] = m.extras[f"acc_{a}"][m.st_interval]
                 out[f"offset_{e}_acc_{a}"] = column
