@@ -1,5 +1,5 @@
 """The ``gyrocal`` command: simulate, import or validate a campaign; compare two calibrations; plan a campaign;
-measure a gyro's noise at rest."""
+measure a gyro's noise at rest; check the linear model against the exact one."""
 
 import argparse
 import sys
@@ -31,6 +31,10 @@ def main(argv=None):
     aln = sub.add_parser("allan", help="the gyro noise of a static recording: Allan deviation and angle random walk")
     aln.add_argument("mapping", help="a shipped mapping (repoimu) or a mapping file (.yaml)")
     aln.add_argument("file", help="a recording with the gyros at rest")
+    lin = sub.add_parser("linearity", help="the exact model against the linear one where the posterior lives")
+    lin.add_argument("results", help="a run's results/<campaign> folder")
+    lin.add_argument("--model", default="baseline", help="the model variant (default baseline)")
+    lin.add_argument("--plugin", action="append", default=[], metavar="FILE", help="a plugin file the model uses")
     pln = sub.add_parser("plan", help="predict what a planned campaign (a scenario YAML) will tell, before flying it")
     pln.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="one scenario, or two to compare side by side")
     pln.add_argument("--out", default=".", help="where plan.csv, plan_detection.csv and plan.png go (default .)")
@@ -63,6 +67,9 @@ def main(argv=None):
             from .importer import read_file, read_mapping
             mapping = read_mapping(args.mapping)
             print(static_report(read_file(args.file, mapping), list(mapping["gyro"]["columns"]), args.file))
+        elif args.command == "linearity":
+            from .linearity import run
+            print(run(args.results, args.model, args.plugin))
         elif args.command == "plan":
             import matplotlib
             matplotlib.use("Agg")
