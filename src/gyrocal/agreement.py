@@ -31,6 +31,12 @@ def mounting_of(calibration_path) -> Rotation | None:
     return Rotation.from_quat(mounting["quat"]) if "quat" in mounting else Rotation.identity()
 
 
+def turnable(table: pd.DataFrame) -> list:
+    """The channels `into_frame` can turn: those with misalignments toward exactly two axes."""
+    mis = table[table["parameter"].str.startswith("mis_")].groupby("channel")["parameter"].nunique()
+    return sorted(mis.index[mis == 2])
+
+
 def into_frame(table: pd.DataFrame, turn: Rotation) -> pd.DataFrame:
     """A calibration table with its body frame turned by ``turn`` (taking its body axes into the
     other run's). Each channel senses ``(1 + s) (e_a + m) . omega``; its row ``e_a + m`` turns
@@ -90,6 +96,9 @@ def compare_files(first, second, z_max: float = 3.0) -> tuple:
             out.append("B turned into A's body frame: the runs aligned their references differently, by "
                        + ", ".join(f"{v:+.0f}" for v in turn.as_rotvec() / ARCSEC_RAD)
                        + " arcsec about roll, pitch, yaw (input.json, mounting)")
+            left = sorted(set(b["channel"]) - set(turnable(b)))
+            if left:
+                out.append(f"not turned (no misalignment toward two axes): {', '.join(left)}")
     table = compare(a, b)
     compared = table[~table["prior_only"]]
     worst = compared.loc[compared["z"].abs().idxmax()] if len(compared) else None

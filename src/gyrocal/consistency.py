@@ -155,12 +155,16 @@ class Sensed:
     """(M-1,) star-tracker sample intervals (s)."""
 
     @cached_property
-    def departures(self) -> np.ndarray:
-        """(M, 3) each sample's error angle between the sensors (eq. 4, nominal parameters, rad)
-        less the interpolation of its neighbours (`neighbour_residual`): the reference's noise
-        estimate and the outlier screen both start from it."""
+    def error(self) -> np.ndarray:
+        """(M, 3) each sample's error angle between the sensors (eq. 4, nominal parameters, rad)."""
         zeros = ch.ChannelParams.zeros(self.data.channels)
-        return neighbour_residual(preprocess.error_angles(self.data, self.data.sets[0], zeros))
+        return preprocess.error_angles(self.data, self.data.sets[0], zeros)
+
+    @cached_property
+    def departures(self) -> np.ndarray:
+        """(M, 3) `error` less the interpolation of its neighbours (`neighbour_residual`): the
+        reference's noise estimate and the outlier screen both start from it."""
+        return neighbour_residual(self.error)
 
 
 def sense(data) -> Sensed:
@@ -538,9 +542,7 @@ def trend_distances(sensed: Sensed):
     axes) less its trend, the running median over `EXCURSION_TREND_S`, and its squared Mahalanobis
     distance under the robust covariance of those deviations. Scale errors, misalignments and
     biases bend the error slowly and the median follows them; a reference excursion leaves it."""
-    data = sensed.data
-    zeros = ch.ChannelParams.zeros(data.channels)
-    err = preprocess.error_angles(data, data.sets[0], zeros)
+    err = sensed.error
     window = int(min(len(err), max(3, round(EXCURSION_TREND_S / float(np.median(sensed.dt))))))
     dev = err - median_filter(err, size=(window | 1, 1), mode="nearest")
     d2 = np.einsum("mi,ij,mj->m", dev, np.linalg.pinv(robust_covariance(dev)), dev)
