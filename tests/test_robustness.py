@@ -202,11 +202,16 @@ def test_an_excursion_comes_back_inside_the_maneuver_within_its_time_and_jumps()
     near[[3, 6]] = True
     jumps = beyond.copy()
     assert list(np.flatnonzero(consistency.excursion_runs(near, beyond, jumps, t, 5.0))) == [3, 4, 5, 6]
-    assert not consistency.excursion_runs(near, beyond, jumps, t, 4.5).any()
+    assert not consistency.excursion_runs(near, beyond, jumps, t, 2.5).any()
     assert not consistency.excursion_runs(near, beyond, np.zeros(12, dtype=bool), t, 5.0).any()
     assert not consistency.excursion_runs(near, np.zeros(12, dtype=bool), jumps, t, 5.0).any()
     near[[0, 1, 11]] = beyond[[0, 1, 11]] = jumps[[0, 1, 11]] = True
     assert list(np.flatnonzero(consistency.excursion_runs(near, beyond, jumps, t, 5.0))) == [3, 4, 5, 6]
+    near[[0, 1, 11]] = beyond[[0, 1, 11]] = jumps[[0, 1, 11]] = False
+    near[7:10] = True                 # edges that stretch it past the limit: the core's time decides
+    assert list(np.flatnonzero(consistency.excursion_runs(near, beyond, jumps, t, 4.0))) == [3, 4, 5, 6, 7, 8, 9]
+    near[7:11] = True                 # past twice the limit: only the core goes
+    assert list(np.flatnonzero(consistency.excursion_runs(near, beyond, jumps, t, 4.0))) == [4, 5]
 
 
 @pytest.fixture(scope="module")

@@ -96,7 +96,8 @@ def compare_files(first, second, z_max: float = 3.0) -> tuple:
             out.append("B turned into A's body frame: the runs aligned their references differently, by "
                        + ", ".join(f"{v:+.0f}" for v in turn.as_rotvec() / ARCSEC_RAD)
                        + " arcsec about roll, pitch, yaw (input.json, mounting)")
-            left = sorted(set(b["channel"]) - set(turnable(b)))
+            channels = set(b.loc[b["parameter"].str.startswith(("sf_", "mis_")), "channel"])
+            left = sorted(channels - set(turnable(b)))
             if left:
                 out.append(f"not turned (no misalignment toward two axes): {', '.join(left)}")
     table = compare(a, b)

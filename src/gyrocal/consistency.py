@@ -550,16 +550,25 @@ def trend_distances(sensed: Sensed):
 
 
 def excursion_runs(near, beyond, jumps, st_time, max_s: float) -> np.ndarray:
-    """Excursions: runs of ``near`` (off the trend beyond a lower cut, so that an excursion's
-    edges go with it) that hold a sample ``beyond`` the outlier threshold and a jump (a sample off
-    its neighbours, ``jumps``: a wander of the error leaves its trend too, but smoothly), last at
-    most ``max_s``, and lie inside the maneuver, so that the error is seen to come back."""
+    """Excursions: runs of ``near`` (off the trend beyond a lower cut) that hold a jump (a sample off
+    its neighbours, ``jumps``: a wander of the error leaves its trend too, but smoothly) and whose
+    core, the samples ``beyond`` the outlier threshold, lasts at most ``max_s`` and lies inside the
+    maneuver, so that the error is seen to come back. The run's edges, off the trend but not
+    beyond the threshold, go with it, unless they stretch it past twice ``max_s``."""
+    n = len(near)
     edges = np.diff(np.concatenate([[0], near.astype(int), [0]]))
-    out = np.zeros(len(near), dtype=bool)
+    out = np.zeros(n, dtype=bool)
     for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
-        if (a > 0 and b < len(near) and st_time[b] - st_time[a - 1] <= max_s
-                and beyond[a:b].any() and jumps[a:b].any()):
+        core = np.flatnonzero(beyond[a:b]) + a
+        if core.size == 0 or not jumps[a:b].any():
+            continue
+        c0, c1 = core[0], core[-1] + 1
+        if c0 == 0 or c1 == n or st_time[c1] - st_time[c0 - 1] > max_s:
+            continue
+        if st_time[min(b, n - 1)] - st_time[max(a - 1, 0)] <= 2 * max_s:
             out[a:b] = True
+        else:
+            out[c0:c1] = True
     return out
 
 

@@ -175,10 +175,12 @@ class GravityOffset(Effect):
     description = ("an attitude offset between reference and gyros that follows the specific force (acc_x, "
                    "acc_y, acc_z): a mount that gives under gravity, or a reference whose error depends on the pose")
     # About each body axis per the force along the two others: a tilt toward the force. The offset
-    # about an axis per the force along it is left out: with the force turning through the body,
-    # their sum is an offset about the force itself, fixed in the room, which each maneuver's
-    # initial attitude takes up. The force's mean over a maneuver acts as a common rotation of the
-    # triad, which the misalignments also describe: the report's model check names what moves.
+    # about an axis per the force along it is left out: their equal part is an offset about the
+    # force itself, fixed in the room, which each maneuver's initial attitude takes up; their
+    # differences can be told apart only by turns about several axes, and were weakly determined
+    # on the T-stick trials (sd 800 arcsec/g). The force's mean over a maneuver acts as a common
+    # rotation of the triad, which the misalignments also describe: the report's model check
+    # names what moves.
     parameters = tuple(Parameter(f"offset_{e}_acc_{a}", "arcsec/g", arcsec_to_rad(1.0) / STANDARD_GRAVITY_M_S2,
                                  3600.0, 36000.0, per_channel=False)
                        for i, e in enumerate(AXES) for a in "xyz" if a != "xyz"[i])
