@@ -45,12 +45,10 @@ def into_frame(table: pd.DataFrame, turn: Rotation) -> pd.DataFrame:
     with the means (a shift of frame does not change what the data told)."""
     out = table.copy()
     columns = [c for c in ("mean", "point", "ci95_low", "ci95_high") if c in out]
-    for _, rows in out.groupby("channel"):
+    for channel in turnable(out):
+        rows = out[out["channel"] == channel]
         mis = {p.removeprefix("mis_"): i for i, p in zip(rows.index, rows["parameter"]) if p.startswith("mis_")}
-        own = [a for a in AXES if a not in mis]
-        if len(own) != 1:
-            continue
-        a = AXES.index(own[0])
+        a = next(AXES.index(axis) for axis in AXES if axis not in mis)
         row = np.zeros(3)
         row[a] = 1.0
         for b, i in mis.items():

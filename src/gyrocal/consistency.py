@@ -532,7 +532,7 @@ def outlier_distances(sensed: Sensed):
         coef, *_ = np.linalg.lstsq(motion[inside], err[inside], rcond=None)
         resid = err - motion @ coef
         cov = robust_covariance(resid[inside])
-        d2 = np.einsum("mi,ij,mj->m", resid, np.linalg.pinv(cov), resid)
+        d2 = mahalanobis2(resid, cov)
         inside = (d2 < cut) & inside
     return resid, d2
 
@@ -545,8 +545,7 @@ def trend_distances(sensed: Sensed):
     err = sensed.error
     window = int(min(len(err), max(3, round(EXCURSION_TREND_S / float(np.median(sensed.dt))))))
     dev = err - median_filter(err, size=(window | 1, 1), mode="nearest")
-    d2 = np.einsum("mi,ij,mj->m", dev, np.linalg.pinv(robust_covariance(dev)), dev)
-    return dev, d2
+    return dev, mahalanobis2(dev, robust_covariance(dev))
 
 
 def excursion_runs(near, beyond, jumps, st_time, max_s: float) -> np.ndarray:
@@ -556,9 +555,8 @@ def excursion_runs(near, beyond, jumps, st_time, max_s: float) -> np.ndarray:
     maneuver, so that the error is seen to come back. The run's edges, off the trend but not
     beyond the threshold, go with it, unless they stretch it past twice ``max_s``."""
     n = len(near)
-    edges = np.diff(np.concatenate([[0], near.astype(int), [0]]))
     out = np.zeros(n, dtype=bool)
-    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)):
+    for a, b in runs(near):
         core = np.flatnonzero(beyond[a:b]) + a
         if core.size == 0 or not jumps[a:b].any():
             continue
@@ -572,6 +570,11 @@ def excursion_runs(near, beyond, jumps, st_time, max_s: float) -> np.ndarray:
     return out
 
 
+def mahalanobis2(x, cov) -> np.ndarray:
+    """(N,) squared Mahalanobis distance of each row of ``x`` (N, p) under ``cov``."""
+    return np.einsum("mi,ij,mj->m", x, np.linalg.pinv(cov), x)
+
+
 def robust_covariance(x, iterations=5, quantile=0.99) -> np.ndarray:
     """Covariance of the bulk of ``x`` (N, p): refit on the points inside the ``quantile`` ellipsoid,
     corrected for the truncation (a normal's tails are cut, not outliers')."""
@@ -581,7 +584,7 @@ def robust_covariance(x, iterations=5, quantile=0.99) -> np.ndarray:
     cut = chi2_quantile(quantile, p)
     factor = chdtr(p + 2, cut) / chdtr(p, cut)
     for _ in range(iterations):
-        d2 = np.einsum("mi,ij,mj->m", x, np.linalg.pinv(cov), x)
+        d2 = mahalanobis2(x, cov)
         inside = x[d2 < cut]
         cov = inside.T @ inside / len(inside) / factor
     return cov
@@ -640,12 +643,16 @@ def check(campaign: Campaign) -> Findings:
     return findings
 
 
+def runs(mask):
+    """``(start, end)`` of each run of consecutive True in ``mask``, ``end`` past its last entry."""
+    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
+    return zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1))
+
+
 def isolated_runs(mask, max_run: int) -> np.ndarray:
     """The entries of ``mask`` that sit in runs of at most ``max_run`` consecutive True."""
-    edges = np.diff(np.concatenate([[0], mask.astype(int), [0]]))
-    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
     out = np.zeros(len(mask), dtype=bool)
-    for a, b in zip(starts, ends):
+    for a, b in runs(mask):
         if b - a <= max_run:
             out[a:b] = True
     return out

@@ -62,7 +62,7 @@ def signature_effects(extra_columns) -> list:
     for column in extra_columns:
         def regress(m, column=column):
             x = m.extras[column] - np.mean(m.extras[column])
-            return {"scale": x[:, None] * m.increments, "bias": np.repeat((x * m.dt)[:, None], len(m.channels), 1)}
+            return {"scale": x[:, None] * m.increments, "bias": m.bias_regressor(x)}
         out.append(Signature(column, regress, f"a scale factor or bias that follows {column}", ("scale", "bias")))
     return out
 

@@ -109,6 +109,11 @@ class ManeuverView:
         self.extras = data.extras
         self.t_center = 0.5 * (data.gyro_time[0] + data.gyro_time[-1])
 
+    def bias_regressor(self, values) -> np.ndarray:
+        """(K, n_channels) the increments a bias proportional to ``values`` (K,) adds, the same
+        column for every channel's own copy of the parameter."""
+        return np.repeat((values * self.dt)[:, None], len(self.channels), axis=1)
+
 
 class ScaleFactor(Effect):
     name = "scale_factor"
@@ -141,7 +146,7 @@ class BiasDrift(Effect):
     signature = "time"
 
     def gyro(self, m):
-        return {"bias_drift": np.repeat(((m.t_mid - m.t_center) * m.dt)[:, None], len(m.channels), axis=1)}
+        return {"bias_drift": m.bias_regressor(m.t_mid - m.t_center)}
 
 
 class SfNonlinearity(Effect):
@@ -166,8 +171,7 @@ class GSensitivity(Effect):
 
     def gyro(self, m):
         # Extra gyro.csv columns acc_x, acc_y, acc_z: the specific force along body x, y, z (m/s^2).
-        n = len(m.channels)
-        return {f"g_{a}": np.repeat((m.extras[f"acc_{a}"] * m.dt)[:, None], n, axis=1) for a in "xyz"}
+        return {f"g_{a}": m.bias_regressor(m.extras[f"acc_{a}"]) for a in "xyz"}
 
 
 class GravityOffset(Effect):

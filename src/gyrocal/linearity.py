@@ -63,6 +63,8 @@ class _Block:
     """Whitened model columns of the free parameters."""
     nuisance: np.ndarray
     """Whitened columns of the initial attitude error and the biases."""
+    profiled: np.ndarray
+    """`columns` with the nuisance's span projected out."""
 
     def white(self, z) -> np.ndarray:
         return self.nz.whiten(self.chol, np.asfortranarray(noise.difference(z).reshape(-1, 1)))[:, 0]
@@ -76,7 +78,9 @@ def _blocks(maneuvers, estimate) -> list:
     for data, lin, nz in zip(maneuvers, lins, noises):
         chol = nz.factor(var)
         w = nz.whiten(chol, np.asfortranarray(nz.rhs))
-        out.append(_Block(data, lin, nz, chol, w[:, :nz.n_params][:, free], w[:, nz.n_params:nz.n_params + nz.n_nuisance]))
+        columns, nuisance = w[:, :nz.n_params][:, free], w[:, nz.n_params:nz.n_params + nz.n_nuisance]
+        q, _ = np.linalg.qr(nuisance)
+        out.append(_Block(data, lin, nz, chol, columns, nuisance, columns - q @ (q.T @ columns)))
     return out
 
 
@@ -97,19 +101,15 @@ def _mismatch(blocks, estimate, step) -> tuple:
     return mismatch, change
 
 
-def _shift_sd(blocks, parts) -> float:
-    """The largest shift, in posterior sd, that fitting ``parts`` (per maneuver, rad) with the
-    linear model would give any parameter, the nuisance profiled out."""
-    n = blocks[0].columns.shape[1]
-    gram, score = np.zeros((n, n)), np.zeros(n)
-    for b, part in zip(blocks, parts):
-        q, _ = np.linalg.qr(b.nuisance)
-        x = b.columns - q @ (q.T @ b.columns)
-        y = b.white(part)
-        y = y - q @ (q.T @ y)
-        gram += x.T @ x
-        score += x.T @ y
-    cov = np.linalg.inv(gram)
+def _profiled_cov(blocks) -> np.ndarray:
+    """Covariance of the free parameters from the whitened columns, the nuisance profiled out."""
+    return np.linalg.inv(sum(b.profiled.T @ b.profiled for b in blocks))
+
+
+def _shift_sd(blocks, cov, parts) -> float:
+    """The largest shift, in posterior sd (``cov``, `_profiled_cov`), that fitting ``parts`` (per
+    maneuver, rad) with the linear model would give any parameter, the nuisance profiled out."""
+    score = sum(b.profiled.T @ b.white(part) for b, part in zip(blocks, parts))
     return float(np.max(np.abs(cov @ score) / np.sqrt(np.diag(cov))))
 
 
@@ -123,6 +123,7 @@ def check(maneuvers, estimate) -> pd.DataFrame:
     part would give a parameter, in posterior sd."""
     free = estimate.spec.free
     blocks = _blocks(maneuvers, estimate)
+    cov = _profiled_cov(blocks)
     rows = []
     for step in probe_steps(estimate.cov[np.ix_(free, free)]):
         full, change = _mismatch(blocks, estimate, step)
@@ -131,8 +132,8 @@ def check(maneuvers, estimate) -> pd.DataFrame:
         columns, curvature = [p[0] for p in parts], [p[1] for p in parts]
         rows.append({"change_rms_arcsec": _rms_arcsec(change), "mismatch_rms_arcsec": _rms_arcsec(full),
                      "curvature_rms_arcsec": _rms_arcsec(curvature), "columns_rms_arcsec": _rms_arcsec(columns),
-                     "curvature_shift_sd": _shift_sd(blocks, curvature),
-                     "columns_shift_sd": _shift_sd(blocks, columns)})
+                     "curvature_shift_sd": _shift_sd(blocks, cov, curvature),
+                     "columns_shift_sd": _shift_sd(blocks, cov, columns)})
     return pd.DataFrame(rows)
 
 
