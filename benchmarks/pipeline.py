@@ -31,8 +31,7 @@ def snakemake_run():
         subprocess.run([sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--cores", "2",
                         "-d", tmp, "-q"], check=True, capture_output=True)
         wall = time.perf_counter() - start
-        jobs = [pd.read_csv(f, sep="\t").assign(rule=f.name.split(".")[0] if f.parent.name != "preprocess"
-                                                  else "preprocess")
+        jobs = [pd.read_csv(f, sep="\t").assign(rule=f.name.split(".")[0])
                 for f in sorted(Path(tmp, "logs").rglob("*.benchmark.tsv"))]
     table = pd.concat(jobs).groupby("rule").agg(jobs=("s", "size"), slowest_s=("s", "max"), all_jobs_s=("s", "sum"),
                                                 peak_mb=("max_rss", "max"))

@@ -53,6 +53,37 @@ def test_preprocess_step_writes_table_figure_and_counts(tiny_run):
     assert counts["st_used"] > 250
 
 
+def test_preprocess_step_writes_every_maneuver_whole_or_leaves_the_directory_as_it_was(tiny, tiny_run, tmp_path,
+                                                                                       monkeypatch):
+    from gyrocal import preprocess
+    from gyrocal.steps import preprocess as preprocess_step
+    out = tmp_path / "preprocess"
+    npz = preprocess_step.run(tiny[0], tiny_run[0] / "input.json", out, figures=False)
+    ids = [m.id for m in telemetry.read_meta(tiny[0])["maneuvers"]]
+    assert npz == [out / f"{i}.npz" for i in ids]
+    assert sorted(p.name for p in out.iterdir()) == sorted(f"{i}.{e}" for i in ids for e in ("npz", "csv"))
+    for i in ids:
+        assert (out / f"{i}.csv").read_bytes() == (tiny_run[0] / f"preprocess/{i}.csv").read_bytes()
+
+    made = []
+
+    def third_fails(data):
+        made.append(data.id)
+        if len(made) == 3:
+            raise RuntimeError("disk full")
+        return table_of(data)
+
+    table_of = preprocess.error_table
+    monkeypatch.setattr(preprocess, "error_table", third_fails)
+    for earlier in out.iterdir():  # an earlier run's files, told apart from what this run would write
+        earlier.write_bytes(b"earlier run")
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    with pytest.raises(RuntimeError, match="disk full"):
+        preprocess_step.run(tiny[0], tiny_run[0] / "input.json", out, figures=False)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+    assert [p.name for p in tmp_path.iterdir()] == ["preprocess"]
+
+
 def test_calibration_csv_follows_the_contract(tiny_run):
     table = pd.read_csv(tiny_run[0] / "baseline/calibration.csv")
     assert list(table.columns) == ["channel", "parameter", "unit", "point", "mean", "sd", "ci95_low",

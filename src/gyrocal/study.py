@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as sps
 
-from . import classic, effects, simulate, spec, telemetry
+from . import classic, effects, simulate, spec
 from .estimate import PointEstimate, linearize_all
 from .likelihood import campaign_stats
 from .noise import log_sigma_of, variances
@@ -69,12 +69,8 @@ def calibrate_steps(campaign_dir, out, cfg: dict, models, figures=True, through=
     the config its rule is given, up to each model's diagnostics (``through="posterior"``: up to
     its posterior). Returns the preprocessed files."""
     out = Path(out)
-    ids = [m.id for m in telemetry.read_meta(campaign_dir)["maneuvers"]]
     validate.run(campaign_dir, out / "input.json")
-    for m in ids:
-        preprocess.run(campaign_dir, out / "input.json", m, out / f"preprocess/{m}.npz", out / f"preprocess/{m}.csv",
-                       out / f"preprocess/{m}.png" if figures else None)
-    npz = [out / f"preprocess/{m}.npz" for m in ids]
+    npz = preprocess.run(campaign_dir, out / "input.json", out / "preprocess", figures)
     classic_step.run(npz, out / "classic.csv")
     plugins = cfg["plugins"]
     for model in models:

@@ -54,6 +54,8 @@ else:
                                 "maneuvers": _meta["maneuvers"], "simulated": True}
 
 RESULTS = results_of("{campaign}")
+PREPROCESSED = f"{RESULTS}/preprocess"
+"""The preprocess rule's directory: ``<maneuver>.{npz,csv,png}`` for each of the campaign's maneuvers."""
 LOGS = "logs/{campaign}"
 MODELS = sorted(config["models"], key=lambda m: m != "baseline")  # baseline is the reference
 PLUGINS = config["plugins"]
@@ -100,7 +102,8 @@ def truth_input(wildcards):
 
 
 def maneuver_files(ext):
-    """A campaign's per-maneuver files of one kind, as an input function."""
+    """A campaign's per-maneuver files of one kind, in the campaign's order, as a params function;
+    a rule that reads them takes the ``PREPROCESSED`` directory as its input."""
 
     def files(wildcards):
         return expand(f"{results_of(wildcards.campaign)}/preprocess/{{maneuver}}.{ext}",
@@ -142,7 +145,7 @@ def campaign_outputs(campaign):
     """Everything a campaign's run leaves, as paths."""
     results = results_of(campaign)
     out = [f"{results}/input.json"]
-    out += expand(f"{results}/preprocess/{{maneuver}}.png", maneuver=CAMPAIGNS[campaign]["maneuvers"])
+    out.append(f"{results}/preprocess")
     for model in MODELS:
         out += [f"{results}/{model}/calibration.csv", f"{results}/{model}/correction.json",
                 f"{results}/{model}/diagnostics.json"]

@@ -3,7 +3,7 @@ rule diagnostics:
     Ahead of calibrate when both wait for a core: compare needs diagnostics, not calibrate."""
     priority: 1
     input:
-        maneuvers=maneuver_files("npz"),
+        preprocessed=PREPROCESSED,
         point=f"{RESULTS}/{{model}}/point_estimate.npz",
         summary=f"{RESULTS}/{{model}}/posterior_summary.csv",
         fit=f"{RESULTS}/{{model}}/fit.csv",
@@ -11,6 +11,7 @@ rule diagnostics:
     output:
         f"{RESULTS}/{{model}}/diagnostics.json",
     params:
+        maneuvers=maneuver_files("npz"),
         thresholds=section("diagnostics"),
     conda:
         "../envs/gyrocal.yaml"

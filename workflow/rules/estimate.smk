@@ -1,9 +1,11 @@
 rule classic:
     """The paper's method: hold-averaged error after each rotation per unit rotation (once per campaign)."""
     input:
-        maneuvers=maneuver_files("npz"),
+        preprocessed=PREPROCESSED,
     output:
         f"{RESULTS}/classic.csv",
+    params:
+        maneuvers=maneuver_files("npz"),
     conda:
         "../envs/gyrocal.yaml"
     log:
@@ -20,12 +22,13 @@ rule point_estimate:
     it on the critical path). Ahead of classic when both wait for a core."""
     priority: 1
     input:
-        maneuvers=maneuver_files("npz"),
+        preprocessed=PREPROCESSED,
         checked=f"{RESULTS}/input.json",
         plugins=PLUGINS,
     output:
         f"{RESULTS}/{{model}}/point_estimate.npz",
     params:
+        maneuvers=maneuver_files("npz"),
         effects=model_effects,
         noise=section("noise"),
     conda:

@@ -1,7 +1,9 @@
 rule posterior:
-    """emcee over the model's parameters and noise scales; convergence across ensembles."""
+    """emcee over the model's parameters and noise scales; convergence across ensembles. Ahead of
+    classic when both wait for a core: the report needs classic, the rest of the run the posterior."""
+    priority: 1
     input:
-        maneuvers=maneuver_files("npz"),
+        preprocessed=PREPROCESSED,
         point=f"{RESULTS}/{{model}}/point_estimate.npz",
         plugins=PLUGINS,
         prior_from=[config["prior_from"]] if config["prior_from"] else [],
@@ -12,6 +14,7 @@ rule posterior:
         sampler=f"{RESULTS}/{{model}}/sampler.json",
         elpd=f"{RESULTS}/{{model}}/elpd_maneuvers.csv",
     params:
+        maneuvers=maneuver_files("npz"),
         priors=section("priors"),
         sampler=section("sampler"),
         grid=section("grid"),
@@ -30,7 +33,7 @@ rule posterior:
 rule calibrate:
     """calibration.csv per the contract, and the gyro correction for every channel set."""
     input:
-        maneuvers=maneuver_files("npz"),
+        preprocessed=PREPROCESSED,
         point=f"{RESULTS}/{{model}}/point_estimate.npz",
         summary=f"{RESULTS}/{{model}}/posterior_summary.csv",
     output:
@@ -41,6 +44,8 @@ rule calibrate:
             subcategory="{model}",
         ),
         correction=f"{RESULTS}/{{model}}/correction.json",
+    params:
+        maneuvers=maneuver_files("npz"),
     conda:
         "../envs/gyrocal.yaml"
     log:

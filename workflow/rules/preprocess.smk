@@ -17,15 +17,16 @@ rule validate:
 
 
 rule preprocess:
-    """One maneuver: slice, propagate every channel set nominally, error angles of eq. 4."""
+    """Every maneuver of a campaign: slice, propagate every channel set nominally, error angles of
+    eq. 4; a table and figure each. One job per campaign, since a maneuver takes a fraction of
+    a second and a job's start-up more."""
     input:
         unpack(campaign_input),
         checked=f"{RESULTS}/input.json",
     output:
-        data=f"{RESULTS}/preprocess/{{maneuver}}.npz",
-        table=f"{RESULTS}/preprocess/{{maneuver}}.csv",
-        figure=report(
-            f"{RESULTS}/preprocess/{{maneuver}}.png",
+        report(
+            directory(PREPROCESSED),
+            patterns=["{maneuver}.png"],
             caption="../report/preprocess.rst",
             category="Maneuvers",
             subcategory="{maneuver}",
@@ -35,8 +36,8 @@ rule preprocess:
     conda:
         "../envs/gyrocal.yaml"
     log:
-        f"{LOGS}/preprocess/{{maneuver}}.log",
+        f"{LOGS}/preprocess.log",
     benchmark:
-        f"{LOGS}/preprocess/{{maneuver}}.benchmark.tsv",
+        f"{LOGS}/preprocess.benchmark.tsv",
     script:
         "../scripts/preprocess.py"

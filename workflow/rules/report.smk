@@ -4,8 +4,7 @@ rule report:
     parallel: it ends the run, when nothing else is left to use the cores."""
     input:
         unpack(report_model_files),
-        maneuvers=maneuver_files("npz"),
-        tables=maneuver_files("csv"),
+        preprocessed=PREPROCESSED,
         checked=f"{RESULTS}/input.json",
         comparison=f"{RESULTS}/model_comparison.csv",
         truth=truth_input,
@@ -13,6 +12,8 @@ rule report:
         html=report(f"{RESULTS}/report.html", caption="../report/review.rst", category="Review before uplink"),
         verdict=f"{RESULTS}/verdict.json",
     params:
+        maneuvers=maneuver_files("npz"),
+        tables=maneuver_files("csv"),
         config=section(),
         models=MODELS,
     threads: 2

@@ -1,6 +1,6 @@
 from gyrocal.steps import common, diagnostics
 
 common.start(snakemake.log[0])
-diagnostics.run(snakemake.input.maneuvers, snakemake.input.point, snakemake.input.summary,
+diagnostics.run(snakemake.params.maneuvers, snakemake.input.point, snakemake.input.summary,
                 snakemake.input.fit, snakemake.input.plugins, snakemake.params.thresholds,
                 snakemake.output[0])

@@ -1,5 +1,4 @@
 from gyrocal.steps import common, preprocess
 
 common.start(snakemake.log[0])
-preprocess.run(snakemake.params.campaign_dir, snakemake.input.checked, snakemake.wildcards.maneuver,
-               snakemake.output.data, snakemake.output.table, snakemake.output.figure)
+preprocess.run(snakemake.params.campaign_dir, snakemake.input.checked, snakemake.output[0])

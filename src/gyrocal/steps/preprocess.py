@@ -1,27 +1,33 @@
-"""Rule ``preprocess``: one maneuver sliced and propagated nominally, with its table and figure."""
+"""Rule ``preprocess``: a campaign's maneuvers sliced and propagated nominally, each with its
+table and figure. One job per campaign: the work per maneuver is a fraction of a second, and a
+process per maneuver spent most of its time starting up and reading the whole campaign again."""
+
+from pathlib import Path
 
 from scipy.spatial.transform import Rotation
 
 from .. import consistency, plots, preprocess, telemetry
-from ..outputs import write_csv, write_with
+from ..outputs import atomic_dir, write_csv
 from .common import read_json
 
 
-def run(campaign_dir, input_json, maneuver_id, out_npz, out_csv, out_png):
-    """Slice one maneuver, leaving out the star-tracker outliers that validation listed;
-    propagate every channel set nominally, save table and figure (none when ``out_png`` is None:
-    the validation study reads no figure)."""
+def run(campaign_dir, input_json, out_dir, figures=True) -> list:
+    """Slice every maneuver of the campaign (in its order), leaving out the star-tracker outliers
+    that validation listed; propagate every channel set nominally; write ``<id>.npz``, ``<id>.csv``
+    and (unless ``figures`` is false: the validation study reads none) ``<id>.png`` into
+    ``out_dir``, whole or not at all. Returns the ``.npz`` paths."""
     info = read_json(input_json)
     campaign = telemetry.read_campaign(campaign_dir)
     if info["mounting"]:
         campaign = consistency.aligned(campaign, Rotation.from_quat(info["mounting"]["quat"]))
     outliers = [o["time_s"] for o in info["star_tracker_outliers"]]
-    data = preprocess.slice_maneuver(campaign, maneuver_id, outliers)
-    table = preprocess.error_table(data)
-    write_with(data.save, out_npz)
-    write_csv(table, out_csv)
-    if out_png is None:
-        return
-    m = campaign.maneuver(maneuver_id)
-    fig = plots.maneuver_figure(table, f"{campaign.name}: {m.id} ({m.turn}), nominal parameters")
-    write_with(lambda handle: plots.save(fig, handle), out_png)
+    with atomic_dir(out_dir) as tmp:
+        for m in campaign.maneuvers:
+            data = preprocess.slice_maneuver(campaign, m.id, outliers)
+            table = preprocess.error_table(data)
+            data.save(tmp / f"{m.id}.npz")
+            write_csv(table, tmp / f"{m.id}.csv")
+            if figures:
+                plots.save(plots.maneuver_figure(table, f"{campaign.name}: {m.id} ({m.turn}), nominal parameters"),
+                           tmp / f"{m.id}.png")
+    return [Path(out_dir) / f"{m.id}.npz" for m in campaign.maneuvers]
