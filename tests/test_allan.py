@@ -37,3 +37,21 @@ def test_uneven_intervals_are_refused_naming_the_row():
     imported = Imported("s", time, np.zeros((5, 4)), np.zeros(5, bool), np.zeros((5, 1)), {})
     with pytest.raises(TelemetryError, match=r"static\.csv: row 4 .* 0\.03 s where the file's is 0\.01 s"):
         allan.static_report(imported, ["g"], "static.csv")
+
+
+@pytest.mark.parametrize("dt_s", [1.0, 0.01])
+def test_a_gyro_logged_as_rates_reads_its_angle_random_walk_at_any_sample_interval(tmp_path, dt_s):
+    # At 1 Hz the cluster of tau = 1 s is one sample, where the import's trapezoid would halve it.
+    from gyrocal.importer import read_file, read_mapping
+    n, arw_true = 100_000, 2.0
+    rate = white_rate_increments(arw_true, dt_s, n, channels=1, seed=7)[:, 0] / dt_s
+    rows = "\n".join(f"{k * dt_s:.6f},1,0,0,0,{r:.10e}" for k, r in enumerate(rate))
+    (tmp_path / "static.csv").write_text("t,qw,qx,qy,qz,gyro\n" + rows + "\n")
+    (tmp_path / "m.yaml").write_text(
+        "format: {delimiter: ',', header_rows: 1}\ntime: {column: 1}\n"
+        "reference: {columns: [2, 3, 4, 5], order: wxyz, sample_interval_s: 0}\n"
+        "gyro: {quantity: rate, unit: rad/s, columns: {g: 6}, axes: {g: yaw}}\n")
+    text = allan.static_report(read_file(tmp_path / "static.csv", read_mapping(tmp_path / "m.yaml")), ["g"],
+                               "static.csv")
+    read = float(text.split("deg/sqrt(h): g ")[1].split()[0])
+    assert read == pytest.approx(arw_true, rel=0.03)

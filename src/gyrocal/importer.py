@@ -50,6 +50,10 @@ class Imported:
     increments: np.ndarray
     """(N, n_channels) rad over the interval ending at each row; the first row is the start."""
     extras: dict
+    rate: np.ndarray | None = None
+    """(N, n_channels) rad/s as sampled, for a gyro logged as rates (None for increments). The
+    Allan deviation needs the samples: the trapezoid averages neighbours, which hides half the
+    white noise at a cluster of one sample."""
 
 
 def mapping_path(name_or_path) -> Path:
@@ -116,6 +120,7 @@ def read_file(path, mapping) -> Imported:
     gyro = mapping["gyro"]
     names = list(gyro["columns"])
     values = np.column_stack([column(gyro["columns"][n], f"gyro {n}") for n in names])
+    rate = None
     if gyro["quantity"] == "rate":
         rate = values * RATE_UNITS[gyro["unit"]]
         increments = np.zeros_like(rate)
@@ -123,7 +128,7 @@ def read_file(path, mapping) -> Imported:
     else:
         increments = values * ANGLE_UNITS[gyro["unit"]]
     extras = {name: column(number, f"extra {name}") for name, number in (mapping.get("extras") or {}).items()}
-    return Imported(path.stem, time, quat, valid, increments, extras)
+    return Imported(path.stem, time, quat, valid, increments, extras, rate)
 
 
 def maneuver_axis(imported: Imported, axes: list) -> str:
