@@ -76,6 +76,16 @@ def test_nan_names_line_and_column(campaign_copy):
     expect(campaign_copy, r"gyro\.csv: line 43, column 'dtg1_pitch': value is NaN")
 
 
+def test_a_truncated_row_is_called_short_not_nan(campaign_copy):
+    path = campaign_copy / "gyro.csv"
+    lines = path.read_text().splitlines()
+    header = lines[0].split(",")
+    lines[42] = ",".join(lines[42].split(",")[:3])
+    path.write_text("\n".join(lines) + "\n")
+    expect(campaign_copy, rf"gyro\.csv: line 43 has 3 of the header's {len(header)} fields \(a short or truncated "
+                          rf"row\): column '{header[3]}' has no value")
+
+
 def test_time_going_backwards_names_the_line(campaign_copy):
     def poke(f):
         f.loc[100, "time"] = f.loc[98, "time"]

@@ -199,8 +199,9 @@ def _read_csv(path, required) -> pd.DataFrame:
         frame = pd.read_csv(io.StringIO(text), **READ_CSV_EXACT)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         _fail(path, f"cannot be read as CSV: {exc}")
-    lines = np.array([i + 1 for i, line in enumerate(text.splitlines()) if line.strip()][1:])
-    frame.attrs["lines"] = lines[:len(frame)]
+    kept = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()][1:]
+    frame.attrs["lines"] = np.array([i for i, _ in kept])[:len(frame)]
+    frame.attrs["fields"] = np.array([line.count(",") + 1 for _, line in kept])[:len(frame)]
     missing = [c for c in required if c not in frame.columns]
     if missing:
         _fail(path, f"missing column(s) {missing}; found {list(frame.columns)}")
@@ -222,7 +223,11 @@ def _check_finite(path, frame, columns, rows=None):
         bad &= rows[:, None]
     if bad.any():
         row, col = np.argwhere(bad)[0]
-        _fail(path, f"line {frame.attrs['lines'][row]}, column '{columns[col]}': value is NaN or infinite")
+        line, fields = frame.attrs["lines"][row], frame.attrs["fields"][row]
+        if fields < frame.shape[1]:
+            _fail(path, f"line {line} has {fields} of the header's {frame.shape[1]} fields (a short or truncated "
+                        f"row): column '{columns[col]}' has no value")
+        _fail(path, f"line {line}, column '{columns[col]}': value is NaN or infinite")
 
 
 def _check_time(path, frame):
