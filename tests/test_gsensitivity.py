@@ -94,3 +94,58 @@ def test_the_posterior_finds_a_known_gravity_offset_of_the_reference(tiny, tmp_p
     z = (offset["mean"] - truth) / offset["sd"]
     assert np.abs(z).max() < 4.0
     assert offset.loc["gravity_offset.offset_roll_acc_z", "sd"] < OFFSET_ROLL_ACC_Z_ARCSEC_G / 5
+
+
+def lab_scenario(tmp_path, **effects_given):
+    """The tiny campaign on a rate table in a lab (`simulate`'s accelerometer), with these effects."""
+    import yaml
+
+    from conftest import DATA
+    path = tmp_path / "lab.yaml"
+    path.write_text(yaml.safe_dump({"base": str(DATA / "tiny.yaml"), "name": "tiny_lab",
+                                    "accelerometer": {"gravity_m_s2": STANDARD_GRAVITY_M_S2},
+                                    "effects": effects_given}))
+    return path
+
+
+def test_a_lab_campaign_logs_gravity_in_body_axes_turning_with_the_body(tmp_path):
+    from gyrocal import simulate
+    campaign, _ = simulate.simulate(simulate.load_scenario(lab_scenario(tmp_path)))
+    force = np.column_stack([campaign.gyro_columns[f"acc_{a}"] for a in "xyz"])
+    assert np.abs(np.linalg.norm(force, axis=1) - STANDARD_GRAVITY_M_S2).max() < 0.02
+    roll = campaign.maneuver("roll_pos")
+    during = (campaign.gyro_time >= roll.t_start) & (campaign.gyro_time <= roll.t_end)
+    f = force[during]
+    assert np.ptp(f[:, 0]) < 0.05  # a turn about x keeps the force's x part
+    before, after = f[0, 1:], f[-1, 1:]  # and turns its y-z part by 90 degrees
+    assert np.degrees(np.arccos(before @ after / np.linalg.norm(before) / np.linalg.norm(after))) == \
+        pytest.approx(90.0, abs=1.0)
+
+
+def test_an_effect_per_g_without_gravity_is_refused(tmp_path):
+    import yaml
+
+    from gyrocal import simulate
+
+    from conftest import DATA
+    path = tmp_path / "orbit.yaml"
+    path.write_text(yaml.safe_dump({"base": str(DATA / "tiny.yaml"), "effects": {"g_sensitivity_deg_s_per_g": 0.01}}))
+    with pytest.raises(ValueError, match=r"needs accelerometer\.gravity_m_s2"):
+        simulate.load_scenario(path)
+
+
+@pytest.mark.parametrize("effect,key,value,prefix", [
+    ("g_sensitivity", "g_sensitivity_deg_s_per_g", 0.003, ".g_"),
+    ("gravity_offset", "gravity_offset_arcsec_per_g", 600.0, "gravity_offset."),
+])
+def test_the_posterior_recovers_what_the_simulator_flew_per_g(tmp_path, config, effect, key, value, prefix):
+    from gyrocal import simulate
+    simulate.run(lab_scenario(tmp_path, **{key: value}), tmp_path / "sim")
+    model = ["scale_factor", "misalignment", "bias", effect]
+    calibrate_steps(tmp_path / "sim/campaign", tmp_path / "out", config_with(config, {"e": model}), ("e",))
+    summary = pd.read_csv(tmp_path / "out" / "e" / "posterior_summary.csv", index_col=0)
+    coefficients = summary[summary.index.str.contains(prefix, regex=False)]
+    assert len(coefficients) == (18 if effect == "g_sensitivity" else 6)
+    z = (coefficients["mean"] - value) / coefficients["sd"]
+    assert np.abs(z).max() < 4.0
+    assert coefficients["sd"].max() < value / 4

@@ -137,9 +137,13 @@ def test_study_workflow_runs_end_to_end_on_tiny_campaigns(tmp_path):
 
     from conftest import DATA, ROOT
     cfg = yaml.safe_load((ROOT / "config" / "study.yaml").read_text())
+    lab = tmp_path / "lab.yaml"  # an effect per g flies its own scenario, in a lab
+    lab.write_text(yaml.safe_dump({"base": str(DATA / "tiny.yaml"), "accelerometer": {"gravity_m_s2": 9.80665}}))
     cfg.update(scenario=str(DATA / "tiny.yaml"), results=str(tmp_path / "study"), clean=2, chunk=2, repeats=1,
                effects={"bias_drift": {"simulator_key": "bias_drift_deg_h_per_h", "magnitudes": [2.0],
-                                       "model": "bias_drift"}})
+                                       "model": "bias_drift"},
+                        "g_sensitivity": {"simulator_key": "g_sensitivity_deg_s_per_g", "magnitudes": [0.003],
+                                          "model": "g_sensitivity", "scenario": str(lab)}})
     cfg["calibration"] = str(ROOT / cfg["calibration"])
     (tmp_path / "study.yaml").write_text(yaml.safe_dump(cfg))
     subprocess.run([sys.executable, "-m", "snakemake", "-s", str(ROOT / "workflow/study/Snakefile"), "--cores", "2",
@@ -147,12 +151,14 @@ def test_study_workflow_runs_end_to_end_on_tiny_campaigns(tmp_path):
     out = tmp_path / "study"
     params = pd.read_csv(out / "parameters.csv")
     assert len(params[params["group"] == "clean"]) == 2 * 24
-    detection = pd.read_csv(out / "detection.csv").iloc[0]
-    assert detection["misfit"] == 1.0 and detection["ranked_first"] == 1.0
+    detection = pd.read_csv(out / "detection.csv").set_index("effect")
+    assert (detection["misfit"] == 1.0).all() and (detection["ranked_first"] == 1.0).all()
+    g = params[(params["model"] == "g_sensitivity") & ~params["core"]]
+    assert len(g) == 18 and np.all(np.abs(g["mean"] - 0.003) < 4 * g["sd"])
     drift = params[(params["model"] == "bias_drift") & ~params["core"]]
     assert len(drift) == 6 and np.all(np.abs(drift["wls"] - 2.0) < 3 * drift["crlb_sd"])
     assert np.all((drift["mean"] > 0) & (drift["mean"] < drift["wls"]))
-    assert json.loads((out / "summary.json").read_text())["campaigns"] == 3
+    assert json.loads((out / "summary.json").read_text())["campaigns"] == 4
     for name in ("accuracy", "coverage", "sbc", "detection"):
         assert (out / f"{name}.png").stat().st_size > 1000
 

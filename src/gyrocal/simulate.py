@@ -21,7 +21,7 @@ from . import channels as ch
 from . import kinematics
 from .spec import ModelSpec, baseline
 from .telemetry import Campaign, Maneuver, write_campaign
-from .units import AXIS_INDEX, PPM, arcsec_to_rad, arw_to_rad_sqrt_s, deg_h_to_rad_s, rad_s_to_deg_h
+from .units import AXIS_INDEX, PPM, STANDARD_GRAVITY_M_S2, arcsec_to_rad, arw_to_rad_sqrt_s, deg_h_to_rad_s, rad_s_to_deg_h
 
 DEFAULTS = {
     "name": "simulated",
@@ -40,6 +40,7 @@ DEFAULTS = {
                           "hold_s": 400.0, "gap_s": 120.0, "uncontrolled_rate_deg_s": 3e-4},
     "maneuvers": [],
     "effects": {},
+    "accelerometer": {"gravity_m_s2": 0.0, "noise_m_s2": 0.002},
 }
 
 EFFECT_DEFAULTS = {
@@ -49,8 +50,14 @@ EFFECT_DEFAULTS = {
     "st_correlation_time_s": 0.0,
     "sf_temperature_ppm_per_K": 0.0,
     "temperature_swing_K": 0.0,
+    "g_sensitivity_deg_s_per_g": 0.0,
+    "gravity_offset_arcsec_per_g": 0.0,
 }
-"""Optional hidden effects, all off by default; magnitudes in the units of their names."""
+"""Optional hidden effects, all off by default; magnitudes in the units of their names. The two
+per g need ``accelerometer.gravity_m_s2`` (a campaign on a rate table in a lab): every channel's
+bias then follows ``g_sensitivity`` times the specific force along each body axis, and the star
+tracker sits ``gravity_offset`` per g of the force along each of the two other axes off about each
+body axis, as the library effects of those names describe them with every coefficient equal."""
 
 
 def _merge(defaults: dict, given: dict, where: str) -> dict:
@@ -66,14 +73,32 @@ def _merge(defaults: dict, given: dict, where: str) -> dict:
     return out
 
 
+def _read_given(path: Path) -> dict:
+    """A scenario file's keys; with ``base: OTHER.yaml`` (beside it), the other file's keys with
+    this one's in their place, section by section."""
+    given = yaml.safe_load(path.read_text()) or {}
+    if "base" not in given:
+        return given
+    base = _read_given(path.parent / given.pop("base"))
+    for key, value in given.items():
+        both_dicts = isinstance(value, dict) and isinstance(base.get(key), dict)
+        base[key] = {**base[key], **value} if both_dicts and key not in ("truth", "channels") else value
+    return base
+
+
 def load_scenario(path) -> dict:
     """Read a scenario YAML and fill in defaults; an unknown key is an error."""
     path = Path(path)
-    given = yaml.safe_load(path.read_text()) or {}
+    given = _read_given(path)
     scenario = _merge(DEFAULTS, given, str(path))
     scenario["effects"] = _merge(EFFECT_DEFAULTS, scenario["effects"], f"{path}: effects")
     if not scenario["maneuvers"]:
         raise ValueError(f"{path}: the scenario has no maneuvers")
+    eff = scenario["effects"]
+    if (eff["g_sensitivity_deg_s_per_g"] or eff["gravity_offset_arcsec_per_g"]) and not \
+            scenario["accelerometer"]["gravity_m_s2"]:
+        raise ValueError(f"{path}: an effect per g needs accelerometer.gravity_m_s2 (a campaign in a lab); "
+                         "in orbit the accelerometers read no gravity")
     return scenario
 
 
@@ -205,6 +230,12 @@ def simulate(scenario: dict, seed=None):
     fine = ch.measure(increments_fine, truth, dt_s=np.full(len(t_mid), dt_sub), extra_scale=extra_scale)
     drift = deg_h_to_rad_s(eff["bias_drift_deg_h_per_h"]) / 3600.0  # rad/s per s
     fine += drift * (t_mid - t0)[:, None] * dt_sub
+    gravity = scenario["accelerometer"]["gravity_m_s2"]
+    if gravity:  # a lab: at rest the accelerometers sense +g along the room's vertical (inertial z)
+        mid = kinematics.compose(attitudes_fine[:-1], Rotation.from_rotvec(0.5 * increments_fine))
+        force_fine = mid.inv().apply([0.0, 0.0, gravity])
+        g_rad_s = np.deg2rad(eff["g_sensitivity_deg_s_per_g"]) / STANDARD_GRAVITY_M_S2
+        fine += (g_rad_s * force_fine.sum(axis=1) * dt_sub)[:, None]
     continuous = fine.reshape(n_gyro, n_sub, len(channels)).sum(axis=1)
     arw = arw_to_rad_sqrt_s(gyro_cfg["arw_deg_sqrt_h"])
     continuous += rng.normal(0.0, arw * np.sqrt(dt_g), continuous.shape)
@@ -222,6 +253,10 @@ def simulate(scenario: dict, seed=None):
     true_st = kinematics.attitude_at(t_fine, attitudes_fine, increments_fine, t_st - eff["st_latency_s"])
     noise = star_tracker_noise(len(t_st), dt_st, st_cfg, eff["st_correlation_time_s"], rng)
     measured = true_st * Rotation.from_rotvec(noise)
+    if eff["gravity_offset_arcsec_per_g"]:
+        force_st = true_st.inv().apply([0.0, 0.0, gravity]) / STANDARD_GRAVITY_M_S2
+        offset = arcsec_to_rad(eff["gravity_offset_arcsec_per_g"]) * (force_st.sum(axis=1, keepdims=True) - force_st)
+        measured = measured * Rotation.from_rotvec(offset)
     quat = measured.as_quat()
     valid = np.ones(len(t_st), dtype=int)
     n_bad = round(st_cfg["invalid_fraction"] * len(t_st))
@@ -233,6 +268,11 @@ def simulate(scenario: dict, seed=None):
     gyro_columns = {c.name: gyro_increments[:, i] for i, c in enumerate(channels)}
     for name, series in temps.items():
         gyro_columns[name] = series.reshape(n_gyro, n_sub).mean(axis=1) + rng.normal(0, 0.01, n_gyro)
+    if gravity:  # each interval's mean specific force, as an accelerometer logged beside the gyros
+        force = force_fine.reshape(n_gyro, n_sub, 3).mean(axis=1)
+        force += rng.normal(0.0, scenario["accelerometer"]["noise_m_s2"], force.shape)
+        for i, a in enumerate("xyz"):
+            gyro_columns[f"acc_{a}"] = force[:, i]
     campaign = Campaign(
         name=scenario["name"],
         channels=channels,

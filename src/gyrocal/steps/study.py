@@ -25,11 +25,14 @@ def summarize(record_paths, scenario_path, cfg, study_cfg, out_dir):
     records = read_records(record_paths)
     params, models = validation.parameter_table(records), validation.model_table(records)
     out_dir = Path(out_dir)
-    scenario = plan.read_scenario(scenario_path)
-    planned = plan.plan(scenario, cfg)
+    planned = plan.plan(plan.read_scenario(scenario_path), cfg)
     predicted = planned.table()
     predicted["label"] = predicted["channel"] + "." + predicted["parameter"]
-    detectable = planned.detection.set_index("effect")["detectable_magnitude"].to_dict()
+    detectable = {}  # each effect's 90 %-detection magnitude, planned on the scenario its campaigns fly
+    for path in {e.get("scenario", str(scenario_path)) for e in study_cfg["effects"].values()}:
+        table = (planned if path == str(scenario_path) else plan.plan(plan.read_scenario(path), cfg)).detection
+        flown = [name for name, e in study_cfg["effects"].items() if e.get("scenario", str(scenario_path)) == path]
+        detectable.update(table[table["effect"].isin(flown)].groupby("effect")["detectable_magnitude"].min())
     accuracy = validation.accuracy(params)
     clean = validation.clean_baseline(params)
     tables = {
