@@ -379,3 +379,13 @@ def test_a_maneuver_too_short_for_the_leave_one_block_out_predictive_is_refused_
         check_blocks([enough, one_block], 60.0)
     with pytest.raises(EstimateError, match=r"pitch_pos spans 68 s \(69 samples, 9 outside"):
         check_blocks([nearly], 60.0)
+
+
+@pytest.mark.parametrize("shift_s", [0.3, -0.7])
+def test_the_clock_offset_is_found_to_a_fraction_of_a_sample(tiny, tmp_path, shift_s):
+    from gyrocal.telemetry import read_campaign
+    mutations.corrupted_copy(tiny[0], tmp_path / "c", mutations.st_clock_offset(shift_s))
+    campaign = read_campaign(tmp_path / "c")
+    for m in ("yaw_pos", "roll_neg"):
+        found = consistency.clock_offset_s(consistency.sense(preprocess.slice_maneuver(campaign, m)))
+        assert found == pytest.approx(-shift_s, abs=0.02)  # the star tracker late: the gyro's clock early

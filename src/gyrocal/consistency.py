@@ -448,17 +448,22 @@ def clock_offset_s(sensed: Sensed) -> float:
     span = min(MAX_CLOCK_SEARCH_S, 0.25 * (t[-1] - t[0]))
     step = 0.25 * float(np.median(np.diff(t)))
 
-    def misfit(shift):
-        g = np.interp(t + shift, data.gyro_time, theta_gyro)
-        x = np.column_stack([g, t - t[0], np.ones_like(t)])
-        coef, *_ = np.linalg.lstsq(x, theta_st, rcond=None)
-        return float(np.sum((theta_st - x @ coef) ** 2))
+    # The fit of theta_st on [g, t, 1] for every shift at once: with a line in t projected out of
+    # both sides (Frisch-Waugh), its residual sum of squares is |y|^2 - (g.y)^2 / |g|^2.
+    line = np.column_stack([t - t[0], np.ones_like(t)])
+    q, _ = np.linalg.qr(line)
+    y = theta_st - q @ (q.T @ theta_st)
+
+    def misfit(shifts):
+        g = np.interp(t[None, :] + shifts[:, None], data.gyro_time, theta_gyro)
+        g -= (g @ q) @ q.T
+        return y @ y - (g @ y) ** 2 / np.maximum(np.einsum("ij,ij->i", g, g), np.finfo(float).tiny)
 
     coarse = max(step, 2 * span / CLOCK_SEARCH_POINTS)
     shifts = np.arange(-span, span + coarse, coarse)
-    best = shifts[int(np.argmin([misfit(s) for s in shifts]))]
+    best = shifts[int(np.argmin(misfit(shifts)))]
     shifts = np.arange(best - 2 * coarse, best + 2 * coarse + step, step)
-    costs = np.array([misfit(s) for s in shifts])
+    costs = misfit(shifts)
     i = int(np.clip(np.argmin(costs), 1, len(shifts) - 2))
     c0, c1, c2 = costs[i - 1:i + 2]
     curvature = c0 - 2 * c1 + c2
