@@ -17,6 +17,10 @@ import numpy as np
 
 from .units import AXES, AXIS_INDEX
 
+MOVING_RATE_FRACTION = 0.05
+"""A gyro sample counts as turning while its rate exceeds this share of the maneuver's peak;
+below it, a maneuver is holding inertial (the paper's holds before and after a rotation)."""
+
 
 @dataclass(frozen=True)
 class Channel:

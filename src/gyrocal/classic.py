@@ -10,7 +10,8 @@ from scipy.spatial.transform import Rotation
 
 from . import channels as ch
 from . import errormodel, kinematics
-from .preprocess import MOVING_RATE_FRACTION, ManeuverData, body_increments, error_angles, propagate_set
+from .channels import MOVING_RATE_FRACTION
+from .preprocess import ManeuverData, body_increments, error_angles, propagate_set
 from .spec import ModelSpec
 from .units import AXES, AXIS_INDEX
 

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .preprocess import MOVING_RATE_FRACTION
+from .channels import MOVING_RATE_FRACTION
 from .units import AXES, DEG_H_RAD_S, PPM, STANDARD_GRAVITY_M_S2, arcsec_to_rad
 
 

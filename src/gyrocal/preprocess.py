@@ -12,10 +12,6 @@ from . import kinematics
 from .telemetry import Campaign, TelemetryError
 from .units import AXES, rad_to_arcsec
 
-MOVING_RATE_FRACTION = 0.05
-"""A gyro sample counts as turning while its rate exceeds this share of the maneuver's peak;
-below it, a maneuver is holding inertial (the paper's holds before and after a rotation)."""
-
 
 @dataclass
 class ManeuverData:

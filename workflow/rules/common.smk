@@ -10,13 +10,14 @@ import sys
 import time
 from pathlib import Path
 
-from gyrocal import simulate as _simulate
-from gyrocal.steps.common import REFUSED as _REFUSED
-from gyrocal import telemetry as _telemetry
+from gyrocal import scenario as _scenario
+from gyrocal.steps import REFUSED as _REFUSED
 from gyrocal.outputs import MODEL_FILES as _MODEL_FILES
 
 
 def _user_campaign(directory):
+    from gyrocal import telemetry as _telemetry  # pandas: 0.4 s of every run's start, where no user campaign is read
+
     try:
         meta = _telemetry.read_meta(directory)
     except _telemetry.TelemetryError as refused:
@@ -49,7 +50,7 @@ elif config["telemetry"]:
 else:
     if not Path(config["scenario"]).exists() and Path(workflow.basedir, config["scenario"]).exists():
         config["scenario"] = str(Path(workflow.basedir, config["scenario"]))
-    _meta = _simulate.peek(config["scenario"])
+    _meta = _scenario.peek(config["scenario"])
     CAMPAIGNS[_meta["name"]] = {"dir": f"{results_of(_meta['name'])}/simulated/campaign",
                                 "maneuvers": _meta["maneuvers"], "simulated": True}
 
@@ -70,7 +71,7 @@ _STARTED = time.time()
 
 
 def refusal_messages():
-    """What the steps of this run refused (their logs from `gyrocal.steps.common.REFUSED` on), to repeat
+    """What the steps of this run refused (their logs from `gyrocal.steps.REFUSED` on), to repeat
     when a run fails."""
     found = []
     for path in sorted(Path("logs").rglob("*.log")):

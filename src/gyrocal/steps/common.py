@@ -10,11 +10,9 @@ from contextlib import contextmanager
 from .. import effects, preprocess
 from ..estimate import EstimateError
 from ..telemetry import TelemetryError
+from . import REFUSED
 
 log = logging.getLogger("gyrocal")
-
-REFUSED = "gyrocal: the campaign was refused:"
-"""How a step's message about bad input begins, in its log and on the console."""
 
 
 def start(log_path):
