@@ -32,7 +32,7 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from gyrocal import comparison, noise, predictive, simulate
+from gyrocal import inferencedata, noise, predictive, simulate
 from gyrocal.estimate import PointEstimate, linearize_all
 from gyrocal.likelihood import Stats, leave_one_out_log_evidence, log_evidence, maneuver_stats, total
 from gyrocal.steps import common
@@ -113,7 +113,7 @@ def study(scenario: Path, effect: str, tmp: Path):
         whole = total(parts)
         full = log_evidence(whole, prior_mean, prior_sd)
         cov_post = np.linalg.inv(whole.A + np.diag(1 / prior_sd**2))
-        loo = comparison.loo(az.from_netcdf(tmp / "out" / model / "posterior.nc"), model)[0]
+        loo = inferencedata.loo(az.from_netcdf(tmp / "out" / model / "posterior.nc"), model)[0]
         psis = loo.loo_i.values
         m = 1
         y, x, g, cov = dense_parts(lins[m], noises[m], var)

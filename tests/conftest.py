@@ -52,7 +52,7 @@ def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
     from gyrocal.study import calibrate_steps
     ids = [m.id for m in telemetry.read_meta(campaign_dir)["maneuvers"]]
     npz = calibrate_steps(campaign_dir, out, cfg, models)
-    compare.run(list(models), [out / m / "posterior.nc" for m in models],
+    compare.run(list(models), [out / m / "elpd_blocks.csv" for m in models],
                 [out / m / "diagnostics.json" for m in models],
                 [out / m / "posterior_summary.csv" for m in models],
                 [out / m / "elpd_maneuvers.csv" for m in models], cfg["model_choice"],

@@ -1,37 +1,29 @@
 """``model_comparison.csv``: the model variants side by side.
 
-Residual RMS and misfit from each variant's diagnostics, PSIS-LOO (arviz) over the
-leave-one-block-out pointwise log-likelihood with its paired difference to the
-reference (the first model) and that difference's standard error, and the
-parameters that moved by more than 2 sd against the reference.
+Residual RMS and misfit from each variant's diagnostics, PSIS-LOO over the
+leave-one-block-out pointwise log-likelihood (each model's ``elpd_blocks.csv``, computed with
+arviz by its posterior step) with its paired difference to the reference (the first model) and
+that difference's standard error, and the parameters that moved by more than 2 sd against the
+reference.
 """
 
-import logging
-import warnings
-
-import arviz as az
 import numpy as np
 import pandas as pd
 
-from .inferencedata import NOISE_LABELS
 from .modelchoice import classify, paired_se, reviewed_model, stacking_weights
+from .noise import NOISE_LABELS
 
-log = logging.getLogger("gyrocal")
+PARETO_K_MAX = 0.7
+"""Above this Pareto k a block's PSIS estimate is unreliable (Vehtari et al. 2017)."""
 
 
-def loo(idata, model: str):
-    """PSIS-LOO of one model and its count of Pareto k > 0.7 blocks. arviz warns about those
-    blocks (the posterior cannot importance-sample their leave-out posterior); the count
-    goes in the table and the log says what it means, instead of a bare warning."""
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message="Estimated shape parameter of Pareto", category=UserWarning)
-        result = az.loo(idata, pointwise=True)
-    high = int(np.sum(result.pareto_k.values > 0.7))
-    if high:
-        log.info("PSIS-LOO for model %s: %d of %d blocks have Pareto k > 0.7, so its elpd_loo is less "
-                 "reliable; typical of a misfitting model, whose residual blocks are influential",
-                 model, high, result.pareto_k.size)
-    return result, high
+def loo_totals(blocks: pd.DataFrame) -> dict:
+    """A model's PSIS-LOO from its per-block table (`inferencedata.loo_blocks`): elpd_loo and its
+    se as arviz's ``loo`` gives them (``sqrt(n var(elpd_i))``), and p_loo, the sum of the blocks'
+    shares."""
+    elpd = blocks["elpd_loo"].to_numpy(dtype=float)
+    return {"elpd_loo": float(elpd.sum()), "elpd_loo_se": float(np.sqrt(len(elpd) * np.var(elpd))),
+            "p_loo": float(blocks["p_loo"].sum())}
 
 
 def moved(reference: pd.DataFrame, current: pd.DataFrame) -> list:
@@ -47,7 +39,7 @@ def moved(reference: pd.DataFrame, current: pd.DataFrame) -> list:
     return out
 
 
-def compare(models, idatas, diagnostics, summaries, lomo, reject_se: float) -> pd.DataFrame:
+def compare(models, loo_blocks, diagnostics, summaries, lomo, reject_se: float) -> pd.DataFrame:
     """One row per model, in the given order; the first is the reference of the differences.
 
     ``lomo`` holds each model's exact leave-one-maneuver-out densities (one per maneuver):
@@ -55,20 +47,20 @@ def compare(models, idatas, diagnostics, summaries, lomo, reject_se: float) -> p
     60-s blocks stays beside it: each block is predicted from its neighbours too, so it
     measures how well a model fills a gap, and sees little of a smooth effect.
     """
-    loos = [loo(idata, m) for m, idata in zip(models, idatas)]
     reference = models[0]
-    ref_loo = loos[0][0]
+    ref = loo_totals(loo_blocks[0])
     rows, loo_pointwise = [], []
-    for m, d, (result, high), summary in zip(models, diagnostics, loos, summaries):
-        loo_pointwise.append(result.loo_i.values)
-        paired = result.loo_i.values - ref_loo.loo_i.values
+    for m, d, blocks, summary in zip(models, diagnostics, loo_blocks, summaries):
+        pointwise = blocks["elpd_loo"].to_numpy(dtype=float)
+        loo_pointwise.append(pointwise)
+        totals = loo_totals(blocks)
+        k = blocks["pareto_k"].to_numpy(dtype=float)
         rows.append({"model": m, "effects": "+".join(d["effects"]),
                      "residual_rms_arcsec": d["residual_rms_arcsec"], "noise_rms_arcsec": d["noise_rms_arcsec"],
-                     "misfit": d["misfit"], "elpd_loo": float(result.elpd_loo), "elpd_loo_se": float(result.se),
-                     "p_loo": float(result.p_loo),
-                     "elpd_diff_vs_first": float(result.elpd_loo - ref_loo.elpd_loo),
-                     "elpd_diff_se": paired_se(paired),
-                     "pareto_k_max": float(np.max(result.pareto_k.values)), "pareto_k_over_0.7": high,
+                     "misfit": d["misfit"], **totals,
+                     "elpd_diff_vs_first": totals["elpd_loo"] - ref["elpd_loo"],
+                     "elpd_diff_se": paired_se(pointwise - loo_pointwise[0]),
+                     "pareto_k_max": float(np.max(k)), "pareto_k_over_0.7": int(np.sum(k > PARETO_K_MAX)),
                      f"moved_over_2sd_vs_{reference}": " ".join(moved(summaries[0], summary))})
     table = pd.DataFrame(rows)
     pointwise = np.array([np.asarray(v, dtype=float) for v in lomo])

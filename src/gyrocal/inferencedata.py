@@ -14,15 +14,44 @@ import arviz as az
 import numpy as np
 import pandas as pd
 import xarray as xr
+from scipy.special import logsumexp
 
 from . import __version__, predictive, preprocess
 from . import channels as ch
-from .noise import NOISE_SCALES, scales_in_units, stated_scales
+from .comparison import PARETO_K_MAX
+from .noise import NOISE_LABELS, NOISE_SCALES, scales_in_units, stated_scales
 from .units import AXES, rad_to_arcsec
 
 log = logging.getLogger("gyrocal")
 
-NOISE_LABELS = [f"noise.{s.key}" for s in NOISE_SCALES]
+
+
+def loo(idata, model: str):
+    """PSIS-LOO of one model (arviz) and its count of Pareto k > `PARETO_K_MAX` blocks. arviz warns
+    about those blocks (the posterior cannot importance-sample their leave-out posterior); the count
+    is returned and the log says what it means, instead of a bare warning."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Estimated shape parameter of Pareto", category=UserWarning)
+        result = az.loo(idata, pointwise=True)
+    high = int(np.sum(result.pareto_k.values > PARETO_K_MAX))
+    if high:
+        log.info("PSIS-LOO for model %s: %d of %d blocks have Pareto k > %g, so its elpd_loo is less "
+                 "reliable; typical of a misfitting model, whose residual blocks are influential",
+                 model, high, result.pareto_k.size, PARETO_K_MAX)
+    return result, high
+
+
+def loo_blocks(idata, model: str) -> pd.DataFrame:
+    """``elpd_blocks.csv``: PSIS-LOO per block (`loo`), with each block's share of p_loo (its lppd
+    less its elpd), so that the model's elpd_loo, its se and p_loo follow from the table alone
+    (`comparison.loo_totals`) and the comparison needs neither arviz nor the InferenceData."""
+    result, _ = loo(idata, model)
+    loglik = idata.log_likelihood["attitude_error"]
+    flat = loglik.values.reshape(-1, loglik.sizes["block"])
+    lppd = logsumexp(flat, axis=0) - np.log(len(flat))
+    elpd = result.loo_i.values
+    return pd.DataFrame({"block": [str(b) for b in loglik.coords["block"].values], "elpd_loo": elpd,
+                         "p_loo": lppd - elpd, "pareto_k": result.pareto_k.values})
 
 
 def posterior_dataset(draws, theta_hat, spec) -> az.InferenceData:
@@ -36,23 +65,26 @@ def posterior_dataset(draws, theta_hat, spec) -> az.InferenceData:
 
 
 def summarize(idata, per_walker, labels, convergence: dict) -> pd.DataFrame:
-    """Mean, sd, central 95 % interval (arviz), r_hat across the independent ensembles
-    (each one chain, step-major) and bulk ESS over every walker's own chain."""
-    stats = az.summary(idata, kind="stats", stat_focus="mean", round_to="none")
-    eti = az.summary(idata, kind="stats", stat_focus="median", hdi_prob=0.95, round_to="none")
+    """Mean, sd and central 95 % interval over every draw (numpy: the same numbers as arviz's
+    ``summary``, which also sorts every parameter for an HDI this table does not show), r_hat
+    across the independent ensembles (each one chain, step-major) and bulk ESS over every
+    walker's own chain (arviz)."""
     rhat = az.rhat(idata)
     ess = az.ess(per_walker, method="bulk")
-    rows = []
     names = [f"channel_param[{label}]" for label in labels] + [s.key for s in NOISE_SCALES]
-    for label, name in zip(list(labels) + NOISE_LABELS, names):
+    values = np.concatenate([idata.posterior["channel_param"].sel(parameter=list(labels)).values]
+                            + [idata.posterior[s.key].values[..., None] for s in NOISE_SCALES], axis=-1)
+    flat = values.reshape(-1, values.shape[-1])
+    low, high = np.quantile(flat, [0.025, 0.975], axis=0)
+    rows = []
+    for i, (label, name) in enumerate(zip(list(labels) + NOISE_LABELS, names)):
         if name.startswith("channel_param"):
             sel = {"parameter": label}
             r, e = float(rhat["channel_param"].sel(sel)), float(ess["channel_param"].sel(sel))
         else:
             r, e = float(rhat[name]), float(ess[name])
-        rows.append({"label": label, "mean": stats.loc[name, "mean"], "sd": stats.loc[name, "sd"],
-                     "ci95_low": eti.loc[name, "eti_2.5%"], "ci95_high": eti.loc[name, "eti_97.5%"],
-                     "r_hat": r, "ess_bulk": e})
+        rows.append({"label": label, "mean": flat[:, i].mean(), "sd": flat[:, i].std(ddof=1),
+                     "ci95_low": low[i], "ci95_high": high[i], "r_hat": r, "ess_bulk": e})
     frame = pd.DataFrame(rows)
     frame["converged"] = (frame["r_hat"] < convergence["r_hat_max"]) & (frame["ess_bulk"] >= convergence["ess_bulk_min"])
     return frame

@@ -1,6 +1,6 @@
 """PSIS-LOO against exact refits, and why its effective number of parameters is small (issue 12).
 
-PSIS-LOO (`comparison.loo`) estimates each block's ``log p(y_i | y_-i)`` by importance
+PSIS-LOO (`inferencedata.loo`) estimates each block's ``log p(y_i | y_-i)`` by importance
 sampling the full posterior, with the block's pointwise term ``log p(y_i | theta, y_-i)``
 (`predictive.block_conditionals`: the block given the rest of its maneuver, the nuisance
 integrated out) as the log weight. Here that estimate is checked against the value it
@@ -39,7 +39,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import logsumexp
 
-from . import classic, comparison, effects, noise, predictive, study
+from . import classic, effects, inferencedata, noise, predictive, study
 from .estimate import PointEstimate
 from .likelihood import maneuver_stats
 from .preprocess import ManeuverData
@@ -247,7 +247,7 @@ class FullRun:
         self.flat = posterior_draws(self.idata, self.estimate.spec, self.estimate.theta)
         self.n_params = len(self.estimate.spec)
         _, self.ratios, _ = predictive.split_draws(self.flat, self.n_params)
-        self.loo, _ = comparison.loo(self.idata, model)
+        self.loo, _ = inferencedata.loo(self.idata, model)
         loglik = self.idata.log_likelihood["attitude_error"]
         self.loglik = loglik.values.reshape(-1, loglik.sizes["block"])
         self.blocks = [str(b) for b in loglik.coords["block"].values]

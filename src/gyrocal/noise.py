@@ -35,6 +35,9 @@ NOISE_SCALES = (NoiseScale("sigma_cross_arcsec", ARCSEC_RAD), NoiseScale("sigma_
 """The three sampled scales, in the order of ``log_sigma``: star tracker across and about its
 boresight (rad), gyro angle random walk (rad/sqrt(s))."""
 
+NOISE_LABELS = [f"noise.{s.key}" for s in NOISE_SCALES]
+"""The noise scales' labels in ``posterior_summary.csv`` (beside the channel parameters')."""
+
 
 def stated_si(stated: dict) -> np.ndarray:
     """The three scales (SI) of noise given in the contract's units."""

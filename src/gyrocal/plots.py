@@ -2,6 +2,10 @@
 along yaw, roll and pitch. Headless use needs the Agg backend, which a workflow step
 selects when it starts (`gyrocal.stepenv.start`), not this module on import."""
 
+import io
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor
+
 import matplotlib.pyplot as plt
 import numpy as np
 
@@ -41,9 +45,37 @@ def maneuver_figure(table, title, fit=None):
     return fig
 
 
+SAVE_DPI = 90
+"""Resolution of the figures written as files (the report embeds its own at 80 dpi)."""
+
+
 def save(fig, path):
-    fig.savefig(path, dpi=90, format="png")
+    fig.savefig(path, dpi=SAVE_DPI, format="png")
     plt.close(fig)
+
+
+def png(fig, **savefig) -> bytes:
+    """The figure as PNG bytes (``savefig``'s keywords), closed after."""
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", **savefig)
+    plt.close(fig)
+    return buffer.getvalue()
+
+
+def _render(job) -> bytes:
+    figure, args, savefig = job
+    return png(globals()[figure](*args), **savefig)
+
+
+def render_all(jobs, processes: int = 1, **savefig) -> list:
+    """PNG bytes of each ``(name of a figure function of this module, its arguments)``, in order.
+    Drawing is most of the time of the steps that draw, and each figure is independent, so with
+    ``processes > 1`` a fork pool of that many draws them; the bytes are the same either way."""
+    work = [(figure, args, savefig) for figure, args in jobs]
+    if processes <= 1 or len(work) < 2:
+        return [_render(job) for job in work]
+    with ProcessPoolExecutor(processes, mp_context=multiprocessing.get_context("fork")) as pool:
+        return list(pool.map(_render, work))
 
 
 def comparison_figure(table):

@@ -79,7 +79,8 @@ def calibrate_steps(campaign_dir, out, cfg: dict, models, figures=True, through=
                            cfg["noise"], plugins, d / "point_estimate.npz")
         posterior.run(npz, d / "point_estimate.npz", plugins, cfg["priors"], cfg["prior_from"] or None,
                       cfg["sampler"], cfg["grid"], cfg["convergence"], cfg["seed"], d / "posterior.nc",
-                      d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json", d / "elpd_maneuvers.csv")
+                      d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json", d / "elpd_maneuvers.csv",
+                      d / "elpd_blocks.csv")
         if through == "posterior":
             continue
         calibrate.run(d / "point_estimate.npz", d / "posterior_summary.csv", npz, d / "calibration.csv",

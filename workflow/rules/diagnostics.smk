@@ -26,7 +26,7 @@ rule diagnostics:
 rule compare:
     """Residual RMS, PSIS-LOO and exact leave-one-maneuver-out of every variant; which are plausible."""
     input:
-        posterior=model_files("posterior.nc"),
+        loo=model_files("elpd_blocks.csv"),
         diagnostics=model_files("diagnostics.json"),
         summary=model_files("posterior_summary.csv"),
         elpd=model_files("elpd_maneuvers.csv"),

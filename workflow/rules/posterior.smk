@@ -13,6 +13,7 @@ rule posterior:
         fit=f"{RESULTS}/{{model}}/fit.csv",
         sampler=f"{RESULTS}/{{model}}/sampler.json",
         elpd=f"{RESULTS}/{{model}}/elpd_maneuvers.csv",
+        loo=f"{RESULTS}/{{model}}/elpd_blocks.csv",
     params:
         maneuvers=maneuver_files("npz"),
         priors=section("priors"),

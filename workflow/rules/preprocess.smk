@@ -33,6 +33,7 @@ rule preprocess:
         ),
     params:
         campaign_dir=campaign_dir,
+    threads: 2  # its figures are drawn in parallel; it runs alone, before the models split the cores
     conda:
         "../envs/gyrocal.yaml"
     log:

@@ -1,6 +1,5 @@
 """Rule ``compare``: the model variants side by side, and which one is reviewed."""
 
-import arviz as az
 import pandas as pd
 
 from .. import comparison, plots
@@ -8,10 +7,11 @@ from ..outputs import write_csv, write_with
 from .common import read_json
 
 
-def run(models, posterior_paths, diagnostics_paths, summary_paths, elpd_paths, choice_cfg, out_csv, out_png):
-    """``model_comparison.csv``: residual RMS, PSIS-LOO and exact leave-one-maneuver-out per
-    variant, what moved, which variants are plausible and which one is reviewed."""
-    table = comparison.compare(models, [az.from_netcdf(p) for p in posterior_paths],
+def run(models, loo_paths, diagnostics_paths, summary_paths, elpd_paths, choice_cfg, out_csv, out_png):
+    """``model_comparison.csv``: residual RMS, PSIS-LOO (each model's ``elpd_blocks.csv``) and exact
+    leave-one-maneuver-out per variant, what moved, which variants are plausible and which one is
+    reviewed."""
+    table = comparison.compare(models, [pd.read_csv(p) for p in loo_paths],
                                [read_json(p) for p in diagnostics_paths],
                                [pd.read_csv(p).set_index("label") for p in summary_paths],
                                [pd.read_csv(p)["elpd"].to_numpy() for p in elpd_paths], choice_cfg["reject_se"])

@@ -17,9 +17,10 @@ def model_priors(est: PointEstimate, priors_cfg: dict, prior_from=None) -> poste
 
 
 def run(npz_paths, point_npz, plugin_paths, priors_cfg, prior_from, sampler_cfg, grid_cfg, convergence_cfg, seed,
-        out_nc, out_summary, out_fit, out_sampler, out_elpd):
-    """Sample the posterior, check convergence, save InferenceData, summary, model fit and the
-    exact leave-one-maneuver-out predictive densities."""
+        out_nc, out_summary, out_fit, out_sampler, out_elpd, out_loo):
+    """Sample the posterior, check convergence, save InferenceData, summary, model fit, the exact
+    leave-one-maneuver-out predictive densities and PSIS-LOO per block (here, where arviz and the
+    InferenceData already are, so that the comparison of the models needs neither)."""
     maneuvers = load_maneuvers(npz_paths)
     est = PointEstimate.load(point_npz, known_effects(plugin_paths))
     priors = model_priors(est, priors_cfg, prior_from)
@@ -33,5 +34,6 @@ def run(npz_paths, point_npz, plugin_paths, priors_cfg, prior_from, sampler_cfg,
     write_csv(summary, out_summary)
     write_csv(fit, out_fit)
     write_json(record, out_sampler)
+    write_csv(inferencedata.loo_blocks(idata, est.spec.model), out_loo)
     elpd = posterior.leave_one_maneuver_out(post, priors)
     write_csv(pd.DataFrame({"maneuver": [d.id for d in maneuvers], "elpd": elpd}), out_elpd)

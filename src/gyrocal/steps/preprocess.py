@@ -11,23 +11,26 @@ from ..outputs import atomic_dir, write_csv
 from .common import read_json
 
 
-def run(campaign_dir, input_json, out_dir, figures=True) -> list:
+def run(campaign_dir, input_json, out_dir, figures=True, processes: int = 1) -> list:
     """Slice every maneuver of the campaign (in its order), leaving out the star-tracker outliers
     that validation listed; propagate every channel set nominally; write ``<id>.npz``, ``<id>.csv``
     and (unless ``figures`` is false: the validation study reads none) ``<id>.png`` into
-    ``out_dir``, whole or not at all. Returns the ``.npz`` paths."""
+    ``out_dir``, whole or not at all. The figures, most of the step's time, are drawn by
+    ``processes`` processes (`plots.render_all`). Returns the ``.npz`` paths."""
     info = read_json(input_json)
     campaign = telemetry.read_campaign(campaign_dir)
     if info["mounting"]:
         campaign = consistency.aligned(campaign, Rotation.from_quat(info["mounting"]["quat"]))
     outliers = [o["time_s"] for o in info["star_tracker_outliers"]]
     with atomic_dir(out_dir) as tmp:
+        drawings = []
         for m in campaign.maneuvers:
             data = preprocess.slice_maneuver(campaign, m.id, outliers)
             table = preprocess.error_table(data)
             data.save(tmp / f"{m.id}.npz")
             write_csv(table, tmp / f"{m.id}.csv")
-            if figures:
-                plots.save(plots.maneuver_figure(table, f"{campaign.name}: {m.id} ({m.turn}), nominal parameters"),
-                           tmp / f"{m.id}.png")
+            drawings.append(("maneuver_figure", (table, f"{campaign.name}: {m.id} ({m.turn}), nominal parameters")))
+        if figures:
+            for m, image in zip(campaign.maneuvers, plots.render_all(drawings, processes, dpi=plots.SAVE_DPI)):
+                (tmp / f"{m.id}.png").write_bytes(image)
     return [Path(out_dir) / f"{m.id}.npz" for m in campaign.maneuvers]
