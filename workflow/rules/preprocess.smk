@@ -1,30 +1,14 @@
-rule validate:
-    """Read and check the campaign; record rows, checksums and what was skipped."""
-    input:
-        unpack(campaign_input),
-    output:
-        f"{RESULTS}/input.json",
-    params:
-        campaign_dir=campaign_dir,
-    conda:
-        "../envs/gyrocal.yaml"
-    log:
-        f"{LOGS}/validate.log",
-    benchmark:
-        f"{LOGS}/validate.benchmark.tsv",
-    script:
-        "../scripts/validate.py"
-
-
 rule preprocess:
-    """Every maneuver of a campaign: slice, propagate every channel set nominally, error angles of
-    eq. 4; a table and figure each. One job per campaign, since a maneuver takes a fraction of
-    a second and a job's start-up more."""
+    """Read and check the campaign (format and physics: bad input stops the run here), record rows,
+    checksums and what was left out (input.json); then every maneuver: slice, propagate every
+    channel set nominally, error angles of eq. 4, a table and figure each. One job per campaign:
+    validation and each maneuver take a fraction of a second, and a job's start-up more (the steps
+    stay apart in gyrocal.steps: validate, preprocess)."""
     input:
         unpack(campaign_input),
-        checked=f"{RESULTS}/input.json",
     output:
-        report(
+        checked=f"{RESULTS}/input.json",
+        preprocessed=report(
             directory(PREPROCESSED),
             patterns=["{maneuver}.png"],
             caption="../report/preprocess.rst",

@@ -1,4 +1,7 @@
-from gyrocal.steps import common, preprocess
+from gyrocal.steps import common, preprocess, validate
 
 common.start(snakemake.log[0])
-preprocess.run(snakemake.params.campaign_dir, snakemake.input.checked, snakemake.output[0], processes=snakemake.threads)
+with common.refusal():
+    validate.run(snakemake.params.campaign_dir, snakemake.output.checked)
+preprocess.run(snakemake.params.campaign_dir, snakemake.output.checked, snakemake.output.preprocessed,
+               processes=snakemake.threads)

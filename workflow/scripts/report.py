@@ -1,8 +1,9 @@
 from gyrocal.outputs import MODEL_FILES
-from gyrocal.steps import common, report
+from gyrocal.steps import common, compare, report
 
-i, p = snakemake.input, snakemake.params
+i, p, o = snakemake.input, snakemake.params, snakemake.output
 common.start(snakemake.log[0])
+compare.run(p.models, i.loo, i.diagnostics, i.summary, i.elpd, p.config["model_choice"], o.table, o.figure)
 report.run(p.models, {name: list(getattr(i, name)) for name in MODEL_FILES}, p.maneuvers,
-           p.tables, i.checked, i.comparison, i.truth[0] if i.truth else None, p.config,
-           snakemake.output.html, snakemake.output.verdict, snakemake.threads)
+           p.tables, i.checked, o.table, i.truth[0] if i.truth else None, p.config,
+           o.html, o.verdict, snakemake.threads)

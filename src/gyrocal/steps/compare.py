@@ -1,4 +1,4 @@
-"""Rule ``compare``: the model variants side by side, and which one is reviewed."""
+"""Step ``compare`` (run by the report rule's job): the model variants side by side, and which one is reviewed."""
 
 import pandas as pd
 

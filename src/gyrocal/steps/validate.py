@@ -1,4 +1,5 @@
-"""Rule ``validate``: read a campaign, check its format and physics, record ``input.json``."""
+"""Step ``validate``, the first of the preprocess rule's job: read a campaign, check its format
+and physics, record ``input.json``."""
 
 import logging
 from dataclasses import asdict
