@@ -1,7 +1,5 @@
 rule diagnostics:
-    """Misfit checks of the residuals against the noise model, and what could explain them.
-    Ahead of calibrate when both wait for a core: compare needs diagnostics, not calibrate."""
-    priority: 1
+    """Misfit checks of the residuals against the noise model, and what could explain them."""
     input:
         preprocessed=PREPROCESSED,
         point=f"{RESULTS}/{{model}}/point_estimate.npz",

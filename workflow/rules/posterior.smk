@@ -1,7 +1,8 @@
 rule posterior:
-    """emcee over the model's parameters and noise scales; convergence across ensembles. Ahead of
-    classic when both wait for a core: the report needs classic, the rest of the run the posterior."""
-    priority: 1
+    """emcee over the model's parameters and noise scales; convergence across ensembles; then
+    calibration.csv per the contract and the gyro correction for every channel set, which need
+    nothing but the posterior and no setting (a tenth of a second, in the same job; the steps stay
+    apart in gyrocal.steps: posterior, calibrate)."""
     input:
         preprocessed=PREPROCESSED,
         point=f"{RESULTS}/{{model}}/point_estimate.npz",
@@ -14,6 +15,13 @@ rule posterior:
         sampler=f"{RESULTS}/{{model}}/sampler.json",
         elpd=f"{RESULTS}/{{model}}/elpd_maneuvers.csv",
         loo=f"{RESULTS}/{{model}}/elpd_blocks.csv",
+        calibration=report(
+            f"{RESULTS}/{{model}}/calibration.csv",
+            caption="../report/calibration.rst",
+            category="Calibration",
+            subcategory="{model}",
+        ),
+        correction=f"{RESULTS}/{{model}}/correction.json",
     params:
         maneuvers=maneuver_files("npz"),
         priors=section("priors"),
@@ -29,29 +37,3 @@ rule posterior:
         f"{LOGS}/{{model}}/posterior.benchmark.tsv",
     script:
         "../scripts/posterior.py"
-
-
-rule calibrate:
-    """calibration.csv per the contract, and the gyro correction for every channel set."""
-    input:
-        preprocessed=PREPROCESSED,
-        point=f"{RESULTS}/{{model}}/point_estimate.npz",
-        summary=f"{RESULTS}/{{model}}/posterior_summary.csv",
-    output:
-        calibration=report(
-            f"{RESULTS}/{{model}}/calibration.csv",
-            caption="../report/calibration.rst",
-            category="Calibration",
-            subcategory="{model}",
-        ),
-        correction=f"{RESULTS}/{{model}}/correction.json",
-    params:
-        maneuvers=maneuver_files("npz"),
-    conda:
-        "../envs/gyrocal.yaml"
-    log:
-        f"{LOGS}/{{model}}/calibrate.log",
-    benchmark:
-        f"{LOGS}/{{model}}/calibrate.benchmark.tsv",
-    script:
-        "../scripts/calibrate.py"

@@ -1,13 +1,15 @@
 rule preprocess:
     """Read and check the campaign (format and physics: bad input stops the run here), record rows,
     checksums and what was left out (input.json); then every maneuver: slice, propagate every
-    channel set nominally, error angles of eq. 4, a table and figure each. One job per campaign:
-    validation and each maneuver take a fraction of a second, and a job's start-up more (the steps
-    stay apart in gyrocal.steps: validate, preprocess)."""
+    channel set nominally, error angles of eq. 4, a table and figure each; then the paper's method
+    over them (classic.csv). Everything a campaign gives with no model and no setting, in one job:
+    each part takes a fraction of a second, and a job's start-up more (the steps stay apart in
+    gyrocal.steps: validate, preprocess, classic)."""
     input:
         unpack(campaign_input),
     output:
         checked=f"{RESULTS}/input.json",
+        classic=f"{RESULTS}/classic.csv",
         preprocessed=report(
             directory(PREPROCESSED),
             patterns=["{maneuver}.png"],

@@ -2,3 +2,4 @@ from gyrocal.steps import common, fleet
 
 common.start(snakemake.log[0])
 fleet.run(snakemake.input.verdicts, snakemake.output.table, snakemake.output.figure)
+common.finish()

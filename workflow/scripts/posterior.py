@@ -1,9 +1,10 @@
-from gyrocal.steps import common, posterior
+from gyrocal.steps import calibrate, common, posterior
 
-p = snakemake.params
+p, o = snakemake.params, snakemake.output
 common.start(snakemake.log[0])
 with common.refusal():
-    posterior.run(snakemake.params.maneuvers, snakemake.input.point, snakemake.input.plugins, p.priors,
+    posterior.run(p.maneuvers, snakemake.input.point, snakemake.input.plugins, p.priors,
                   snakemake.input.prior_from[0] if snakemake.input.prior_from else None, p.sampler, p.grid,
-                  p.convergence, p.seed, snakemake.output.posterior, snakemake.output.summary,
-                  snakemake.output.fit, snakemake.output.sampler, snakemake.output.elpd, snakemake.output.loo)
+                  p.convergence, p.seed, o.posterior, o.summary, o.fit, o.sampler, o.elpd, o.loo)
+calibrate.run(snakemake.input.point, o.summary, p.maneuvers, o.calibration, o.correction)
+common.finish()

@@ -7,3 +7,4 @@ compare.run(p.models, i.loo, i.diagnostics, i.summary, i.elpd, p.config["model_c
 report.run(p.models, {name: list(getattr(i, name)) for name in MODEL_FILES}, p.maneuvers,
            p.tables, i.checked, o.table, i.truth[0] if i.truth else None, p.config,
            o.html, o.verdict, snakemake.threads)
+common.finish()

@@ -3,3 +3,4 @@ from gyrocal.steps import common
 
 common.start(snakemake.log[0])
 simulate.run(snakemake.input.scenario, snakemake.output.campaign.rsplit("/", 1)[0], snakemake.params.seed)
+common.finish()

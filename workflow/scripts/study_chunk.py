@@ -3,3 +3,4 @@ from gyrocal.steps import common, study
 common.start(snakemake.log[0])
 study.run_chunk(snakemake.params.scenario, snakemake.params.calibration, snakemake.params.study,
                 snakemake.wildcards.group, snakemake.params.indices, snakemake.output[0])
+common.finish()

@@ -1,4 +1,5 @@
-"""Rule ``calibrate``: ``calibration.csv`` and the gyro correction of one model."""
+"""Step ``calibrate``, the last of the posterior rule's job: ``calibration.csv`` and the gyro correction of
+one model."""
 
 import pandas as pd
 

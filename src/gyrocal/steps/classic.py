@@ -1,4 +1,4 @@
-"""Rule ``classic``: the paper's method over every maneuver."""
+"""Step ``classic``, the last of the preprocess rule's job: the paper's method over every maneuver."""
 
 from .. import classic, spec
 from ..outputs import write_csv

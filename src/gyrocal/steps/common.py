@@ -29,6 +29,19 @@ def start(log_path):
     warnings.filterwarnings("ignore", message="Passing a dict or None as alias_mapping", category=DeprecationWarning)
 
 
+def finish():
+    """End a workflow step's process once its outputs are written: flush the logs and exit at once.
+
+    The interpreter's teardown, which frees every module and object one by one, took 0.2-0.6 s
+    per job (more than some steps' own work, and 2 s on the default run's critical path) with
+    nothing left to do: every output is already written whole and closed (`gyrocal.outputs`).
+    A step that fails never gets here, and exits as Python does."""
+    logging.shutdown()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)
+
+
 @contextmanager
 def refusal():
     """Turn bad input (`telemetry.TelemetryError`, `estimate.EstimateError`) into its message on
