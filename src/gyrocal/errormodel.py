@@ -21,7 +21,8 @@ solves ``S' W z = 0`` with ``S`` nearly free of the residual's noise (docs/valid
 "The structure test's excess").
 """
 
-from dataclasses import dataclass
+import json
+from dataclasses import dataclass, fields
 
 import numpy as np
 from scipy.ndimage import uniform_filter1d
@@ -60,6 +61,24 @@ class Linearization:
     """(M, S, S, 3, 3) per-interval random-walk covariance of the sets per unit ARW^2."""
     body_error: np.ndarray
     """(M, S, 3) the same error in body axes (rad), for plots and diagnostics."""
+
+    def arrays(self, prefix: str) -> dict:
+        """The fields as arrays named ``prefix + field`` (`numpy.savez`), less the random-walk
+        covariance, which `from_arrays` builds again from ``st_dt`` (`_shared_walk`)."""
+        out = {prefix + f.name: getattr(self, f.name) for f in fields(self) if f.name not in _NOT_SAVED}
+        out[prefix + "labels"] = np.asarray(json.dumps({"maneuver": self.maneuver, "sets": self.sets}))
+        return out
+
+    @classmethod
+    def from_arrays(cls, arrays, prefix: str) -> "Linearization":
+        """What `arrays` saved, the same to the bit as the linearisation that was saved."""
+        labels = json.loads(str(arrays[prefix + "labels"]))
+        sets = [tuple(s) for s in labels["sets"]]
+        saved = {f.name: arrays[prefix + f.name] for f in fields(cls) if f.name not in _NOT_SAVED}
+        return cls(labels["maneuver"], sets, shared_walk=_shared_walk(len(sets), saved["st_dt"]), **saved)
+
+
+_NOT_SAVED = ("maneuver", "sets", "shared_walk")
 
 
 def view(data: ManeuverData) -> ManeuverView:

@@ -38,6 +38,10 @@ class PointEstimate:
     """Correlation time of the star-tracker noise (0: white)."""
     stated_noise: dict = field(default_factory=dict)
     """The noise knowledge the run was given (contract units and ``boresight_body``)."""
+    at_estimate: tuple = ()
+    """Each maneuver's `errormodel.Linearization` about this estimate, as the WLS's last step left
+    it and saved with it: the posterior and the diagnostics start from it, and computing it again
+    took 0.6 s in each of their jobs (empty: computed when asked)."""
 
     @property
     def boresight(self):
@@ -47,22 +51,32 @@ class PointEstimate:
         return self.spec.channel_params(self.theta, self.biases[m])
 
     def linearize(self, maneuvers, m: int):
-        return errormodel.linearize(maneuvers[m], self.spec, self.theta, self.biases[m])
+        """Maneuver ``m``'s linearisation about the estimate: the saved one where it is of that
+        maneuver (same id and star-tracker samples), else computed."""
+        data = maneuvers[m]
+        if m < len(self.at_estimate):
+            saved = self.at_estimate[m]
+            if saved.maneuver == data.id and len(saved.st_dt) == len(data.st_time):
+                return saved
+        return errormodel.linearize(data, self.spec, self.theta, self.biases[m])
 
     def save(self, handle):
+        lins = {k: v for m, lin in enumerate(self.at_estimate) for k, v in lin.arrays(f"lin{m}_").items()}
         np.savez(handle, theta=self.theta, cov=self.cov, biases=self.biases, chi0=self.chi0,
                  log_sigma=self.log_sigma, cost=self.cost, nfev=self.nfev, message=self.message,
                  correlation_time_s=self.correlation_time_s, spec=self.spec.to_json(),
-                 stated_noise=json.dumps(self.stated_noise))
+                 stated_noise=json.dumps(self.stated_noise), n_linearized=len(self.at_estimate), **lins)
 
     @classmethod
     def load(cls, path, known_effects=None) -> "PointEstimate":
         """Read `save`; ``known_effects`` (library and plugins, by name) are needed by the
         steps that evaluate the model's effects again."""
         z = np.load(path, allow_pickle=False)
+        n_lin = int(z["n_linearized"]) if "n_linearized" in z.files else 0  # none in files of earlier versions
         return cls(ModelSpec.from_json(str(z["spec"]), known_effects), z["theta"], z["cov"], z["biases"],
                    z["chi0"], z["log_sigma"], float(z["cost"]), int(z["nfev"]), str(z["message"]),
-                   float(z["correlation_time_s"]), json.loads(str(z["stated_noise"])))
+                   float(z["correlation_time_s"]), json.loads(str(z["stated_noise"])),
+                   tuple(errormodel.Linearization.from_arrays(z, f"lin{m}_") for m in range(n_lin)))
 
 
 def _unpack(x, theta0, free, n_man, n_ch):
@@ -75,7 +89,7 @@ def _unpack(x, theta0, free, n_man, n_ch):
 
 
 def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, biases0=None, chi00=None,
-        correlation_time_s=0.0) -> PointEstimate:
+        correlation_time_s=0.0, lins0=None) -> PointEstimate:
     """Weighted least squares over every maneuver with `scipy.optimize.least_squares`.
 
     Unknowns: the model's parameters, and per maneuver the initial attitude error and
@@ -88,7 +102,8 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
     sd from the optimum. The exact nonlinear model is re-propagated at every step; weights
     come from the banded noise covariance (star tracker across and about its
     boresight, gyro random walk). Prior-only parameters stay at ``theta0``; their rows of
-    the covariance are NaN.
+    the covariance are NaN. ``lins0``, the maneuvers' linearisations at the start (a caller that
+    has them), is not computed again: the noise structure and the first step both use it.
     """
     n_ch, n_man = len(spec.channels), len(maneuvers)
     free = spec.free
@@ -99,20 +114,22 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
     chi00 = np.zeros((n_man, 3)) if chi00 is None else chi00
     x0 = np.concatenate([theta0[free], np.column_stack([chi00, biases0]).ravel()])
     var = variances(log_sigma)
-    first = [errormodel.linearize(d, spec, theta0, biases0[m]) for m, d in enumerate(maneuvers)]
+    first = lins0 if lins0 is not None else [errormodel.linearize(d, spec, theta0, biases0[m])
+                                              for m, d in enumerate(maneuvers)]
     noises = [noise.build(lin, boresight, correlation_time_s) for lin in first]
     chols = [nz.factor(var) for nz in noises]
     cache = {}
+    at_start = {x0.tobytes(): first}
 
     def evaluate(x):
         key = x.tobytes()
         if key in cache:
             return cache[key]
         theta, chi0, biases = _unpack(x, theta0, free, n_man, n_ch)
+        lins = at_start.pop(key, None) or [errormodel.linearize(d, spec, theta, biases[m])
+                                           for m, d in enumerate(maneuvers)]
         res, shared, own = [], [], []
-        for m, d in enumerate(maneuvers):
-            lin = errormodel.linearize(d, spec, theta, biases[m])
-            nz = noises[m]
+        for m, (lin, nz) in enumerate(zip(lins, noises)):
             r = noise.difference(lin.z - chi0[m]).reshape(nz.n, 1)
             nuis = noise.difference(noise.nuisance_design(lin)).reshape(nz.n, -1)
             j_theta = -noise.difference(lin.design[..., free]).reshape(nz.n, -1)
@@ -122,20 +139,20 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
             own.append(-white[:, 1 + n_par:])
         cache.clear()
         cache[key] = (np.concatenate(res), sparse.hstack([sparse.csr_array(np.vstack(shared)),
-                                                          sparse.block_diag(own, format="csr")], format="csr"))
+                                                          sparse.block_diag(own, format="csr")], format="csr"), lins)
         return cache[key]
 
     result = least_squares(lambda x: evaluate(x)[0], x0, jac=lambda x: evaluate(x)[1],
                            method="trf", x_scale="jac", ftol=1e-8, xtol=1e-8, gtol=1e-10, max_nfev=30,
                            tr_options={"regularize": False, "atol": 1e-12, "btol": 1e-12})
-    jac = evaluate(result.x)[1]
+    _, jac, at_estimate = evaluate(result.x)
     cov_free = np.linalg.inv((jac.T @ jac).toarray())[:n_par, :n_par]
     cov = np.full((len(spec), len(spec)), np.nan)
     cov[np.ix_(free, free)] = cov_free
     theta, chi0, biases = _unpack(result.x, theta0, free, n_man, n_ch)
     return PointEstimate(spec, theta, cov, biases, chi0,
                          np.asarray(log_sigma, dtype=float), float(2 * result.cost), int(result.nfev),
-                         str(result.message), float(correlation_time_s), dict(stated_noise))
+                         str(result.message), float(correlation_time_s), dict(stated_noise), tuple(at_estimate))
 
 
 class EstimateError(RuntimeError):
@@ -302,4 +319,4 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     if estimate_scales:
         log_sigma = estimate_noise(noises, log_sigma)
     return wls(maneuvers, start.spec, stated_noise, log_sigma, start.theta, start.biases, start.chi0,
-               correlation_time_s=tau)
+               correlation_time_s=tau, lins0=lins)
