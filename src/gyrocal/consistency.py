@@ -708,11 +708,12 @@ def align(campaign: Campaign) -> tuple:
     return aligned(campaign, mounting), applied
 
 
-def read_checked(directory):
-    """Read a campaign (format, `telemetry.read_campaign`), turn its reference into body axes
-    (`align`) and check its physics; every error found is raised at once in one
-    `TelemetryError`. Returns the aligned campaign and its `Findings`."""
-    campaign, mounting = align(read_campaign(directory))
+def read_checked(directory, campaign=None):
+    """Read a campaign (format, `telemetry.read_campaign`; or take ``campaign``, the directory's
+    as that read it), turn its reference into body axes (`align`) and check its physics; every
+    error found is raised at once in one `TelemetryError`. Returns the aligned campaign and its
+    `Findings`."""
+    campaign, mounting = align(read_campaign(directory) if campaign is None else campaign)
     findings = check(campaign)
     findings.mounting = mounting
     if findings.errors:

@@ -11,14 +11,16 @@ from ..outputs import atomic_dir, write_csv
 from .common import read_json
 
 
-def run(campaign_dir, input_json, out_dir, figures=True, processes: int = 1) -> list:
+def run(campaign_dir, input_json, out_dir, figures=True, processes: int = 1, campaign=None) -> list:
     """Slice every maneuver of the campaign (in its order), leaving out the star-tracker outliers
     that validation listed; propagate every channel set nominally; write ``<id>.npz``, ``<id>.csv``
     and (unless ``figures`` is false: the validation study reads none) ``<id>.png`` into
     ``out_dir``, whole or not at all. The figures, most of the step's time, are drawn by
-    ``processes`` processes (`plots.render_all`). Returns the ``.npz`` paths."""
+    ``processes`` processes (`plots.render_all`). ``campaign``: the directory's campaign as
+    `telemetry.read_campaign` read it, where the caller has it. Returns the ``.npz`` paths."""
     info = read_json(input_json)
-    campaign = telemetry.read_campaign(campaign_dir)
+    if campaign is None:
+        campaign = telemetry.read_campaign(campaign_dir)
     if info["mounting"]:
         campaign = consistency.aligned(campaign, Rotation.from_quat(info["mounting"]["quat"]))
     outliers = [o["time_s"] for o in info["star_tracker_outliers"]]

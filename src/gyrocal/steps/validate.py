@@ -10,11 +10,11 @@ from ..outputs import write_json
 log = logging.getLogger("gyrocal")
 
 
-def run(campaign_dir, out_json):
-    """Read the campaign and check its format and physics (`consistency`); record what was
-    read, the warnings, the star-tracker outliers to leave out, its noise knowledge and
-    the files' checksums."""
-    campaign, findings = consistency.read_checked(campaign_dir)
+def run(campaign_dir, out_json, campaign=None):
+    """Read the campaign (unless given ``campaign``, as `telemetry.read_campaign` read it) and
+    check its format and physics (`consistency`); record what was read, the warnings, the
+    star-tracker outliers to leave out, its noise knowledge and the files' checksums."""
+    campaign, findings = consistency.read_checked(campaign_dir, campaign)
     log.info("%s", consistency.summary(campaign, findings))
     write_json({
         "campaign": campaign.name,
