@@ -30,7 +30,8 @@ def posterior_again(out, npz, cfg, tmp_path):
     """The posterior step once more on a finished run's point estimate, with ``cfg``."""
     posterior_step.run(npz, out / "baseline/point_estimate.npz", [], cfg["priors"], None, cfg["sampler"],
                        cfg["grid"], cfg["convergence"], cfg["seed"], tmp_path / "p.nc", tmp_path / "s.csv",
-                       tmp_path / "f.csv", tmp_path / "j.json", tmp_path / "e.csv")
+                       tmp_path / "f.csv", tmp_path / "j.json", tmp_path / "e.csv",
+                       tmp_path / "b.csv")
 
 
 def test_validate_step_records_rows_and_checksums(tiny_run):
@@ -212,3 +213,72 @@ def test_linearised_model_agrees_with_the_exact_one_to_1_percent_of_the_sd(mom, 
             deltas.append(noise.build(dataclasses.replace(lin, z=exact - linear), est.boresight))
         moved = cov @ campaign_stats(deltas, var).b
         assert np.all(np.abs(moved) < 0.01 * sd), np.max(np.abs(moved) / sd)
+
+
+def test_psis_table_gives_arvizs_elpd_loo_its_se_and_p_loo(tiny_run):
+    import arviz as az
+
+    from gyrocal import comparison, inferencedata
+    idata = az.from_netcdf(tiny_run[0] / "baseline/posterior.nc")
+    blocks = pd.read_csv(tiny_run[0] / "baseline/elpd_blocks.csv")
+    expected = az.loo(idata, pointwise=True)
+    totals = comparison.loo_totals(blocks)
+    assert totals["elpd_loo"] == pytest.approx(float(expected.elpd_loo), rel=1e-12)
+    assert totals["elpd_loo_se"] == pytest.approx(float(expected.se), rel=1e-12)
+    assert totals["p_loo"] == pytest.approx(float(expected.p_loo), rel=1e-9, abs=1e-9)
+    np.testing.assert_allclose(blocks["pareto_k"], expected.pareto_k.values, rtol=0, atol=0)
+    assert list(blocks["block"]) == [str(b) for b in idata.log_likelihood["block"].values]
+    again = inferencedata.loo_blocks(idata, "baseline")
+    for column in ("elpd_loo", "p_loo", "pareto_k"):
+        np.testing.assert_array_equal(again[column].to_numpy(), blocks[column].to_numpy())
+
+
+def test_saved_linearisation_is_the_models_to_the_bit_and_older_files_still_load(tiny_run, tmp_path):
+    out, npz = tiny_run
+    maneuvers = common.load_maneuvers(npz)
+    est = PointEstimate.load(out / "baseline/point_estimate.npz")
+    assert len(est.at_estimate) == len(maneuvers)
+    for m, data in enumerate(maneuvers):
+        saved = est.linearize(maneuvers, m)
+        assert saved is est.at_estimate[m]
+        fresh = errormodel.linearize(data, est.spec, est.theta, est.biases[m])
+        assert saved.maneuver == fresh.maneuver and saved.sets == fresh.sets
+        for field in dataclasses.fields(fresh):
+            assert np.array_equal(getattr(saved, field.name), getattr(fresh, field.name)), field.name
+    # a file written before the linearisation was saved: the same estimate, linearised when asked
+    with np.load(out / "baseline/point_estimate.npz") as z:
+        older = {k: z[k] for k in z.files if not k.startswith("lin") and k != "n_linearized"}
+    np.savez(tmp_path / "older.npz", **older)
+    old = PointEstimate.load(tmp_path / "older.npz")
+    assert old.at_estimate == () and np.array_equal(old.theta, est.theta)
+    assert np.array_equal(old.linearize(maneuvers, 0).design, est.at_estimate[0].design)
+    # a linearisation of another maneuver is not taken for this one's
+    assert est.linearize(maneuvers[1:], 0).maneuver == maneuvers[1].id
+
+
+def test_wls_given_its_start_linearisation_finds_the_same_estimate_to_the_bit(tiny_run):
+    out, npz = tiny_run
+    maneuvers = common.load_maneuvers(npz)
+    est = PointEstimate.load(out / "baseline/point_estimate.npz")
+    start = dataclasses.replace(est, at_estimate=())
+    lins = [start.linearize(maneuvers, m) for m in range(len(maneuvers))]
+    args = (maneuvers, est.spec, est.stated_noise, est.log_sigma, est.theta * 0.9, est.biases, est.chi0)
+    given = estimate.wls(*args, lins0=[errormodel.linearize(d, est.spec, est.theta * 0.9, est.biases[m])
+                                       for m, d in enumerate(maneuvers)])
+    computed = estimate.wls(*args)
+    assert lins and given.nfev == computed.nfev
+    for name in ("theta", "cov", "biases", "chi0"):
+        assert np.array_equal(getattr(given, name), getattr(computed, name), equal_nan=True), name
+
+
+def test_a_finished_step_exits_zero_at_once_with_its_log_written(tmp_path):
+    import subprocess
+    import sys
+    log = tmp_path / "step.log"
+    code = ("import logging\nfrom gyrocal.steps import common\n"
+            f"common.start({str(log)!r})\nlogging.getLogger('gyrocal').info('written whole')\n"
+            "print('before', flush=False)\ncommon.finish()\nprint('after')\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr
+    assert run.stdout == "before\n"
+    assert "written whole" in log.read_text()

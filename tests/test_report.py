@@ -3,6 +3,8 @@
 import shutil
 import subprocess
 
+import numpy as np
+import pandas as pd
 import pytest
 
 from gyrocal import simulate
@@ -91,3 +93,14 @@ def test_report_renders_in_a_real_browser_with_verdict_and_tables(mom_run, hidde
             assert f'id="{table}"' in dom
         assert dom.count("<img") >= 8
         assert mpimg.imread(shot).shape[:2] == (900, 1300)
+
+
+def test_figures_drawn_by_two_processes_are_the_same_png_bytes(tmp_path):
+    from gyrocal import plots
+    t = np.arange(50.0)
+    table = pd.DataFrame({"time": t, "rate_roll_deg_s": np.sin(t), "rate_pitch_deg_s": 0.0, "rate_yaw_deg_s": 0.1,
+                          **{f"set0_error_{a}_arcsec": np.cos(t * k) for k, a in enumerate(("yaw", "roll", "pitch"))}})
+    jobs = [("maneuver_figure", (table, f"figure {i}")) for i in range(3)]
+    one = plots.render_all(jobs, 1, dpi=40)
+    two = plots.render_all(jobs, 2, dpi=40)
+    assert one == two and len(one) == 3 and all(p.startswith(b"\x89PNG") for p in one)

@@ -260,7 +260,7 @@ def test_a_point_estimate_beyond_the_bounds_stops_before_sampling_naming_paramet
     with pytest.raises(EstimateError) as err:
         posterior_step.run(npz, out / "baseline/point_estimate.npz", [], {**config["priors"], "sf_bound_ppm": 100.0},
                            None, config["sampler"], config["grid"], config["convergence"], config["seed"],
-                           *(tmp_path / name for name in ("p.nc", "s.csv", "f.csv", "j.json", "e.csv")))
+                           *(tmp_path / name for name in ("p.nc", "s.csv", "f.csv", "j.json", "e.csv", "b.csv")))
     message = str(err.value)
     assert "dtg1_roll.sf_pos = 14" in message and "(bound 100," in message
     assert "fits maneuver" in message
