@@ -14,8 +14,8 @@ log = logging.getLogger("gyrocal")
 
 def run(npz_paths, input_json, model, model_effects, noise_cfg, plugin_paths, out_npz):
     """The full-trajectory WLS of one model, started from the classic estimate; saved
-    with the model's specification and the noise knowledge it used. The classic estimate is
-    computed here (a tenth of a second), so the classic rule's job is off the critical path."""
+    with the model's specification, the noise knowledge it used and its linearisation. The classic
+    start is computed here, for the model's own specification (a tenth of a second)."""
     maneuvers = load_maneuvers(npz_paths)
     fx = effects.resolve(model, model_effects, effects.load_plugins(plugin_paths or []))
     model_spec = ModelSpec.build(model, fx, maneuvers[0].channels)
