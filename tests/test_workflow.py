@@ -62,8 +62,8 @@ def test_a_report_threshold_change_reruns_the_report_and_nothing_upstream(tiny, 
 
 def test_a_sampler_setting_change_reruns_the_posterior_but_not_the_point_estimate(tiny, workflow_run, tmp_path):
     jobs, said = dry_run_with(tiny, workflow_run, tmp_path, "sampler:\n  chunk_steps: 150\n")
-    assert jobs.get("posterior") == 2, said[-3000:]        # one per model of the default config
-    assert "point_estimate" not in jobs and "classic" not in jobs and "preprocess" not in jobs, jobs
+    # one posterior per model of the default config, and what reads it; no point estimate, no preprocess
+    assert jobs == {"posterior": 2, "diagnostics": 2, "report": 1, "all": 1}, said[-3000:]
 
 
 def test_an_unchanged_config_schedules_nothing(tiny, workflow_run, tmp_path):

@@ -18,12 +18,11 @@ PARETO_K_MAX = 0.7
 
 
 def loo_totals(blocks: pd.DataFrame) -> dict:
-    """A model's PSIS-LOO from its per-block table (`inferencedata.loo_blocks`): elpd_loo and its
-    se as arviz's ``loo`` gives them (``sqrt(n var(elpd_i))``), and p_loo, the sum of the blocks'
-    shares."""
+    """A model's PSIS-LOO from its per-block table (`inferencedata.loo_blocks`): elpd_loo, its se
+    (``sqrt(n var(elpd_i))``) and p_loo (lppd less elpd_loo), summed as arviz's ``loo`` sums them."""
     elpd = blocks["elpd_loo"].to_numpy(dtype=float)
-    return {"elpd_loo": float(elpd.sum()), "elpd_loo_se": float(np.sqrt(len(elpd) * np.var(elpd))),
-            "p_loo": float(blocks["p_loo"].sum())}
+    return {"elpd_loo": float(elpd.sum()), "elpd_loo_se": float((len(elpd) * np.var(elpd)) ** 0.5),
+            "p_loo": float(np.sum(blocks["lppd"].to_numpy(dtype=float)) - elpd.sum())}
 
 
 def moved(reference: pd.DataFrame, current: pd.DataFrame) -> list:

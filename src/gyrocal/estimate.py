@@ -5,6 +5,7 @@ step, weights from the banded noise covariance (`noise`) and the noise scales fr
 REML; it starts from the paper's method (`classic`).
 """
 
+import hashlib
 import json
 from dataclasses import dataclass, field
 
@@ -42,6 +43,8 @@ class PointEstimate:
     """Each maneuver's `errormodel.Linearization` about this estimate, as the WLS's last step left
     it and saved with it: the posterior and the diagnostics start from it, and computing it again
     took 0.6 s in each of their jobs (empty: computed when asked)."""
+    at_estimate_keys: tuple = ()
+    """`linearization_key` of each saved linearisation: what it was computed from."""
 
     @property
     def boresight(self):
@@ -50,18 +53,27 @@ class PointEstimate:
     def params(self, m: int):
         return self.spec.channel_params(self.theta, self.biases[m])
 
+    def linearization_key(self, data, m: int) -> str:
+        """A digest of what maneuver ``m``'s linearisation is computed from: the maneuver (id, times,
+        gyro increments, star-tracker attitudes), the specification, ``theta`` and its biases."""
+        digest = hashlib.sha256(self.spec.to_json().encode())
+        for part in (data.id.encode(), data.gyro_time, data.increments, data.st_time, data.st_quat,
+                     data.attitude0_quat, self.theta, self.biases[m]):
+            digest.update(np.ascontiguousarray(part).tobytes() if isinstance(part, np.ndarray) else part)
+        return digest.hexdigest()
+
     def linearize(self, maneuvers, m: int):
-        """Maneuver ``m``'s linearisation about the estimate: the saved one where it is of that
-        maneuver (same id and star-tracker samples), else computed."""
+        """Maneuver ``m``'s linearisation about the estimate: the saved one where it was computed
+        from this maneuver, specification, ``theta`` and biases (`linearization_key`), else
+        computed."""
         data = maneuvers[m]
-        if m < len(self.at_estimate):
-            saved = self.at_estimate[m]
-            if saved.maneuver == data.id and len(saved.st_dt) == len(data.st_time):
-                return saved
+        if m < len(self.at_estimate) and self.at_estimate_keys[m] == self.linearization_key(data, m):
+            return self.at_estimate[m]
         return errormodel.linearize(data, self.spec, self.theta, self.biases[m])
 
     def save(self, handle):
         lins = {k: v for m, lin in enumerate(self.at_estimate) for k, v in lin.arrays(f"lin{m}_").items()}
+        lins.update({f"lin{m}_key": np.asarray(key) for m, key in enumerate(self.at_estimate_keys)})
         np.savez(handle, theta=self.theta, cov=self.cov, biases=self.biases, chi0=self.chi0,
                  log_sigma=self.log_sigma, cost=self.cost, nfev=self.nfev, message=self.message,
                  correlation_time_s=self.correlation_time_s, spec=self.spec.to_json(),
@@ -76,7 +88,8 @@ class PointEstimate:
         return cls(ModelSpec.from_json(str(z["spec"]), known_effects), z["theta"], z["cov"], z["biases"],
                    z["chi0"], z["log_sigma"], float(z["cost"]), int(z["nfev"]), str(z["message"]),
                    float(z["correlation_time_s"]), json.loads(str(z["stated_noise"])),
-                   tuple(errormodel.Linearization.from_arrays(z, f"lin{m}_") for m in range(n_lin)))
+                   tuple(errormodel.Linearization.from_arrays(z, f"lin{m}_") for m in range(n_lin)),
+                   tuple(str(z[f"lin{m}_key"]) for m in range(n_lin)))
 
 
 def _unpack(x, theta0, free, n_man, n_ch):
@@ -150,9 +163,12 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
     cov = np.full((len(spec), len(spec)), np.nan)
     cov[np.ix_(free, free)] = cov_free
     theta, chi0, biases = _unpack(result.x, theta0, free, n_man, n_ch)
-    return PointEstimate(spec, theta, cov, biases, chi0,
-                         np.asarray(log_sigma, dtype=float), float(2 * result.cost), int(result.nfev),
-                         str(result.message), float(correlation_time_s), dict(stated_noise), tuple(at_estimate))
+    estimate = PointEstimate(spec, theta, cov, biases, chi0,
+                             np.asarray(log_sigma, dtype=float), float(2 * result.cost), int(result.nfev),
+                             str(result.message), float(correlation_time_s), dict(stated_noise))
+    estimate.at_estimate = tuple(at_estimate)
+    estimate.at_estimate_keys = tuple(estimate.linearization_key(d, m) for m, d in enumerate(maneuvers))
+    return estimate
 
 
 class EstimateError(RuntimeError):

@@ -14,7 +14,7 @@ import arviz as az
 import numpy as np
 import pandas as pd
 import xarray as xr
-from scipy.special import logsumexp
+from arviz.stats.stats_utils import logsumexp
 
 from . import __version__, predictive, preprocess
 from . import channels as ch
@@ -42,16 +42,17 @@ def loo(idata, model: str):
 
 
 def loo_blocks(idata, model: str) -> pd.DataFrame:
-    """``elpd_blocks.csv``: PSIS-LOO per block (`loo`), with each block's share of p_loo (its lppd
-    less its elpd), so that the model's elpd_loo, its se and p_loo follow from the table alone
-    (`comparison.loo_totals`) and the comparison needs neither arviz nor the InferenceData."""
+    """``elpd_blocks.csv``: PSIS-LOO per block (`loo`), with each block's lppd (arviz's) and share of
+    p_loo (its lppd less its elpd), so that the model's elpd_loo, its se and p_loo follow from the
+    table alone, as arviz's ``loo`` gives them (`comparison.loo_totals`), and the comparison needs
+    neither arviz nor the InferenceData."""
     result, _ = loo(idata, model)
     loglik = idata.log_likelihood["attitude_error"]
     flat = loglik.values.reshape(-1, loglik.sizes["block"])
-    lppd = logsumexp(flat, axis=0) - np.log(len(flat))
+    lppd = logsumexp(flat, b_inv=len(flat), axis=0)
     elpd = result.loo_i.values
     return pd.DataFrame({"block": [str(b) for b in loglik.coords["block"].values], "elpd_loo": elpd,
-                         "p_loo": lppd - elpd, "pareto_k": result.pareto_k.values})
+                         "lppd": lppd, "p_loo": lppd - elpd, "pareto_k": result.pareto_k.values})
 
 
 def posterior_dataset(draws, theta_hat, spec) -> az.InferenceData:
@@ -64,27 +65,30 @@ def posterior_dataset(draws, theta_hat, spec) -> az.InferenceData:
         coords={"parameter": spec.labels}, dims={"channel_param": ["parameter"]})
 
 
+CI_PROB = 0.95
+"""The credible interval of the summary: central, as arviz's ``summary`` gives its ETI."""
+
+
 def summarize(idata, per_walker, labels, convergence: dict) -> pd.DataFrame:
-    """Mean, sd and central 95 % interval over every draw (numpy: the same numbers as arviz's
-    ``summary``, which also sorts every parameter for an HDI this table does not show), r_hat
-    across the independent ensembles (each one chain, step-major) and bulk ESS over every
-    walker's own chain (arviz)."""
+    """Mean, sd and central 95 % interval over every draw, computed as arviz's ``summary`` does
+    (xarray over chain and draw; the interval's tails at ``(1 - CI_PROB) / 2``), to the bit, without
+    the HDI it also sorts every parameter for; r_hat across the independent ensembles (each one
+    chain, step-major) and bulk ESS over every walker's own chain (arviz)."""
     rhat = az.rhat(idata)
     ess = az.ess(per_walker, method="bulk")
-    names = [f"channel_param[{label}]" for label in labels] + [s.key for s in NOISE_SCALES]
-    values = np.concatenate([idata.posterior["channel_param"].sel(parameter=list(labels)).values]
-                            + [idata.posterior[s.key].values[..., None] for s in NOISE_SCALES], axis=-1)
-    flat = values.reshape(-1, values.shape[-1])
-    low, high = np.quantile(flat, [0.025, 0.975], axis=0)
+    draws = idata.posterior
+    mean, sd = draws.mean(dim=("chain", "draw")), draws.std(dim=("chain", "draw"), ddof=1)
+    tail = (1 - CI_PROB) / 2
+    low, high = (draws.quantile(q, dim=("chain", "draw")) for q in (tail, 1 - tail))
     rows = []
-    for i, (label, name) in enumerate(zip(list(labels) + NOISE_LABELS, names)):
-        if name.startswith("channel_param"):
-            sel = {"parameter": label}
-            r, e = float(rhat["channel_param"].sel(sel)), float(ess["channel_param"].sel(sel))
+    for label in list(labels) + NOISE_LABELS:
+        if label in NOISE_LABELS:
+            name, sel = label.removeprefix("noise."), {}
         else:
-            r, e = float(rhat[name]), float(ess[name])
-        rows.append({"label": label, "mean": flat[:, i].mean(), "sd": flat[:, i].std(ddof=1),
-                     "ci95_low": low[i], "ci95_high": high[i], "r_hat": r, "ess_bulk": e})
+            name, sel = "channel_param", {"parameter": label}
+        value = {k: float(v[name].sel(sel)) for k, v in (("mean", mean), ("sd", sd), ("ci95_low", low),
+                                                          ("ci95_high", high), ("r_hat", rhat), ("ess_bulk", ess))}
+        rows.append({"label": label, **value})
     frame = pd.DataFrame(rows)
     frame["converged"] = (frame["r_hat"] < convergence["r_hat_max"]) & (frame["ess_bulk"] >= convergence["ess_bulk_min"])
     return frame

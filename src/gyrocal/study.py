@@ -131,7 +131,8 @@ def model_record(campaign_dir, work, model, truth, hidden_units, known, cfg, stu
     """Per-parameter rows and the campaign-level facts of one model's run."""
     work = Path(work)
     d = work / model
-    npz = sorted((work / "preprocess").glob("*.npz"))
+    ids = json.loads((work / "input.json").read_text())["maneuvers"]
+    npz = [work / "preprocess" / f"{m}.npz" for m in ids]  # the campaign's order, which the biases follow
     est = PointEstimate.load(d / "point_estimate.npz", known)
     model_spec = est.spec
     true = _contract_vector(model_spec, truth, hidden_units)
