@@ -113,7 +113,7 @@ def study(scenario: Path, effect: str, tmp: Path):
         whole = total(parts)
         full = log_evidence(whole, prior_mean, prior_sd)
         cov_post = np.linalg.inv(whole.A + np.diag(1 / prior_sd**2))
-        loo = inferencedata.loo(az.from_netcdf(tmp / "out" / model / "posterior.nc"), model)[0]
+        loo = inferencedata.loo(az.from_netcdf(tmp / "out" / model / "posterior.nc"), model)
         psis = loo.loo_i.values
         m = 1
         y, x, g, cov = dense_parts(lins[m], noises[m], var)

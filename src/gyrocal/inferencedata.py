@@ -25,11 +25,10 @@ from .units import AXES, rad_to_arcsec
 log = logging.getLogger("gyrocal")
 
 
-
 def loo(idata, model: str):
-    """PSIS-LOO of one model (arviz) and its count of Pareto k > `PARETO_K_MAX` blocks. arviz warns
-    about those blocks (the posterior cannot importance-sample their leave-out posterior); the count
-    is returned and the log says what it means, instead of a bare warning."""
+    """PSIS-LOO of one model (arviz). arviz warns about blocks with Pareto k > `PARETO_K_MAX` (the
+    posterior cannot importance-sample their leave-out posterior); the log says how many and what
+    it means instead, and `comparison.compare` counts them in its table."""
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="Estimated shape parameter of Pareto", category=UserWarning)
         result = az.loo(idata, pointwise=True)
@@ -38,7 +37,7 @@ def loo(idata, model: str):
         log.info("PSIS-LOO for model %s: %d of %d blocks have Pareto k > %g, so its elpd_loo is less "
                  "reliable; typical of a misfitting model, whose residual blocks are influential",
                  model, high, result.pareto_k.size, PARETO_K_MAX)
-    return result, high
+    return result
 
 
 def loo_blocks(idata, model: str) -> pd.DataFrame:
@@ -46,7 +45,7 @@ def loo_blocks(idata, model: str) -> pd.DataFrame:
     p_loo (its lppd less its elpd), so that the model's elpd_loo, its se and p_loo follow from the
     table alone, as arviz's ``loo`` gives them (`comparison.loo_totals`), and the comparison needs
     neither arviz nor the InferenceData."""
-    result, _ = loo(idata, model)
+    result = loo(idata, model)
     loglik = idata.log_likelihood["attitude_error"]
     flat = loglik.values.reshape(-1, loglik.sizes["block"])
     lppd = logsumexp(flat, b_inv=len(flat), axis=0)

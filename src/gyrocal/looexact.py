@@ -247,7 +247,7 @@ class FullRun:
         self.flat = posterior_draws(self.idata, self.estimate.spec, self.estimate.theta)
         self.n_params = len(self.estimate.spec)
         _, self.ratios, _ = predictive.split_draws(self.flat, self.n_params)
-        self.loo, _ = inferencedata.loo(self.idata, model)
+        self.loo = inferencedata.loo(self.idata, model)
         loglik = self.idata.log_likelihood["attitude_error"]
         self.loglik = loglik.values.reshape(-1, loglik.sizes["block"])
         self.blocks = [str(b) for b in loglik.coords["block"].values]

@@ -29,13 +29,8 @@ def embed_png(data: bytes) -> str:
     return f'<img alt="figure" src="data:image/png;base64,{base64.b64encode(data).decode()}">'
 
 
-def embed(fig) -> str:
-    """A figure as an inline PNG ``<img>``."""
-    return embed_png(plots.png(fig, **EMBED_PNG))
-
-
 def draw_all(jobs, processes: int = 1) -> list:
-    """`embed` of each ``(plots function name, its arguments)``, in order, drawn by ``processes``
+    """`embed_png` of each ``(plots function name, its arguments)``, in order, drawn by ``processes``
     processes (`plots.render_all`); the PNG bytes are the same either way."""
     return [embed_png(data) for data in plots.render_all(jobs, processes, **EMBED_PNG)]
 

@@ -31,8 +31,8 @@ def run(campaign_dir, input_json, out_dir, figures=True, processes: int = 1, cam
             table = preprocess.error_table(data)
             data.save(tmp / f"{m.id}.npz")
             write_csv(table, tmp / f"{m.id}.csv")
-            drawings.append(("maneuver_figure", (table, f"{campaign.name}: {m.id} ({m.turn}), nominal parameters")))
-        if figures:
-            for m, image in zip(campaign.maneuvers, plots.render_all(drawings, processes, dpi=plots.SAVE_DPI)):
-                (tmp / f"{m.id}.png").write_bytes(image)
+            if figures:
+                drawings.append(("maneuver_figure", (table, f"{campaign.name}: {m.id} ({m.turn}), nominal parameters")))
+        for m, image in zip(campaign.maneuvers, plots.render_all(drawings, processes, dpi=plots.SAVE_DPI)):
+            (tmp / f"{m.id}.png").write_bytes(image)
     return [Path(out_dir) / f"{m.id}.npz" for m in campaign.maneuvers]
