@@ -96,6 +96,7 @@ def test_coverage_and_accuracy_of_a_calibrated_estimator():
     acc = validation.accuracy(params).iloc[0]
     assert acc["efficiency"] == pytest.approx(1.0, abs=0.06)
     assert acc["paper_over_posterior"] == pytest.approx(3.0) and acc["holds_over_posterior"] == pytest.approx(1.5)
+    assert acc["paper_over_crlb"] == pytest.approx(3.0 * acc["rmse_mean"] / 2.0)
     assert validation.pooled_efficiency(params) == pytest.approx(acc["efficiency"])
 
 
