@@ -73,6 +73,15 @@ def test_efficient_estimator_band_holds_one():
     assert lo < 1 < hi and lo > 0.85 and hi < 1.2
 
 
+def test_efficiency_confidence_interval_covers_the_true_efficiency():
+    rng = np.random.default_rng(5)
+    n, crlb, sigma = 200, 1.0, 1.0 / np.sqrt(0.8)  # true efficiency 0.8
+    efficiency = crlb**2 / np.mean(rng.normal(0, sigma, (4000, n)) ** 2, axis=1)
+    lo, hi = validation.efficiency_confidence(efficiency, n)
+    assert np.mean((lo <= 0.8) & (0.8 <= hi)) == pytest.approx(0.95, abs=0.01)
+    assert np.mean(hi < 0.8) == pytest.approx(0.025, abs=0.008)
+
+
 def _records(errors, sd, truth=0.0):
     """Synthetic records of one parameter: posterior mean = truth + error, normal quantiles of sd."""
     from scipy.stats import norm
@@ -95,6 +104,7 @@ def test_coverage_and_accuracy_of_a_calibrated_estimator():
         assert cov.loc[level, "rate_lo"] < level < cov.loc[level, "rate_hi"]
     acc = validation.accuracy(params).iloc[0]
     assert acc["efficiency"] == pytest.approx(1.0, abs=0.06)
+    assert acc["efficiency_lo"] < 1.0 < acc["efficiency_hi"] and acc["efficiency_hi"] - acc["efficiency_lo"] < 0.1
     assert acc["paper_over_posterior"] == pytest.approx(3.0) and acc["holds_over_posterior"] == pytest.approx(1.5)
     assert acc["paper_over_crlb"] == pytest.approx(3.0 * acc["rmse_mean"] / 2.0)
     assert validation.pooled_efficiency(params) == pytest.approx(acc["efficiency"])

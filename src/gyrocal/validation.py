@@ -55,9 +55,17 @@ def efficiency_interval(n: int, level: float = 0.9) -> tuple:
     return 1 / lo, 1 / hi
 
 
+def efficiency_confidence(efficiency, n: int, level: float = 0.95) -> tuple:
+    """Confidence interval of a true efficiency CRLB/sigma^2 from one estimated over ``n``
+    campaigns of unbiased, normal errors: ``n MSE / sigma^2`` is then chi2(n)."""
+    lo, hi = sps.chi2.ppf([(1 - level) / 2, (1 + level) / 2], n) / n
+    return efficiency * lo, efficiency * hi
+
+
 def accuracy(params: pd.DataFrame) -> pd.DataFrame:
     """RMSE per parameter of every estimator, the Cramér-Rao bound (root mean of the campaigns'
-    bounds), the posterior mean's efficiency CRLB/MSE with its 90 % band for an efficient estimator,
+    bounds), the posterior mean's efficiency CRLB/MSE with its 95 % confidence interval and the 90 %
+    band in which an efficient estimator's would fall,
     and the ratios the targets name; ``paper_over_crlb`` is the most any unbiased estimator could
     gain over the paper's classic method on these campaigns."""
     rows = []
@@ -66,9 +74,12 @@ def accuracy(params: pd.DataFrame) -> pd.DataFrame:
         rmse = {k: float(np.sqrt(np.mean(e**2))) for k, e in err.items()}
         crlb = float(np.sqrt(np.mean(g["crlb_sd"] ** 2)))
         lo, hi = efficiency_interval(len(g))
+        efficiency = crlb**2 / rmse["mean"] ** 2
+        ci_lo, ci_hi = efficiency_confidence(efficiency, len(g))
         rows.append({"label": label, "unit": g["unit"].iloc[0], "n": len(g),
                      **{f"rmse_{k}": v for k, v in rmse.items()}, "crlb": crlb,
-                     "efficiency": crlb**2 / rmse["mean"] ** 2, "efficient_band_lo": lo, "efficient_band_hi": hi,
+                     "efficiency": efficiency, "efficiency_lo": ci_lo, "efficiency_hi": ci_hi,
+                     "efficient_band_lo": lo, "efficient_band_hi": hi,
                      "bias_over_crlb": float(err["mean"].mean() / crlb),
                      "paper_over_posterior": rmse["classic_paper"] / rmse["mean"],
                      "paper_over_crlb": rmse["classic_paper"] / crlb,
@@ -246,7 +257,8 @@ def markdown_table(frame: pd.DataFrame, digits: int = 3) -> str:
 
 SUMMARY_COLUMNS = {
     "accuracy": ["label", "unit", "rmse_classic_paper", "rmse_classic_holds", "rmse_wls", "rmse_mean", "crlb",
-                 "efficiency", "paper_over_posterior", "paper_over_crlb", "holds_over_posterior"],
+                 "efficiency", "efficiency_lo", "efficiency_hi", "paper_over_posterior", "paper_over_crlb",
+                 "holds_over_posterior"],
     "coverage": ["level", "covered", "n", "rate", "rate_lo", "rate_hi"],
     "sbc": ["quantity", "n", "p", "p_bonferroni"],
     "error_rates": ["test", "fired", "n", "rate", "rate_lo", "rate_hi", "nominal"],
