@@ -102,22 +102,38 @@ def binomial_interval(k: int, n: int, level: float = 0.95) -> tuple:
     return float(lo), float(hi)
 
 
-def coverage(params: pd.DataFrame, by=None) -> pd.DataFrame:
-    """How often each central interval holds the truth, with its binomial 95 % interval.
+def clustered_interval(hit: np.ndarray, cluster: np.ndarray, level: float = 0.95) -> tuple:
+    """Clopper-Pearson interval of a rate whose trials come in clusters, and its effective number
+    of trials: the binomial's ``n`` divided by the design effect (Kish) of the clusters' totals,
+    never above ``n``. A campaign's parameters share its noise, so they are not independent trials."""
+    hit = np.asarray(hit, dtype=float)
+    _, codes = np.unique(cluster, return_inverse=True)
+    k_c, n_c = np.bincount(codes, hit), np.bincount(codes).astype(float)
+    n, rate = len(hit), hit.mean()
+    var_binomial = rate * (1 - rate) / n
+    var_cluster = np.sum((k_c - rate * n_c) ** 2) / n**2
+    n_eff = n / max(var_cluster / var_binomial, 1.0) if var_binomial > 0 else float(n)
+    a = 1 - level
+    lo = sps.beta.ppf(a / 2, rate * n_eff, (1 - rate) * n_eff + 1) if rate > 0 else 0.0
+    hi = sps.beta.ppf(1 - a / 2, rate * n_eff + 1, (1 - rate) * n_eff) if rate < 1 else 1.0
+    return float(lo), float(hi), float(n_eff)
 
-    The parameters of one campaign share its noise, so the binomial band (which treats them as
-    independent) is a little narrow; the per-parameter rows have independent campaigns.
-    """
+
+def coverage(params: pd.DataFrame, by=None) -> pd.DataFrame:
+    """How often each central interval holds the truth, with its 95 % interval, the campaigns taken
+    as clusters (`clustered_interval`: on the per-parameter rows, one trial per campaign, it is
+    the binomial interval)."""
     rows = []
     groups = [((), params)] if by is None else params.groupby(by, sort=False)
     for key, g in groups:
         key = key if isinstance(key, tuple) else (key,)
+        campaign = (g["group"].astype(str) + ":" + g["index"].astype(str)).to_numpy()
         for level, (lo, hi) in LEVELS.items():
             hit = ((g[lo] <= g["truth"]) & (g["truth"] <= g[hi])).to_numpy()
             k, n = int(hit.sum()), len(hit)
-            band = binomial_interval(k, n)
+            rate_lo, rate_hi, n_eff = clustered_interval(hit, campaign)
             rows.append({**dict(zip(by or [], key)), "level": level, "covered": k, "n": n, "rate": k / n,
-                         "rate_lo": band[0], "rate_hi": band[1]})
+                         "rate_lo": rate_lo, "rate_hi": rate_hi, "n_effective": n_eff})
     return pd.DataFrame(rows)
 
 
@@ -259,7 +275,7 @@ SUMMARY_COLUMNS = {
     "accuracy": ["label", "unit", "rmse_classic_paper", "rmse_classic_holds", "rmse_wls", "rmse_mean", "crlb",
                  "efficiency", "efficiency_lo", "efficiency_hi", "paper_over_posterior", "paper_over_crlb",
                  "holds_over_posterior"],
-    "coverage": ["level", "covered", "n", "rate", "rate_lo", "rate_hi"],
+    "coverage": ["level", "covered", "n", "n_effective", "rate", "rate_lo", "rate_hi"],
     "sbc": ["quantity", "n", "p", "p_bonferroni"],
     "error_rates": ["test", "fired", "n", "rate", "rate_lo", "rate_hi", "nominal"],
     "detection": ["effect", "magnitude", "n", "misfit", "ranked_first", "named_first", "detected_and_first"],
