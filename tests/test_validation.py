@@ -94,8 +94,9 @@ def test_clustered_interval_counts_campaigns_whose_trials_agree():
     per_campaign = rng.random(100) < 0.9
     hit, campaign = np.repeat(per_campaign, 10), np.repeat(np.arange(100), 10)
     lo, hi, n_eff = validation.clustered_interval(hit, campaign)
-    assert n_eff == pytest.approx(100)
-    assert (lo, hi) == pytest.approx(validation.binomial_interval(int(per_campaign.sum()), 100), abs=2e-3)
+    from scipy.stats import t
+    assert n_eff == pytest.approx(100 * (t.ppf(0.975, 999) / t.ppf(0.975, 99)) ** 2)
+    assert (lo, hi) == pytest.approx(validation.binomial_interval(int(per_campaign.sum()), 100), abs=5e-3)
 
 
 def test_clustered_interval_covers_a_clustered_rate():
@@ -112,6 +113,20 @@ def test_clustered_interval_covers_a_clustered_rate():
         b_lo, b_hi = validation.binomial_interval(int(hit.sum()), len(hit))
         held_binomial += b_lo <= 0.95 <= b_hi
     assert held / 400 == pytest.approx(0.95, abs=0.03) and held_binomial / 400 < 0.85
+
+
+def test_clustered_interval_holds_with_few_campaigns():
+    """Nine campaigns of 24 trials with a strong shared effect, as an effect group of the study has:
+    the degrees-of-freedom correction keeps the interval near its level."""
+    rng = np.random.default_rng(6)
+    campaign = np.repeat(np.arange(9), 24)
+    held = 0
+    for _ in range(2000):
+        shared = rng.normal(0, 1, 9)[campaign]
+        hit = np.abs(0.6 * shared + 0.8 * rng.normal(0, 1, len(campaign))) < 1.959964
+        lo, hi, _ = validation.clustered_interval(hit, campaign)
+        held += lo <= 0.95 <= hi
+    assert held / 2000 > 0.92
 
 
 def _records(errors, sd, truth=0.0):

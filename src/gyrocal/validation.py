@@ -104,15 +104,20 @@ def binomial_interval(k: int, n: int, level: float = 0.95) -> tuple:
 
 def clustered_interval(hit: np.ndarray, cluster: np.ndarray, level: float = 0.95) -> tuple:
     """Clopper-Pearson interval of a rate whose trials come in clusters, and its effective number
-    of trials: the binomial's ``n`` divided by the design effect (Kish) of the clusters' totals,
-    never above ``n``. A campaign's parameters share its noise, so they are not independent trials."""
+    of trials (Korn and Graubard 1998): the binomial's ``n`` divided by the design effect of the
+    clusters' totals (never below 1), then shrunk by ``(t_{n-1} / t_{m-1})^2`` for the ``m``
+    clusters the variance rests on. A campaign's parameters share its noise, so they are not
+    independent trials; with one trial per cluster this is the binomial interval."""
     hit = np.asarray(hit, dtype=float)
     _, codes = np.unique(cluster, return_inverse=True)
     k_c, n_c = np.bincount(codes, hit), np.bincount(codes).astype(float)
-    n, rate = len(hit), hit.mean()
+    n, m, rate = len(hit), len(n_c), hit.mean()
     var_binomial = rate * (1 - rate) / n
     var_cluster = np.sum((k_c - rate * n_c) ** 2) / n**2
     n_eff = n / max(var_cluster / var_binomial, 1.0) if var_binomial > 0 else float(n)
+    if 1 < m < n:
+        q = (1 + level) / 2
+        n_eff *= (sps.t.ppf(q, n - 1) / sps.t.ppf(q, m - 1)) ** 2
     a = 1 - level
     lo = sps.beta.ppf(a / 2, rate * n_eff, (1 - rate) * n_eff + 1) if rate > 0 else 0.0
     hi = sps.beta.ppf(1 - a / 2, rate * n_eff + 1, (1 - rate) * n_eff) if rate < 1 else 1.0
