@@ -57,17 +57,17 @@ def efficiency_interval(n: int, level: float = 0.9) -> tuple:
 
 def efficiency_confidence(efficiency, n: int, level: float = 0.95) -> tuple:
     """Confidence interval of a true efficiency CRLB/sigma^2 from one estimated over ``n``
-    campaigns of unbiased, normal errors: ``n MSE / sigma^2`` is then chi2(n)."""
-    lo, hi = sps.chi2.ppf([(1 - level) / 2, (1 + level) / 2], n) / n
-    return efficiency * lo, efficiency * hi
+    campaigns of unbiased, normal errors: the estimate over `efficiency_interval`'s band."""
+    lo, hi = efficiency_interval(n, level)
+    return efficiency / hi, efficiency / lo
 
 
 def accuracy(params: pd.DataFrame) -> pd.DataFrame:
     """RMSE per parameter of every estimator, the Cramér-Rao bound (root mean of the campaigns'
     bounds), the posterior mean's efficiency CRLB/MSE with its 95 % confidence interval and the 90 %
-    band in which an efficient estimator's would fall,
-    and the ratios the targets name; ``paper_over_crlb`` is the most any unbiased estimator could
-    gain over the paper's classic method on these campaigns."""
+    band in which an efficient estimator's would fall, and the ratios the targets name;
+    ``paper_over_crlb`` is the most an estimator could gain over the paper's classic method on
+    these campaigns (the bound includes the prior the truths are drawn from)."""
     rows = []
     for label, g in clean_baseline(params).groupby("label", sort=False):
         err = {k: g[k] - g["truth"] for k in ESTIMATORS}
@@ -94,8 +94,8 @@ def pooled_efficiency(params: pd.DataFrame) -> float:
     return float(1 / np.mean(((g["mean"] - g["truth"]) / g["crlb_sd"]) ** 2))
 
 
-def binomial_interval(k: int, n: int, level: float = 0.95) -> tuple:
-    """Clopper-Pearson interval of a rate ``k / n``."""
+def binomial_interval(k: float, n: float, level: float = 0.95) -> tuple:
+    """Clopper-Pearson interval of a rate ``k / n`` (counts may be effective ones, not whole)."""
     a = 1 - level
     lo = sps.beta.ppf(a / 2, k, n - k + 1) if k > 0 else 0.0
     hi = sps.beta.ppf(1 - a / 2, k + 1, n - k) if k < n else 1.0
@@ -118,10 +118,7 @@ def clustered_interval(hit: np.ndarray, cluster: np.ndarray, level: float = 0.95
     if 1 < m < n:
         q = (1 + level) / 2
         n_eff *= (sps.t.ppf(q, n - 1) / sps.t.ppf(q, m - 1)) ** 2
-    a = 1 - level
-    lo = sps.beta.ppf(a / 2, rate * n_eff, (1 - rate) * n_eff + 1) if rate > 0 else 0.0
-    hi = sps.beta.ppf(1 - a / 2, rate * n_eff + 1, (1 - rate) * n_eff) if rate < 1 else 1.0
-    return float(lo), float(hi), float(n_eff)
+    return (*binomial_interval(rate * n_eff, n_eff, level), float(n_eff))
 
 
 def coverage(params: pd.DataFrame, by=None) -> pd.DataFrame:
