@@ -315,3 +315,21 @@ def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time(
     chain[:, 2, 1] = 3.7  # one walker stuck: that parameter's time is undefined, and only that one
     times = _autocorr_times(chain)
     assert np.isnan(times[1]) and np.isfinite(times[[0, 2]]).all()
+
+
+def test_fitted_proposal_with_the_exact_conditional_covariance_is_the_sample_covariance():
+    from gyrocal.posterior import fitted_proposal
+
+    rng = np.random.default_rng(4)
+    mix = rng.standard_normal((7, 7))
+    draws = rng.standard_normal((5000, 7)) @ mix.T + np.arange(7)
+    full = np.cov(draws.T)
+    p = 4
+    conditional = full[:p, :p] - full[:p, p:] @ np.linalg.solve(full[p:, p:], full[p:, :p])
+    proposal = fitted_proposal(draws, conditional, inflate=1.0)
+    np.testing.assert_allclose(proposal.mean, draws.mean(axis=0), rtol=1e-12)
+    np.testing.assert_allclose(proposal.chol @ proposal.chol.T, full, rtol=1e-10, atol=1e-12)
+    doubled = fitted_proposal(draws, 2 * conditional, inflate=1.0)
+    np.testing.assert_allclose((doubled.chol @ doubled.chol.T)[:p, :p] - full[:p, :p], conditional, rtol=1e-10,
+                               atol=1e-12)
+    np.testing.assert_allclose((doubled.chol @ doubled.chol.T)[p:], full[p:], rtol=1e-10, atol=1e-12)

@@ -169,6 +169,30 @@ class StudentProposal:
         return new, self.log_density(x) - self.log_density(new)
 
 
+def fitted_proposal(draws, theta_cov, dof=30.0, inflate=1.05) -> StudentProposal:
+    """Independence proposal fitted to burn-in draws of ``[dtheta, log sigma]``, keeping the
+    channel parameters' covariance given the noise scales at the Laplace one.
+
+    Given the noise scales the linearised model is Gaussian in ``dtheta``, with the covariance
+    ``theta_cov`` the data fix (exact at the point estimate's noise). Only the noise scales' own
+    mean and covariance and the regression of ``dtheta`` on them come from the draws: ``3 (P + 2)``
+    numbers where a full fit estimates ``(P + 3)(P + 4) / 2`` (on MOM, 99 against 561). A few thousand
+    correlated burn-in draws give those far more precisely, and the proposal is accepted more often.
+    """
+    p = len(theta_cov)
+    theta, hyper = draws[:, :p], draws[:, p:]
+    mean = draws.mean(axis=0)
+    hyper_cov = np.atleast_2d(np.cov(hyper.T))
+    cross = (theta - mean[:p]).T @ (hyper - mean[p:]) / (len(draws) - 1)
+    slope = np.linalg.solve(hyper_cov, cross.T).T
+    cov = np.empty((p + hyper.shape[1],) * 2)
+    cov[:p, :p] = theta_cov + slope @ cross.T
+    cov[:p, p:] = cross
+    cov[p:, :p] = cross.T
+    cov[p:, p:] = hyper_cov
+    return StudentProposal(mean, cov, dof=dof, inflate=inflate)
+
+
 @dataclass
 class SamplerResult:
     chains: np.ndarray
@@ -200,9 +224,15 @@ def _autocorr_times(chain) -> np.ndarray:
     return tau
 
 
+DE_SHARE = 0.1
+"""Share of differential-evolution moves: local steps that keep every walker moving where the
+independence proposal fits the posterior badly (a misfit model, a noise ratio at its grid's edge).
+On MOM, 0.3 made the autocorrelation time 4.3 steps, 0.1 made it 2.8 and none 2.5."""
+
+
 def _sampler(logpost, walkers, dim, proposal, seed):
     """An emcee sampler with its own random state, seeded: numpy's global state is untouched."""
-    moves = [(emcee.moves.MHMove(proposal), 0.7), (emcee.moves.DEMove(), 0.3)]
+    moves = [(emcee.moves.MHMove(proposal), 1.0 - DE_SHARE), (emcee.moves.DEMove(), DE_SHARE)]
     sampler = emcee.EnsembleSampler(walkers, dim, logpost, vectorize=True, moves=moves)
     sampler.random_state = np.random.RandomState(seed).get_state()
     return sampler
@@ -220,10 +250,10 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
     """Independent emcee ensembles, run until every chain is at least k autocorrelation times.
 
     Moves: independence proposals (`StudentProposal`) mixed with differential
-    evolution. Each ensemble burns in with a proposal from the Laplace approximation,
-    fits its own proposal to that, burns in again, refits, and keeps that proposal
-    fixed for production, so adaptation never touches the production chain and the
-    ensembles stay independent. Every sampler of ensemble e starts its own random
+    evolution (`DE_SHARE`). Each ensemble burns in with a proposal from the Laplace
+    approximation, fits its own proposal to that (`fitted_proposal`), burns in again, refits,
+    and keeps that proposal fixed for production, so adaptation never touches the production
+    chain and the ensembles stay independent. Every sampler of ensemble e starts its own random
     state from the same seed of e; the start points come from a generator of its own.
     """
     dim = len(proposal_mean)
@@ -232,6 +262,7 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
     n_ens, burn = int(cfg["ensembles"]), int(cfg["burn_steps"])
     chunk, multiple, max_steps = int(cfg["chunk_steps"]), float(cfg["min_tau_multiple"]), int(cfg["max_steps"])
     laplace = StudentProposal(proposal_mean, proposal_cov)
+    theta_cov = proposal_cov[:dim - len(NOISE_NAMES), :dim - len(NOISE_NAMES)]
     start = StudentProposal(proposal_mean, proposal_cov, dof=5.0, inflate=2.0)
     samplers = []
     for e in range(n_ens):
@@ -252,8 +283,7 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
         for _ in range(2):
             warm = _sampler(logpost, walkers, dim, proposal, sampler_seed)
             state = warm.run_mcmc(state, burn // 2)
-            fitted = warm.get_chain(discard=burn // 4, flat=True)
-            proposal = StudentProposal(fitted.mean(axis=0), np.cov(fitted.T), dof=30.0, inflate=1.05)
+            proposal = fitted_proposal(warm.get_chain(discard=burn // 4, flat=True), theta_cov)
         samplers.append([_sampler(logpost, walkers, dim, proposal, sampler_seed), state])
     steps = 0
     while True:
