@@ -27,6 +27,10 @@ rule all:
     default_target: True
 
 
+onsuccess:
+    cancel_rescheduling_timers()
+
+
 onerror:
     refusals = refusal_messages()
     if refusals:

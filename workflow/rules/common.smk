@@ -7,6 +7,7 @@ independent jobs under ``results/<campaign>/``; a fleet adds ``results/fleet/``.
 
 import re
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -159,3 +160,13 @@ def all_outputs():
     if FLEET:
         out += [f"{results_of('fleet')}/summary.csv", f"{results_of('fleet')}/summary.png"]
     return out
+
+
+def cancel_rescheduling_timers():
+    """Snakemake's job rate limiter arms a non-daemon one-second `threading.Timer` at each job
+    selection (`JobScheduler._schedule_reevalutation`), and the interpreter waits for the last one,
+    armed when the final job started, before it exits: about a second after every run. Once the
+    workflow has succeeded nothing is left to schedule, so they are cancelled."""
+    for thread in threading.enumerate():
+        if isinstance(thread, threading.Timer):
+            thread.cancel()
