@@ -333,3 +333,15 @@ def test_fitted_proposal_with_the_exact_conditional_covariance_is_the_sample_cov
     np.testing.assert_allclose((doubled.chol @ doubled.chol.T)[:p, :p] - full[:p, :p], conditional, rtol=1e-10,
                                atol=1e-12)
     np.testing.assert_allclose((doubled.chol @ doubled.chol.T)[p:], full[p:], rtol=1e-10, atol=1e-12)
+
+
+def test_fitted_proposal_refuses_noise_scales_that_never_moved():
+    from gyrocal.posterior import SamplingError, fitted_proposal
+
+    draws = np.random.default_rng(5).standard_normal((400, 6))
+    draws[:, 4] = 0.3
+    with pytest.raises(SamplingError, match="did not move during burn-in"):
+        fitted_proposal(draws, np.eye(3))
+    draws[:, 4] = 2 * draws[:, 3]
+    with pytest.raises(SamplingError, match="singular"):
+        fitted_proposal(draws, np.eye(3))
