@@ -17,9 +17,9 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from gyrocal import simulate
-from gyrocal.calibration import core_rows
-from gyrocal.estimate import PointEstimate
+from gyrocal.inference.calibration import core_rows
+from gyrocal.inference.estimate import PointEstimate
+from gyrocal.simulation import simulate
 
 from conftest import DATA, config_with, run_campaign
 from test_criticism import BASE, CASES

@@ -23,10 +23,10 @@ GRIDS = [(11, 7.0), (9, 7.0), (7, 8.0), (5, 8.0)]
 
 
 def main():
-    from gyrocal import posterior
-    from gyrocal.estimate import linearize_all
-    from gyrocal.likelihood import campaign_stats
-    from gyrocal.noise import variances
+    from gyrocal.inference import posterior
+    from gyrocal.inference.estimate import linearize_all
+    from gyrocal.inference.likelihood import campaign_stats
+    from gyrocal.inference.noise import variances
 
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     fitted = baseline_fit(ROOT / "config/scenarios/mom.yaml", cfg)

@@ -8,7 +8,7 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from gyrocal import kinematics
+from gyrocal.model import kinematics
 
 
 def main():

@@ -47,7 +47,8 @@ def default_blocks(table: pd.DataFrame) -> list:
 def main():
     from snakemake.utils import validate
 
-    from gyrocal import looexact, simulate
+    from gyrocal.simulation import simulate
+    from gyrocal.study import looexact
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("out", nargs="?", default=str(ROOT / "results/study/loo_vs_refit.csv"))

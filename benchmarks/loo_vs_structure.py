@@ -32,11 +32,12 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from gyrocal import inferencedata, noise, predictive, simulate
-from gyrocal.estimate import PointEstimate, linearize_all
-from gyrocal.likelihood import Stats, leave_one_out_log_evidence, log_evidence, maneuver_stats, total
-from gyrocal.steps import common
-from gyrocal.steps import posterior as posterior_step
+from gyrocal.inference import inferencedata, noise, predictive
+from gyrocal.inference.estimate import PointEstimate, linearize_all
+from gyrocal.inference.likelihood import Stats, leave_one_out_log_evidence, log_evidence, maneuver_stats, total
+from gyrocal.pipeline.steps import common
+from gyrocal.pipeline.steps import posterior as posterior_step
+from gyrocal.simulation import simulate
 
 from conftest import DATA, config_with, run_campaign
 from test_criticism import BASE

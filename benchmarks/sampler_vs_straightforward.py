@@ -22,7 +22,7 @@ of its `LogPosterior` on batches of 64 walkers.
 
 The straightforward model (`Straightforward`) is what a user of emcee writes: every evaluation
 applies the calibration to the raw gyro increments of each maneuver and channel set
-(`gyrocal.correction`, the exact inverse of eq. 3), integrates them from the star tracker's
+(`gyrocal.model.correction`, the exact inverse of eq. 3), integrates them from the star tracker's
 attitude at the maneuver's start, turned by the maneuver's initial attitude error, compares the
 propagated attitude with every star-tracker quaternion (eq. 4) and adds a Gaussian
 log-likelihood with the stated star-tracker noise (across and about the boresight, white, each
@@ -120,9 +120,9 @@ class Figures:
 
 def gyrocal_figures(c: Campaign, cfg: dict) -> Figures:
     """Run `posterior.sample` as the pipeline does; time it and its log posterior."""
-    from gyrocal import inferencedata, posterior
-    from gyrocal.likelihood import campaign_stats, conditional_posterior
-    from gyrocal.noise import variances
+    from gyrocal.inference import inferencedata, posterior
+    from gyrocal.inference.likelihood import campaign_stats, conditional_posterior
+    from gyrocal.inference.noise import variances
     est, spec = c.estimate, c.estimate.spec
     start = time.perf_counter()
     post = posterior.sample(c.maneuvers, est, c.priors, cfg["sampler"], cfg["grid"], cfg["seed"])
@@ -153,7 +153,7 @@ class Straightforward:
     """
 
     def __init__(self, maneuvers, spec, priors, stated: dict):
-        from gyrocal.units import ARCSEC_RAD
+        from gyrocal.model.units import ARCSEC_RAD
         self.maneuvers, self.spec = maneuvers, spec
         self.n_par, self.n_ch = len(spec), len(spec.channels)
         self.dim = self.n_par + len(maneuvers) * (3 + self.n_ch)
@@ -170,7 +170,7 @@ class Straightforward:
 
     def unpack(self, x):
         """Channel parameters (SI `ChannelParams` per maneuver, with its biases) and initial errors (rad)."""
-        from gyrocal.units import arcsec_to_rad, deg_h_to_rad_s
+        from gyrocal.model.units import arcsec_to_rad, deg_h_to_rad_s
         theta = self.spec.to_si(x[:self.n_par])
         nuisance = np.asarray(x[self.n_par:]).reshape(len(self.maneuvers), 3 + self.n_ch)
         biases = deg_h_to_rad_s(nuisance[:, 3:])
@@ -179,7 +179,7 @@ class Straightforward:
     def errors(self, x) -> list:
         """(M, 3) star tracker relative to the propagated attitude (rad, body axes; eq. 4), for every
         maneuver and, within it, every channel set."""
-        from gyrocal import correction, kinematics
+        from gyrocal.model import correction, kinematics
         params, chi0 = self.unpack(x)
         out = []
         for m, d in enumerate(self.maneuvers):
@@ -213,7 +213,7 @@ class Straightforward:
 
     def point(self, est) -> np.ndarray:
         """gyrocal's WLS point estimate as an ``x``."""
-        from gyrocal.units import rad_s_to_deg_h, rad_to_arcsec
+        from gyrocal.model.units import rad_s_to_deg_h, rad_to_arcsec
         nuisance = np.column_stack([rad_to_arcsec(est.chi0), rad_s_to_deg_h(est.biases)])
         return np.concatenate([self.spec.to_unit(est.theta), nuisance.ravel()])
 

@@ -41,11 +41,13 @@ def longer(scenario: dict, k: int) -> dict:
 
 
 def stage_times(scenario: dict, cfg: dict) -> dict:
-    from gyrocal import classic, consistency, inferencedata, posterior, preprocess, simulate
-    from gyrocal.estimate import point_estimate
-    from gyrocal.noise import noise_knowledge
-    from gyrocal.spec import baseline
-    from gyrocal.steps.posterior import model_priors
+    from gyrocal.checks import consistency
+    from gyrocal.inference import classic, inferencedata, posterior, preprocess
+    from gyrocal.inference.estimate import point_estimate
+    from gyrocal.inference.noise import noise_knowledge
+    from gyrocal.model.spec import baseline
+    from gyrocal.pipeline.steps.posterior import model_priors
+    from gyrocal.simulation import simulate
 
     times = {}
 
@@ -81,7 +83,7 @@ def main():
     parser.add_argument("--longer", action="store_true", help="k times longer holds, not k times the maneuvers")
     args = parser.parse_args()
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
-    from gyrocal.simulate import load_scenario
+    from gyrocal.simulation.simulate import load_scenario
     scenario = load_scenario(ROOT / "config/scenarios/mom.yaml")
     rows = {}
     for k in args.factors:

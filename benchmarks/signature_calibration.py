@@ -16,9 +16,12 @@ import pandas as pd
 import yaml
 from snakemake.utils import validate
 
-from gyrocal import classic, diagnostics, noise, preprocess, simulate, study
-from gyrocal.estimate import point_estimate
-from gyrocal.spec import baseline
+from gyrocal.criticism import diagnostics
+from gyrocal.inference import classic, noise, preprocess
+from gyrocal.inference.estimate import point_estimate
+from gyrocal.model.spec import baseline
+from gyrocal.simulation import simulate
+from gyrocal.study import campaign as study
 
 ALPHAS = (0.1, 0.01, 0.001)
 

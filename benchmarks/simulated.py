@@ -18,10 +18,12 @@ class Fitted:
 def baseline_fit(scenario_path, cfg: dict) -> Fitted:
     """Simulate ``scenario_path``, slice its maneuvers, and fit the baseline model (classic start,
     REML noise, WLS) as the pipeline would."""
-    from gyrocal import classic, estimate, preprocess, simulate, telemetry
-    from gyrocal.noise import noise_knowledge
-    from gyrocal.spec import baseline
-    from gyrocal.steps.posterior import model_priors
+    from gyrocal.inference import classic, estimate, preprocess
+    from gyrocal.inference.noise import noise_knowledge
+    from gyrocal.io import telemetry
+    from gyrocal.model.spec import baseline
+    from gyrocal.pipeline.steps.posterior import model_priors
+    from gyrocal.simulation import simulate
 
     with tempfile.TemporaryDirectory() as tmp:
         simulate.run(scenario_path, tmp)
@@ -41,9 +43,9 @@ def evaluations_per_s(post, estimate, priors, calls: int) -> float:
 
     import numpy as np
 
-    from gyrocal import posterior
-    from gyrocal.likelihood import campaign_stats, conditional_posterior
-    from gyrocal.noise import variances
+    from gyrocal.inference import posterior
+    from gyrocal.inference.likelihood import campaign_stats, conditional_posterior
+    from gyrocal.inference.noise import variances
 
     logpost = posterior.LogPosterior(post.grid, estimate.theta, priors)
     mean, _ = conditional_posterior(campaign_stats(post.noises, variances(estimate.log_sigma)),

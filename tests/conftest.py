@@ -4,7 +4,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from gyrocal import simulate
+from gyrocal.simulation import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = Path(__file__).resolve().parent / "data"
@@ -37,8 +37,8 @@ def mom(tmp_path_factory):
 
 def truth_vector(channels, truth):
     """The simulation's true channel model (SI), with its biases."""
-    from gyrocal.spec import baseline
-    from gyrocal.units import deg_h_to_rad_s
+    from gyrocal.model.spec import baseline
+    from gyrocal.model.units import deg_h_to_rad_s
     params = baseline(channels).params_from_contract(truth["parameters"])
     params.bias_rad_s[:] = deg_h_to_rad_s([truth["parameters"][c.name]["bias_deg_h"] for c in channels])
     return params
@@ -46,10 +46,11 @@ def truth_vector(channels, truth):
 
 def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
     """Every workflow step in the order the rules run them, each given the config the rule gives it."""
-    from gyrocal import telemetry
-    from gyrocal.outputs import MODEL_FILES
-    from gyrocal.steps import compare, report
-    from gyrocal.study import calibrate_steps
+    from gyrocal.io import telemetry
+    from gyrocal.io.outputs import MODEL_FILES
+    from gyrocal.pipeline.steps import compare_models as compare
+    from gyrocal.pipeline.steps import report
+    from gyrocal.study.campaign import calibrate_steps
     ids = [m.id for m in telemetry.read_meta(campaign_dir)["maneuvers"]]
     npz = calibrate_steps(campaign_dir, out, cfg, models)
     compare.run(list(models), [out / m / "elpd_blocks.csv" for m in models],

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
-from gyrocal import allan
-from gyrocal.importer import Imported
-from gyrocal.telemetry import TelemetryError
-from gyrocal.units import DEG_H_RAD_S
+from gyrocal.io.importer import Imported
+from gyrocal.io.telemetry import TelemetryError
+from gyrocal.model.units import DEG_H_RAD_S
+from gyrocal.planning import allan
 
 
 def white_rate_increments(arw_deg_sqrt_h, dt_s, n, channels=2, seed=1):
@@ -42,7 +42,7 @@ def test_uneven_intervals_are_refused_naming_the_row():
 @pytest.mark.parametrize("dt_s", [1.0, 0.01])
 def test_a_gyro_logged_as_rates_reads_its_angle_random_walk_at_any_sample_interval(tmp_path, dt_s):
     # At 1 Hz the cluster of tau = 1 s is one sample, where the import's trapezoid would halve it.
-    from gyrocal.importer import read_file, read_mapping
+    from gyrocal.io.importer import read_file, read_mapping
     n, arw_true = 100_000, 2.0
     rate = white_rate_increments(arw_true, dt_s, n, channels=1, seed=7)[:, 0] / dt_s
     rows = "\n".join(f"{k * dt_s:.6f},1,0,0,0,{r:.10e}" for k, r in enumerate(rate))

@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
-from gyrocal import channels as ch
-from gyrocal.spec import baseline as baseline_spec
-from gyrocal.units import ARCSEC_RAD, PPM, paper_term
+from gyrocal.model import channels as ch
+from gyrocal.model.spec import baseline as baseline_spec
+from gyrocal.model.units import ARCSEC_RAD, PPM, paper_term
 
 
 @pytest.fixture

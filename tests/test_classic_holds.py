@@ -3,8 +3,10 @@
 import numpy as np
 import pytest
 
-from gyrocal import classic, preprocess, simulate, spec
-from gyrocal.units import rad_s_to_deg_h
+from gyrocal.inference import classic, preprocess
+from gyrocal.model import spec
+from gyrocal.model.units import rad_s_to_deg_h
+from gyrocal.simulation import simulate
 
 from conftest import DATA
 

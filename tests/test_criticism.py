@@ -10,9 +10,10 @@ import json
 import pandas as pd
 import pytest
 
-from gyrocal import effects, simulate
-from gyrocal.calibration import core_rows
-from gyrocal.estimate import PointEstimate
+from gyrocal.inference.calibration import core_rows
+from gyrocal.inference.estimate import PointEstimate
+from gyrocal.model import effects
+from gyrocal.simulation import simulate
 
 from conftest import DATA, config_with, run_campaign
 
@@ -115,7 +116,7 @@ def load_from(out, model):
 
 def test_a_broken_plugin_is_refused_saying_what_is_missing(tmp_path):
     bad = tmp_path / "bad.py"
-    bad.write_text("from gyrocal.effects import Effect\nclass E(Effect):\n    name = 'e'\nEFFECTS = [E()]\n")
+    bad.write_text("from gyrocal.model.effects import Effect\nclass E(Effect):\n    name = 'e'\nEFFECTS = [E()]\n")
     with pytest.raises(effects.PluginError, match="parameters is empty"):
         effects.load_plugins([bad])
     (tmp_path / "none.py").write_text("x = 1\n")

@@ -3,7 +3,7 @@
 import matplotlib
 import pandas as pd
 
-from gyrocal import fleet
+from gyrocal.report import fleet
 
 matplotlib.use("Agg")
 

@@ -4,12 +4,12 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal import effects
-from gyrocal.errormodel import effect_derivatives, view
-from gyrocal.preprocess import slice_maneuver
-from gyrocal.study import calibrate_steps
-from gyrocal.telemetry import read_campaign
-from gyrocal.units import STANDARD_GRAVITY_M_S2
+from gyrocal.inference.errormodel import effect_derivatives, view
+from gyrocal.inference.preprocess import slice_maneuver
+from gyrocal.io.telemetry import read_campaign
+from gyrocal.model import effects
+from gyrocal.model.units import STANDARD_GRAVITY_M_S2
+from gyrocal.study.campaign import calibrate_steps
 
 import mutations
 from conftest import config_with
@@ -109,7 +109,7 @@ def lab_scenario(tmp_path, **effects_given):
 
 
 def test_a_lab_campaign_logs_gravity_in_body_axes_turning_with_the_body(tmp_path):
-    from gyrocal import simulate
+    from gyrocal.simulation import simulate
     campaign, _ = simulate.simulate(simulate.load_scenario(lab_scenario(tmp_path)))
     force = np.column_stack([campaign.gyro_columns[f"acc_{a}"] for a in "xyz"])
     assert np.abs(np.linalg.norm(force, axis=1) - STANDARD_GRAVITY_M_S2).max() < 0.02
@@ -125,7 +125,7 @@ def test_a_lab_campaign_logs_gravity_in_body_axes_turning_with_the_body(tmp_path
 def test_an_effect_per_g_without_gravity_is_refused(tmp_path):
     import yaml
 
-    from gyrocal import simulate
+    from gyrocal.simulation import simulate
 
     from conftest import DATA
     path = tmp_path / "orbit.yaml"
@@ -139,7 +139,7 @@ def test_an_effect_per_g_without_gravity_is_refused(tmp_path):
     ("gravity_offset", "gravity_offset_arcsec_per_g", 600.0, "gravity_offset."),
 ])
 def test_the_posterior_recovers_what_the_simulator_flew_per_g(tmp_path, config, effect, key, value, prefix):
-    from gyrocal import simulate
+    from gyrocal.simulation import simulate
     simulate.run(lab_scenario(tmp_path, **{key: value}), tmp_path / "sim")
     model = ["scale_factor", "misalignment", "bias", effect]
     calibrate_steps(tmp_path / "sim/campaign", tmp_path / "out", config_with(config, {"e": model}), ("e",))

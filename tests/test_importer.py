@@ -9,7 +9,9 @@ import pytest
 import yaml
 from scipy.spatial.transform import Rotation
 
-from gyrocal import agreement, cli, importer, telemetry
+from gyrocal.criticism import agreement
+from gyrocal.io import importer, telemetry
+from gyrocal.pipeline import cli
 
 
 def repoimu_like(path, rate_rad_s=0.5, n=400, dt=0.01, t0=3.0, dropouts=(50, 51)):

@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation, Slerp
 
-from gyrocal import kinematics
-from gyrocal.units import ARCSEC_RAD
+from gyrocal.model import kinematics
+from gyrocal.model.units import ARCSEC_RAD
 
 
 def test_compose_matches_scipy_rotation_product():

@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from gyrocal import cli, linearity
-from gyrocal.preprocess import ManeuverData
+from gyrocal.criticism import linearity
+from gyrocal.inference.preprocess import ManeuverData
+from gyrocal.pipeline import cli
 
 
 def test_probe_steps_sit_on_the_99_percent_ellipsoid_in_pairs():
@@ -29,8 +30,8 @@ def test_split_recovers_the_linear_and_quadratic_parts():
 
 @pytest.fixture(scope="module")
 def tiny_estimate(tiny_run):
-    from gyrocal.estimate import PointEstimate
-    from gyrocal.steps.common import known_effects
+    from gyrocal.inference.estimate import PointEstimate
+    from gyrocal.pipeline.steps.common import known_effects
     out, npz = tiny_run
     return [ManeuverData.load(p) for p in npz], PointEstimate.load(out / "baseline" / "point_estimate.npz",
                                                                     known_effects([]))

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from test_numerics import BORESIGHT, P, tiny_linearization
 
-from gyrocal import looexact, noise, predictive
-from gyrocal.preprocess import ManeuverData
+from gyrocal.inference import noise, predictive
+from gyrocal.inference.preprocess import ManeuverData
+from gyrocal.study import looexact
 
 from conftest import config_with
 

@@ -1,10 +1,10 @@
-"""Which model is reviewed, and when the answer hangs on the model (gyrocal.modelchoice)."""
+"""Which model is reviewed, and when the answer hangs on the model (gyrocal.criticism.modelchoice)."""
 
 import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal import modelchoice
+from gyrocal.criticism import modelchoice
 
 LABELS = ["dtg2_yaw.sf_pos", "dtg2_yaw.sf_neg"]
 

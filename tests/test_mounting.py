@@ -6,8 +6,8 @@ import pytest
 import yaml
 from scipy.spatial.transform import Rotation
 
-from gyrocal import consistency
-from gyrocal.telemetry import TelemetryError
+from gyrocal.checks import consistency
+from gyrocal.io.telemetry import TelemetryError
 
 import mutations
 
@@ -57,7 +57,7 @@ def test_a_nominal_mounting_far_off_is_refined_by_the_data(tiny, tmp_path):
 
 
 def test_the_report_says_what_an_estimated_mounting_leaves_unidentified():
-    from gyrocal.report import mounting_text
+    from gyrocal.report.review import mounting_text
     text = mounting_text({"quat": [0, 0, 0, 1], "source": "estimated from the data", "angle_deg": 2.855,
                           "sd_deg": {"roll": 0.1, "pitch": 0.2, "yaw": 0.1}})
     assert "2.855 deg" in text and "Everything is relative" in text and "non-orthogonality" in text

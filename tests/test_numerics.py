@@ -10,10 +10,11 @@ import pytest
 from scipy.linalg import cholesky_banded
 from scipy.spatial.transform import Rotation
 
-from gyrocal import diagnostics, errormodel, noise, predictive, selectedinverse
-from gyrocal.likelihood import Stats, campaign_stats
-from gyrocal.noise import variances
-from gyrocal.posterior import RatioGrid
+from gyrocal.criticism import diagnostics
+from gyrocal.inference import errormodel, noise, predictive, selectedinverse
+from gyrocal.inference.likelihood import Stats, campaign_stats
+from gyrocal.inference.noise import variances
+from gyrocal.inference.posterior import RatioGrid
 
 M, SETS, P, CHANNELS = 30, 2, 4, 3
 BORESIGHT = [0.3, 0.0, 0.954]
@@ -261,7 +262,7 @@ def test_score_test_ignores_a_candidate_the_model_already_spans_and_tests_a_part
 def test_leave_one_maneuver_out_evidence_equals_dense_gaussian_refits():
     """log p(y_m | y_-m) from the summed statistics against the dense marginal of the data
     (parameters integrated over their prior, nuisance over a flat prior), with and without m."""
-    from gyrocal.likelihood import leave_one_out_log_evidence, maneuver_stats
+    from gyrocal.inference.likelihood import leave_one_out_log_evidence, maneuver_stats
     noises = [noise.build(tiny_linearization(s, m=12), BORESIGHT) for s in (8, 9, 10)]
     prior_mean, prior_sd = np.array([0.01, -0.02, 0.0, 0.03]), np.array([0.05, 0.1, 0.02, 0.08])
     got = leave_one_out_log_evidence([maneuver_stats(nz, VAR) for nz in noises], prior_mean, prior_sd)
@@ -293,7 +294,7 @@ def test_chi2_log_sf_stays_finite_and_exact_where_scipy_underflows(x, df):
     """Against the closed form for even df: P(chi2_2k > x) = exp(-x/2) sum_{i<k} (x/2)^i / i!."""
     from scipy.special import gammaln, logsumexp
 
-    from gyrocal.diagnostics import chi2_log_sf
+    from gyrocal.criticism.diagnostics import chi2_log_sf
     i = np.arange(df // 2)
     exact = -x / 2 + logsumexp(i * np.log(x / 2) - gammaln(i + 1))
     assert chi2_log_sf(x, df) == pytest.approx(exact, rel=1e-9)
@@ -302,7 +303,7 @@ def test_chi2_log_sf_stays_finite_and_exact_where_scipy_underflows(x, df):
 def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time():
     import emcee
 
-    from gyrocal.posterior import _autocorr_times
+    from gyrocal.inference.posterior import _autocorr_times
 
     rng = np.random.default_rng(3)
     noise_draws = rng.standard_normal((200, 6, 3))
@@ -318,7 +319,7 @@ def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time(
 
 
 def test_fitted_proposal_with_the_exact_conditional_covariance_is_the_sample_covariance():
-    from gyrocal.posterior import fitted_proposal
+    from gyrocal.inference.posterior import fitted_proposal
 
     rng = np.random.default_rng(4)
     mix = rng.standard_normal((7, 7))
@@ -336,7 +337,7 @@ def test_fitted_proposal_with_the_exact_conditional_covariance_is_the_sample_cov
 
 
 def test_fitted_proposal_refuses_noise_scales_that_never_moved():
-    from gyrocal.posterior import SamplingError, fitted_proposal
+    from gyrocal.inference.posterior import SamplingError, fitted_proposal
 
     draws = np.random.default_rng(5).standard_normal((400, 6))
     draws[:, 4] = 0.3

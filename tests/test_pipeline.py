@@ -8,13 +8,15 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal import channels as ch
-from gyrocal import correction, effects, errormodel, estimate, noise, telemetry
-from gyrocal.estimate import PointEstimate
-from gyrocal.likelihood import campaign_stats
-from gyrocal.steps import common
-from gyrocal.steps import posterior as posterior_step
-from gyrocal.units import PPM
+from gyrocal.inference import errormodel, estimate, noise
+from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.likelihood import campaign_stats
+from gyrocal.io import telemetry
+from gyrocal.model import channels as ch
+from gyrocal.model import correction, effects
+from gyrocal.model.units import PPM
+from gyrocal.pipeline.steps import common
+from gyrocal.pipeline.steps import posterior as posterior_step
 
 from conftest import truth_vector
 
@@ -56,8 +58,8 @@ def test_preprocess_step_writes_table_figure_and_counts(tiny_run):
 
 def test_preprocess_step_writes_every_maneuver_whole_or_leaves_the_directory_as_it_was(tiny, tiny_run, tmp_path,
                                                                                        monkeypatch):
-    from gyrocal import preprocess
-    from gyrocal.steps import preprocess as preprocess_step
+    from gyrocal.inference import preprocess
+    from gyrocal.pipeline.steps import preprocess as preprocess_step
     out = tmp_path / "preprocess"
     npz = preprocess_step.run(tiny[0], tiny_run[0] / "input.json", out, figures=False)
     ids = [m.id for m in telemetry.read_meta(tiny[0])["maneuvers"]]
@@ -218,7 +220,8 @@ def test_linearised_model_agrees_with_the_exact_one_to_1_percent_of_the_sd(mom, 
 def test_psis_table_gives_arvizs_elpd_loo_its_se_and_p_loo(tiny_run):
     import arviz as az
 
-    from gyrocal import comparison, inferencedata
+    from gyrocal.criticism import comparison
+    from gyrocal.inference import inferencedata
     idata = az.from_netcdf(tiny_run[0] / "baseline/posterior.nc")
     blocks = pd.read_csv(tiny_run[0] / "baseline/elpd_blocks.csv")
     expected = az.loo(idata, pointwise=True)
@@ -277,7 +280,7 @@ def test_a_finished_step_exits_zero_at_once_with_its_log_written(tmp_path):
     import subprocess
     import sys
     log = tmp_path / "step.log"
-    code = ("import logging\nfrom gyrocal.steps import common\n"
+    code = ("import logging\nfrom gyrocal.pipeline.steps import common\n"
             f"common.start({str(log)!r})\nlogging.getLogger('gyrocal').info('written whole')\n"
             "print('before', flush=False)\ncommon.finish()\nprint('after')\n")
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)

@@ -7,10 +7,14 @@ import pandas as pd
 import pytest
 import yaml
 
-from gyrocal import cli, diagnostics, plan, preprocess, simulate
-from gyrocal.estimate import point_estimate
-from gyrocal.likelihood import Stats
-from gyrocal.spec import baseline
+from gyrocal.criticism import diagnostics
+from gyrocal.inference import preprocess
+from gyrocal.inference.estimate import point_estimate
+from gyrocal.inference.likelihood import Stats
+from gyrocal.model.spec import baseline
+from gyrocal.pipeline import cli
+from gyrocal.planning import plan
+from gyrocal.simulation import simulate
 
 from conftest import DATA, ROOT, truth_vector
 

@@ -16,11 +16,12 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from gyrocal import classic, consistency, preprocess
-from gyrocal.estimate import EstimateError, check_physical, point_estimate
-from gyrocal.posterior import Priors
-from gyrocal.spec import baseline
-from gyrocal.telemetry import TelemetryError
+from gyrocal.checks import consistency
+from gyrocal.inference import classic, preprocess
+from gyrocal.inference.estimate import EstimateError, check_physical, point_estimate
+from gyrocal.inference.posterior import Priors
+from gyrocal.io.telemetry import TelemetryError
+from gyrocal.model.spec import baseline
 
 from conftest import truth_vector
 
@@ -109,7 +110,7 @@ def calibrate(directory):
 
 @pytest.fixture(scope="module")
 def truth(tiny):
-    from gyrocal.telemetry import read_campaign
+    from gyrocal.io.telemetry import read_campaign
     channels = read_campaign(tiny[0]).channels
     return baseline(channels).core_vector(truth_vector(channels, tiny[1]))
 

@@ -10,8 +10,9 @@ import pandas as pd
 import pytest
 import yaml
 
-from gyrocal import consistency, importer
-from gyrocal.telemetry import TelemetryError
+from gyrocal.checks import consistency
+from gyrocal.io import importer
+from gyrocal.io.telemetry import TelemetryError
 
 from conftest import ROOT, run_campaign
 
@@ -53,7 +54,7 @@ def test_the_y_trials_two_vicon_excursions_are_left_out(xyz):
 
 
 def test_the_static_recording_gives_the_gyros_angle_random_walk():
-    from gyrocal import allan
+    from gyrocal.planning import allan
     mapping = importer.read_mapping("repoimu")
     text = allan.static_report(importer.read_file(DATA / "TStick_Test01_Static.csv", mapping),
                                list(mapping["gyro"]["columns"]), "static")

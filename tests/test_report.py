@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal import simulate
+from gyrocal.simulation import simulate
 
 from conftest import DATA, config_with, run_campaign
 
@@ -96,7 +96,7 @@ def test_report_renders_in_a_real_browser_with_verdict_and_tables(mom_run, hidde
 
 
 def test_figures_drawn_by_two_processes_are_the_same_png_bytes(tmp_path):
-    from gyrocal import plots
+    from gyrocal.report import figures as plots
     t = np.arange(50.0)
     table = pd.DataFrame({"time": t, "rate_roll_deg_s": np.sin(t), "rate_pitch_deg_s": 0.0, "rate_yaw_deg_s": 0.1,
                           **{f"set0_error_{a}_arcsec": np.cos(t * k) for k, a in enumerate(("yaw", "roll", "pitch"))}})

@@ -8,9 +8,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal import cli, consistency, preprocess
-from gyrocal.estimate import EstimateError
-from gyrocal.steps import posterior as posterior_step
+from gyrocal.checks import consistency
+from gyrocal.inference import preprocess
+from gyrocal.inference.estimate import EstimateError
+from gyrocal.pipeline import cli
+from gyrocal.pipeline.steps import posterior as posterior_step
 
 import mutations
 from conftest import run_campaign
@@ -72,7 +74,7 @@ def test_a_hyphenated_directory_without_a_name_gets_a_safe_default_name(tiny, tm
 
 
 def test_a_window_without_holds_is_a_warning_and_classic_gives_no_number(tiny, tmp_path):
-    from gyrocal import classic, preprocess
+    from gyrocal.inference import classic, preprocess
     directory = tmp_path / "campaign"
     mutations.corrupted_copy(tiny[0], directory, mutations.no_hold)
     campaign, findings = consistency.read_checked(directory)
@@ -85,7 +87,7 @@ def test_a_maneuver_without_holds_reports_the_error_between_its_first_and_last_r
     reference every 1 s reached it and crashed). Corrected with the truth, the error left by
     the rotation (scale errors of about 1000 ppm over 90 deg: hundreds of arcsec) shrinks to
     the noise."""
-    from gyrocal import report
+    from gyrocal.report import review as report
 
     from conftest import truth_vector
     directory = tmp_path / "campaign"
@@ -138,10 +140,10 @@ def test_robust_covariance_recovers_the_bulk_despite_gross_outliers():
 
 
 def test_a_parameter_with_no_information_is_prior_only_and_one_with_little_is_not(tiny):
-    from gyrocal.identification import uninformed
-    from gyrocal.likelihood import Stats
-    from gyrocal.spec import baseline
-    from gyrocal.telemetry import read_campaign
+    from gyrocal.inference.identification import uninformed
+    from gyrocal.inference.likelihood import Stats
+    from gyrocal.io.telemetry import read_campaign
+    from gyrocal.model.spec import baseline
     spec = baseline(read_campaign(tiny[0]).channels)
     info = 1.0 / spec.prior_sd_si**2
     A = np.diag(info * 50.0)
@@ -301,8 +303,8 @@ def test_posterior_netcdf_differs_by_nothing_but_content(tiny, tiny_run, config,
 def test_a_noise_no_sensor_can_have_stops_before_sampling_with_the_residuals(tiny_run):
     import dataclasses
 
-    from gyrocal import preprocess
-    from gyrocal.estimate import PointEstimate, check_noise
+    from gyrocal.inference import preprocess
+    from gyrocal.inference.estimate import PointEstimate, check_noise
     out, npz = tiny_run
     est = PointEstimate.load(out / "baseline/point_estimate.npz")
     collapsed = dataclasses.replace(est, log_sigma=est.log_sigma + np.array([-8.0, 0.0, 0.0]))
@@ -370,7 +372,7 @@ def test_a_maneuver_too_short_for_the_leave_one_block_out_predictive_is_refused_
     """Each LOO block is predicted from the rest of its maneuver: a maneuver of one block (or one
     whose rest holds a handful of samples) used to crash in a Cholesky factorisation; it is
     refused with its span and the fix."""
-    from gyrocal.estimate import check_blocks
+    from gyrocal.inference.estimate import check_blocks
     enough = types.SimpleNamespace(id="yaw_pos", st_time=np.arange(0.0, 70.0))
     one_block = types.SimpleNamespace(id="roll_neg", st_time=np.arange(0.0, 59.0))
     nearly = types.SimpleNamespace(id="pitch_pos", st_time=np.arange(0.0, 69.0))
@@ -383,7 +385,7 @@ def test_a_maneuver_too_short_for_the_leave_one_block_out_predictive_is_refused_
 
 @pytest.mark.parametrize("shift_s", [0.3, -0.7])
 def test_the_clock_offset_is_found_to_a_fraction_of_a_sample(tiny, tmp_path, shift_s):
-    from gyrocal.telemetry import read_campaign
+    from gyrocal.io.telemetry import read_campaign
     mutations.corrupted_copy(tiny[0], tmp_path / "c", mutations.st_clock_offset(shift_s))
     campaign = read_campaign(tmp_path / "c")
     for m in ("yaw_pos", "roll_neg"):

@@ -5,10 +5,12 @@ import hashlib
 import numpy as np
 import pytest
 
-from gyrocal import channels as ch
-from gyrocal import cli, preprocess, telemetry
-from gyrocal.classic import hold_windows
-from gyrocal.units import AXIS_INDEX, arcsec_to_rad, arw_to_rad_sqrt_s, rad_to_arcsec
+from gyrocal.inference import preprocess
+from gyrocal.inference.classic import hold_windows
+from gyrocal.io import telemetry
+from gyrocal.model import channels as ch
+from gyrocal.model.units import AXIS_INDEX, arcsec_to_rad, arw_to_rad_sqrt_s, rad_to_arcsec
+from gyrocal.pipeline import cli
 
 from conftest import DATA, truth_vector
 

@@ -6,10 +6,11 @@ import sys
 import numpy as np
 from scipy.optimize import least_squares
 
-from gyrocal import errormodel, posterior, preprocess, telemetry
-from gyrocal.noise import noise_knowledge
-from gyrocal.spec import baseline
-from gyrocal.units import rad_s_to_deg_h
+from gyrocal.inference import errormodel, posterior, preprocess
+from gyrocal.inference.noise import noise_knowledge
+from gyrocal.io import telemetry
+from gyrocal.model.spec import baseline
+from gyrocal.model.units import rad_s_to_deg_h
 
 from conftest import ROOT, truth_vector
 

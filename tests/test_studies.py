@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal import simulate
+from gyrocal.simulation import simulate
 
 from conftest import DATA, config_with, run_campaign
 

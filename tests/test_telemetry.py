@@ -5,8 +5,9 @@ import pandas as pd
 import pytest
 import yaml
 
-from gyrocal import cli, telemetry
-from gyrocal.telemetry import TelemetryError
+from gyrocal.io import telemetry
+from gyrocal.io.telemetry import TelemetryError
+from gyrocal.pipeline import cli
 
 
 @pytest.fixture

@@ -4,8 +4,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal import channels as ch
-from gyrocal import study, validation
+from gyrocal.model import channels as ch
+from gyrocal.study import campaign as study
+from gyrocal.study import tables as validation
 
 
 def test_truth_is_drawn_from_the_configured_prior_within_its_bounds():

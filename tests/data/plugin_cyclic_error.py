@@ -7,8 +7,8 @@ one parameter shares the channel misalignments' unit but belongs to no channel.
 
 import numpy as np
 
-from gyrocal.effects import Effect, Parameter
-from gyrocal.units import ARCSEC_RAD
+from gyrocal.model.effects import Effect, Parameter
+from gyrocal.model.units import ARCSEC_RAD
 
 
 class CyclicError(Effect):

@@ -6,7 +6,7 @@ Not part of gyrocal's library; the tests and the tutorial load it with
 
 import numpy as np
 
-from gyrocal.effects import Effect, Parameter
+from gyrocal.model.effects import Effect, Parameter
 
 
 class SfTemperature(Effect):

@@ -11,13 +11,13 @@ import threading
 import time
 from pathlib import Path
 
-from gyrocal import scenario as _scenario
-from gyrocal.steps import REFUSED as _REFUSED
-from gyrocal.outputs import MODEL_FILES as _MODEL_FILES
+from gyrocal.io import scenario as _scenario
+from gyrocal.pipeline.steps import REFUSED as _REFUSED
+from gyrocal.io.outputs import MODEL_FILES as _MODEL_FILES
 
 
 def _user_campaign(directory):
-    from gyrocal import telemetry as _telemetry  # pandas: 0.4 s of every run's start, where no user campaign is read
+    from gyrocal.io import telemetry as _telemetry  # pandas: 0.4 s of every run's start, where no user campaign is read
 
     try:
         meta = _telemetry.read_meta(directory)
@@ -72,7 +72,7 @@ _STARTED = time.time()
 
 
 def refusal_messages():
-    """What the steps of this run refused (their logs from `gyrocal.steps.REFUSED` on), to repeat
+    """What the steps of this run refused (their logs from `gyrocal.pipeline.steps.REFUSED` on), to repeat
     when a run fails."""
     found = []
     for path in sorted(Path("logs").rglob("*.log")):
@@ -120,7 +120,7 @@ def model_files(name):
 
 
 def report_model_files(wildcards):
-    """Every model's files the report reads, named as gyrocal.outputs.MODEL_FILES, in MODELS' order."""
+    """Every model's files the report reads, named as gyrocal.io.outputs.MODEL_FILES, in MODELS' order."""
     return {name: expand(f"{results_of(wildcards.campaign)}/{{model}}/{file}", model=MODELS)
             for name, file in _MODEL_FILES.items()}
 

@@ -2,7 +2,7 @@ rule posterior:
     """emcee over the model's parameters and noise scales; convergence across ensembles; then
     calibration.csv per the contract and the gyro correction for every channel set, which need
     nothing but the posterior and no setting (a tenth of a second, in the same job; the steps stay
-    apart in gyrocal.steps: posterior, calibrate)."""
+    apart in gyrocal.pipeline.steps: posterior, calibrate)."""
     input:
         preprocessed=PREPROCESSED,
         point=f"{RESULTS}/{{model}}/point_estimate.npz",

@@ -4,7 +4,7 @@ rule preprocess:
     channel set nominally, error angles of eq. 4, a table and figure each; then the paper's method
     over them (classic.csv). Everything a campaign gives with no model and no setting, in one job:
     each part takes a fraction of a second, and a job's start-up more (the steps stay apart in
-    gyrocal.steps: validate, preprocess, classic)."""
+    gyrocal.pipeline.steps: validate, preprocess, classic)."""
     input:
         unpack(campaign_input),
     output:

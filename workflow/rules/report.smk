@@ -2,7 +2,7 @@ rule report:
     """The model variants side by side (residual RMS, PSIS-LOO, exact leave-one-maneuver-out),
     which are plausible and which one is reviewed; then the pre-uplink review of that one:
     verdict, the paper's tables with intervals, fits, correction. One job (the steps stay apart
-    in gyrocal.steps: compare, report), since the comparison takes a fraction of a second and a
+    in gyrocal.pipeline.steps: compare, report), since the comparison takes a fraction of a second and a
     job's start-up more. It shows the whole config, so it alone takes all of it. Its figures
     are drawn in parallel: it ends the run, when nothing else is left to use the cores."""
     input:

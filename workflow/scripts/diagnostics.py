@@ -1,4 +1,4 @@
-from gyrocal.steps import common, diagnostics
+from gyrocal.pipeline.steps import common, diagnostics
 
 common.start(snakemake.log[0])
 diagnostics.run(snakemake.params.maneuvers, snakemake.input.point, snakemake.input.summary,

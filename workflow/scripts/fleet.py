@@ -1,4 +1,4 @@
-from gyrocal.steps import common, fleet
+from gyrocal.pipeline.steps import common, fleet
 
 common.start(snakemake.log[0])
 fleet.run(snakemake.input.verdicts, snakemake.output.table, snakemake.output.figure)

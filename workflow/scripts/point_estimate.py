@@ -1,4 +1,4 @@
-from gyrocal.steps import common, point_estimate
+from gyrocal.pipeline.steps import common, point_estimate
 
 common.start(snakemake.log[0])
 point_estimate.run(snakemake.params.maneuvers, snakemake.input.checked, snakemake.wildcards.model,

@@ -1,4 +1,4 @@
-from gyrocal.steps import calibrate, common, posterior
+from gyrocal.pipeline.steps import calibrate, common, posterior
 
 p, o = snakemake.params, snakemake.output
 common.start(snakemake.log[0])

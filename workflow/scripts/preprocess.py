@@ -1,5 +1,5 @@
-from gyrocal import telemetry
-from gyrocal.steps import classic, common, preprocess, validate
+from gyrocal.io import telemetry
+from gyrocal.pipeline.steps import classic, common, preprocess, validate
 
 o, campaign_dir = snakemake.output, snakemake.params.campaign_dir
 common.start(snakemake.log[0])

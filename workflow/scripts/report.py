@@ -1,5 +1,6 @@
-from gyrocal.outputs import MODEL_FILES
-from gyrocal.steps import common, compare, report
+from gyrocal.io.outputs import MODEL_FILES
+from gyrocal.pipeline.steps import common, report
+from gyrocal.pipeline.steps import compare_models as compare
 
 i, p, o = snakemake.input, snakemake.params, snakemake.output
 common.start(snakemake.log[0])

@@ -1,5 +1,5 @@
-from gyrocal import simulate
-from gyrocal.steps import common
+from gyrocal.pipeline.steps import common
+from gyrocal.simulation import simulate
 
 common.start(snakemake.log[0])
 simulate.run(snakemake.input.scenario, snakemake.output.campaign.rsplit("/", 1)[0], snakemake.params.seed)

@@ -1,4 +1,5 @@
-from gyrocal.steps import common, study
+from gyrocal.pipeline.steps import common
+from gyrocal.study import steps as study
 
 common.start(snakemake.log[0])
 study.run_chunk(snakemake.params.scenario, snakemake.params.calibration, snakemake.params.study,

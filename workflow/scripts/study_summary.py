@@ -1,6 +1,7 @@
 from pathlib import Path
 
-from gyrocal.steps import common, study
+from gyrocal.pipeline.steps import common
+from gyrocal.study import steps as study
 
 common.start(snakemake.log[0])
 study.summarize(snakemake.input.records, snakemake.params.scenario, snakemake.params.calibration, snakemake.params.study,

@@ -1,0 +1,2 @@
+"""The model against the measurements: residual diagnostics, model comparison and choice,
+agreement between campaigns, the linear model's validity, and the GO/NO-GO verdict."""

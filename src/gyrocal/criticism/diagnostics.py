@@ -1,0 +1,303 @@
+"""Model criticism: is the fit consistent with the noise model, and if not, what is missing?
+
+Three checks of the residuals against the noise model (their level, their whiteness,
+their structure) and a ranking of what could explain a misfit: each library effect the
+model lacks and each residual signature (docs/interface.md section 5), scored by a
+Lagrange-multiplier (score) test at the fitted model, which needs no refit: the drop in
+the weighted residual sum of squares that adding its columns would buy, with the
+model's own parameters and the nuisance re-fitted. Its ``score`` is one minus the
+test's p-value: near 1 for structure the noise cannot explain.
+"""
+
+import numpy as np
+import pandas as pd
+from scipy.special import chdtr, chdtrc, gammaln
+
+from gyrocal.inference import errormodel, noise
+from gyrocal.inference.estimate import PointEstimate, linearize_all
+from gyrocal.inference.likelihood import campaign_stats
+from gyrocal.inference.noise import NOISE_SCALES, variances
+from gyrocal.inference.predictive import WhitenedManeuver
+from gyrocal.model import effects
+from gyrocal.model.units import AXES, rad_to_arcsec
+
+
+class Signature(effects.Effect):
+    """A residual signature as a per-channel regressor of the channel increments."""
+
+    def __init__(self, name, regressor, description, columns=("k",)):
+        self.name = name
+        self.description = description
+        self.parameters = tuple(effects.Parameter(c, "-", 1.0, 1.0) for c in columns)
+        self._regressor = regressor
+
+    def gyro(self, m):
+        return self._regressor(m)
+
+
+def _own(m, values):
+    """(K, n_channels) of a body-axis quantity on each channel's own axis."""
+    return values[:, [c.axis_index for c in m.channels]]
+
+
+def signature_effects(extra_columns) -> list:
+    """The signatures of docs/interface.md section 5, plus one per extra ``gyro.csv`` column.
+
+    ``time`` and ``rate_squared`` are the columns of the library's ``bias_drift`` and
+    ``sf_nonlinearity``: they are ranked once, under the effect (see `rank`).
+    """
+    def cross(m):
+        rate = m.body_rate
+        own = _own(m, rate)
+        return {"k": own * (rate.sum(axis=1, keepdims=True) - own) * m.dt[:, None]}
+
+    out = [
+        Signature("rate", lambda m: {"k": m.increments}, "an error proportional to the rate"),
+        Signature("rate_sign", lambda m: {"k": np.sign(m.rate) * m.moving * m.dt[:, None]},
+                  "a bias that flips with the direction of rotation"),
+        Signature("cross_rate", cross, "own rate times the other axes' rates (anisoinertia)"),
+        Signature("acceleration", lambda m: {"k": _own(m, m.acceleration) * m.dt[:, None]},
+                  "the angular acceleration: a timing offset between gyros and star tracker"),
+    ]
+    for column in extra_columns:
+        def regress(m, column=column):
+            x = m.extras[column] - np.mean(m.extras[column])
+            return {"scale": x[:, None] * m.increments, "bias": m.bias_regressor(x)}
+        out.append(Signature(column, regress, f"a scale factor or bias that follows {column}", ("scale", "bias")))
+    return out
+
+
+def _applies(effect, data) -> bool:
+    """Whether an effect can be evaluated on this campaign (a plugin may need columns it lacks)."""
+    try:
+        errormodel.effect_derivatives(effect, errormodel.view(data))
+        return True
+    except ValueError:
+        return False
+
+
+def _augmented(maneuvers, estimate: PointEstimate, candidates, var):
+    """Sufficient statistics of the fitted model's parameters followed by the candidate
+    effects' columns, all global, with each maneuver's nuisance integrated out."""
+    spec = estimate.spec.augmented(candidates)
+    theta = np.concatenate([estimate.theta, np.zeros(len(spec) - len(estimate.spec))])
+    out = []
+    for m, data in enumerate(maneuvers):
+        lin = errormodel.linearize(data, spec, theta, estimate.biases[m])
+        out.append(noise.build(lin, estimate.boresight, estimate.correlation_time_s))
+    return spec, campaign_stats(out, var)
+
+
+COLLINEAR_FRACTION = 1e-3
+"""A candidate direction whose weighted variance is more than 99.9 % explained by the
+model's own columns is not tested: there the statistic would measure second-order model
+error amplified a thousandfold, not structure."""
+
+
+def conditional_drop(stats, base, cand) -> float:
+    """Drop in the weighted residual sum of squares from adding columns ``cand`` to the
+    columns ``base`` (Schur complement), in directions ``base`` does not already span."""
+    base, cand = np.asarray(base, dtype=int), np.asarray(cand, dtype=int)
+    A_mm = stats.A[np.ix_(base, base)]
+    A_cm = stats.A[np.ix_(cand, base)]
+    solve = np.linalg.lstsq(A_mm, np.column_stack([A_cm.T, stats.b[base]]), rcond=1e-12)[0]
+    S = stats.A[np.ix_(cand, cand)] - A_cm @ solve[:, :-1]
+    r = stats.b[cand] - A_cm @ solve[:, -1]
+    scale = np.sqrt(np.maximum(np.diag(stats.A)[cand], 1e-300))
+    values, vectors = np.linalg.eigh(S / np.outer(scale, scale))
+    keep = values > COLLINEAR_FRACTION
+    projected = vectors[:, keep].T @ (r / scale)
+    return float(np.sum(projected**2 / values[keep]))
+
+
+def _chi2_drop(stats, n_model, idx) -> float:
+    """Score statistic of candidate columns ``idx`` given the model's own parameters."""
+    return conditional_drop(stats, np.arange(n_model), n_model + np.asarray(idx))
+
+
+ENCOMPASS_TOP = 5
+
+
+def _encompass(ranking, groups, stats, n_model):
+    """Reorder the leading significant candidates by what each leaves unexplained.
+
+    Two candidates can both explain much of a misfit (a rate-squared scale factor and a
+    bias that flips with the rotation). The better explanation is the one after whose
+    addition the others explain least: for each leader, the most significant of the
+    other leaders given it (``leftover_log10_p``), highest first.
+    """
+    columns = {effect.name: idx for _, effect, idx in groups}
+    leaders = [r for r in ranking[:ENCOMPASS_TOP] if r["log10_p"] < -2 and r["name"] in columns]
+    if len(leaders) < 2:
+        return
+    for r in leaders:
+        base = list(range(n_model)) + [n_model + i for i in columns[r["name"]]]
+        worst = 0.0
+        for other in leaders:
+            if other is r:
+                continue
+            drop = conditional_drop(stats, base, [n_model + i for i in columns[other["name"]]])
+            worst = min(worst, chi2_log_sf(drop, len(columns[other["name"]])) / np.log(10))
+        r["leftover_log10_p"] = round(worst, 2)
+    positions = sorted(ranking.index(r) for r in leaders)
+    for position, r in zip(positions, sorted(leaders, key=lambda r: (-r["leftover_log10_p"], r["log10_p"]))):
+        ranking[position] = r
+
+
+def chi2_log_sf(x: float, df: int) -> float:
+    """``log P(chi2_df > x)``, finite however large x: scipy's where it does not underflow
+    (x up to about 1400), else the asymptotic series of the upper incomplete gamma function,
+    ``Q(a, z) ~ z^(a-1) e^-z / Gamma(a) (1 + (a-1)/z + (a-1)(a-2)/z^2 + ...)``, a = df/2, z = x/2.
+    scipy's part is `scipy.stats.chi2.logsf` from `scipy.special` (through ``log1p(-cdf)`` where
+    the tail is above one half), without importing scipy.stats: 0.5 s of the diagnostics step's
+    start-up."""
+    if x <= 0:
+        return 0.0
+    sf = chdtrc(df, x)
+    with np.errstate(divide="ignore"):
+        value = float(np.log1p(-chdtr(df, x)) if sf > 0.5 else np.log(sf))
+    if np.isfinite(value):
+        return value
+    a, z = df / 2.0, x / 2.0
+    terms = np.cumprod([(a - k) / z for k in range(1, 6)])
+    return float((a - 1) * np.log(z) - z - gammaln(a) + np.log1p(terms.sum()))
+
+
+def _entry(name, kind, drop, df, description, signature=""):
+    log_p = chi2_log_sf(drop, df)
+    entry = {"name": name, "kind": kind, "score": round(-float(np.expm1(log_p)), 4), "chi2_drop": round(drop, 2),
+             "df": df, "log10_p": round(log_p / np.log(10), 2), "description": description}
+    return {**entry, "signature": signature} if signature else entry
+
+
+def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), white=None):
+    """Score every library effect the model lacks and every residual signature.
+
+    A library effect whose columns are a signature's (``bias_drift`` and ``time``) is
+    scored once, under its name, with the signature beside it. A noise-model effect
+    (correlated star-tracker noise) is scored by the score test of an autocorrelation
+    coefficient, ``n rho^2`` on one degree of freedom, from ``white``.
+    Returns a list of dicts (best first) and, per candidate with per-channel columns,
+    its statistic channel by channel.
+    """
+    var = variances(estimate.log_sigma)
+    present = set(estimate.spec.effect_names)
+    library = [e for e in list(effects.LIBRARY.values()) + list(plugin_effects)
+               if e.name not in present and not e.core and not e.noise and _applies(e, maneuvers[0])]
+    candidates = [("effect", e) for e in library] + [("signature", e) for e in signature_effects(extra_columns)]
+    spec, stats = _augmented(maneuvers, estimate, [e for _, e in candidates], var)
+    n_model = len(estimate.spec)
+    extras = spec.parameters[n_model:]
+    groups = [(kind, e, [i for i, p in enumerate(extras) if p.effect == e.name]) for kind, e in candidates]
+    ranking, detail = [], {}
+    for kind, effect, idx in groups:
+        drop = _chi2_drop(stats, n_model, idx)
+        ranking.append(_entry(effect.name, kind, drop, len(idx), effect.description, effect.signature))
+        per_channel = [i for i in idx if extras[i].channel is not None]
+        if per_channel:
+            detail[effect.name] = {extras[i].label: round(_chi2_drop(stats, n_model, [i]), 2)
+                                                       for i in per_channel}
+    if white is not None and not estimate.spec.correlated_noise:
+        for effect in (e for e in effects.LIBRARY.values() if e.noise):
+            ranking.append(_entry(effect.name, "effect", white["z"] ** 2, 1, effect.description))
+    ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
+    _encompass(ranking, groups, stats, n_model)
+    return ranking, detail
+
+
+def whiteness(maneuvers, lins, noises, estimate: PointEstimate):
+    """Lag-1 autocorrelation of the standardised innovations at the fitted model, per
+    maneuver and overall, with its z-score (``rho sqrt(n)``, N(0, 1) under the model)."""
+    ratios = estimate.log_sigma[1:] - estimate.log_sigma[0]
+    scale = np.exp(2 * estimate.log_sigma[0])
+    per, pooled_num, pooled_den = {}, 0.0, 0.0
+    for data, lin, nz in zip(maneuvers, lins, noises):
+        wm = WhitenedManeuver(nz, ratios)
+        zero = np.zeros((1, nz.n_params))
+        beta = wm.nuisance(zero)
+        w = (wm.wd - wm.wg @ beta[0]) / np.sqrt(scale)
+        lag = lin.z.shape[1] * 3
+        num, den = float(w[lag:] @ w[:-lag]), float(w @ w)
+        per[data.id] = {"lag1": round(num / den, 4), "z": round(num / den * np.sqrt(len(w) / lag), 2),
+                        "variance": round(den / len(w), 4)}
+        pooled_num += num
+        pooled_den += den
+    n = sum(len(d.st_time) for d in maneuvers)
+    rho = pooled_num / pooled_den
+    return {"lag1": round(rho, 4), "z": round(rho * np.sqrt(n), 2), "per_maneuver": per}
+
+
+def noise_rms_arcsec(maneuvers, stated_noise) -> float:
+    """What the stated noise alone predicts for the residual RMS per axis: the star
+    tracker's variance averaged over the axes, plus the walk left after the initial
+    attitude and bias are fitted (detrended Brownian motion: q T / 15)."""
+    b = np.asarray(stated_noise["boresight_body"], dtype=float)
+    b = b / np.linalg.norm(b)
+    cross, about, arw = noise.stated_si(stated_noise)
+    st_var = (2 * cross**2 + about**2) / 3
+    durations = np.array([d.st_time[-1] - d.gyro_time[0] for d in maneuvers])
+    return float(rad_to_arcsec(np.sqrt(st_var + arw**2 * np.mean(durations) / 15)))
+
+
+def misfit_checks(residual_rms, noise_rms, white, ranking, noise_posterior, stated_noise, cfg) -> list:
+    """Each check: name, passed, and a sentence a reviewer can act on."""
+    checks = []
+    ratio = residual_rms / noise_rms
+    checks.append({"check": "level", "passed": bool(ratio <= cfg["rms_ratio_max"]),
+                   "why": f"residual RMS {residual_rms:.2f} arcsec is {ratio:.2f} times what the stated noise "
+                          f"predicts ({noise_rms:.2f}); limit {cfg['rms_ratio_max']}"})
+    for name in (s.key for s in NOISE_SCALES):
+        fitted, stated = noise_posterior[name], stated_noise[name]
+        r = fitted / stated
+        ok = 1 / cfg["noise_ratio_max"] <= r <= cfg["noise_ratio_max"]
+        checks.append({"check": f"noise:{name}", "passed": bool(ok),
+                       "why": f"the data ask for {name} = {fitted:.4g}, {r:.2f} times the stated {stated:.4g}; "
+                              f"allowed {1 / cfg['noise_ratio_max']:.2f} to {cfg['noise_ratio_max']:.2f}"})
+    checks.append({"check": "whiteness", "passed": bool(abs(white["z"]) <= cfg["whiteness_z_max"]),
+                   "why": f"lag-1 autocorrelation of the standardised innovations {white['lag1']:+.3f} "
+                          f"(z = {white['z']:+.1f}; limit |z| <= {cfg['whiteness_z_max']})"})
+    worst = ranking[0]
+    checks.append({"check": "structure", "passed": bool(worst["log10_p"] >= cfg["structure_log10_p_min"]),
+                   "why": f"{worst['kind']} {worst['name']} would explain chi2 {worst['chi2_drop']:.1f} on "
+                          f"{worst['df']} degrees of freedom (log10 p = {worst['log10_p']:.1f}; "
+                          f"limit {cfg['structure_log10_p_min']})"})
+    return checks
+
+
+def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.DataFrame, thresholds: dict,
+             plugin_effects=()) -> dict:
+    """``diagnostics.json`` (docs/interface.md section 5): the misfit checks of the fitted
+    model, the ranking of what could explain a misfit, and what they rest on.
+
+    ``fit`` is the posterior step's per-sample fit table, ``summary`` its posterior
+    summary indexed by label; ``thresholds`` the config's ``diagnostics`` section.
+    """
+    lins, noises = linearize_all(maneuvers, estimate)
+    residuals = fit[[f"residual_{a}" for a in AXES]].to_numpy()
+    residual_rms = float(np.sqrt(np.mean(residuals**2)))
+    noise_rms = noise_rms_arcsec(maneuvers, estimate.stated_noise)
+    white = whiteness(maneuvers, lins, noises, estimate)
+    ranking, detail = rank(maneuvers, estimate, list(maneuvers[0].extras), plugin_effects, white)
+    keys = [s.key for s in NOISE_SCALES]
+    noise_post = {k: float(summary.loc[f"noise.{k}", "mean"]) for k in keys}
+    checks = misfit_checks(residual_rms, noise_rms, white, ranking, noise_post, estimate.stated_noise, thresholds)
+    per_maneuver = {}
+    for (m, s), group in fit.groupby(["maneuver", "set"], sort=False):
+        per_maneuver.setdefault(m, {})[f"set{s}"] = {
+            a: round(float(np.sqrt(np.mean(group[f"residual_{a}"] ** 2))), 3) for a in AXES}
+    return {
+        "model": estimate.spec.model,
+        "effects": list(estimate.spec.effect_names),
+        "residual_rms_arcsec": round(residual_rms, 4),
+        "noise_rms_arcsec": round(noise_rms, 4),
+        "misfit": not all(c["passed"] for c in checks),
+        "ranking": ranking,
+        "checks": checks,
+        "whiteness": white,
+        "noise_posterior": noise_post,
+        "noise_stated": {k: estimate.stated_noise[k] for k in keys},
+        "st_correlation_time_s": estimate.correlation_time_s,
+        "residual_rms_per_maneuver_arcsec": per_maneuver,
+        "signature_detail_chi2": detail,
+        "unexplained_fraction": round(float(fit[[f"outside_{a}" for a in AXES]].to_numpy().mean()), 4),
+    }

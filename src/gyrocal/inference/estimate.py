@@ -1,0 +1,339 @@
+"""Deterministic point estimate: full-trajectory weighted least squares (WLS).
+
+Over every maneuver at once, with the exact nonlinear model re-propagated at every
+step, weights from the banded noise covariance (`noise`) and the noise scales from
+REML; it starts from the paper's method (`classic`).
+"""
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import sparse
+from scipy.optimize import least_squares, minimize
+
+from gyrocal.inference import errormodel, identification, noise
+from gyrocal.inference.likelihood import campaign_stats, maneuver_stats
+from gyrocal.inference.noise import variances
+from gyrocal.model import units
+from gyrocal.model.spec import ModelSpec
+
+
+@dataclass
+class PointEstimate:
+    """Full-trajectory WLS solution and its Jacobian covariance, all SI."""
+
+    spec: ModelSpec
+    theta: np.ndarray
+    """The parameters in the spec's column order."""
+    cov: np.ndarray
+    biases: np.ndarray
+    """(n_maneuvers, n_channels) rad/s."""
+    chi0: np.ndarray
+    log_sigma: np.ndarray
+    """log [sigma_cross_rad, sigma_about_rad, arw_rad_sqrt_s] used for the weights."""
+    cost: float
+    nfev: int
+    message: str
+    correlation_time_s: float = 0.0
+    """Correlation time of the star-tracker noise (0: white)."""
+    stated_noise: dict = field(default_factory=dict)
+    """The noise knowledge the run was given (contract units and ``boresight_body``)."""
+    at_estimate: tuple = ()
+    """Each maneuver's `errormodel.Linearization` about this estimate, as the WLS's last step left
+    it and saved with it: the posterior and the diagnostics start from it, and computing it again
+    took 0.6 s in each of their jobs (empty: computed when asked)."""
+    at_estimate_keys: tuple = ()
+    """`linearization_key` of each saved linearisation: what it was computed from."""
+
+    @property
+    def boresight(self):
+        return self.stated_noise["boresight_body"]
+
+    def params(self, m: int):
+        return self.spec.channel_params(self.theta, self.biases[m])
+
+    def linearization_key(self, data, m: int) -> str:
+        """A digest of what maneuver ``m``'s linearisation is computed from: the maneuver (id, times,
+        gyro increments, star-tracker attitudes), the specification, ``theta`` and its biases."""
+        digest = hashlib.sha256(self.spec.to_json().encode())
+        for part in (data.id.encode(), data.gyro_time, data.increments, data.st_time, data.st_quat,
+                     data.attitude0_quat, self.theta, self.biases[m]):
+            digest.update(np.ascontiguousarray(part).tobytes() if isinstance(part, np.ndarray) else part)
+        return digest.hexdigest()
+
+    def linearize(self, maneuvers, m: int):
+        """Maneuver ``m``'s linearisation about the estimate: the saved one where it was computed
+        from this maneuver, specification, ``theta`` and biases (`linearization_key`), else
+        computed."""
+        data = maneuvers[m]
+        if m < len(self.at_estimate) and self.at_estimate_keys[m] == self.linearization_key(data, m):
+            return self.at_estimate[m]
+        return errormodel.linearize(data, self.spec, self.theta, self.biases[m])
+
+    def save(self, handle):
+        lins = {k: v for m, lin in enumerate(self.at_estimate) for k, v in lin.arrays(f"lin{m}_").items()}
+        lins.update({f"lin{m}_key": np.asarray(key) for m, key in enumerate(self.at_estimate_keys)})
+        np.savez(handle, theta=self.theta, cov=self.cov, biases=self.biases, chi0=self.chi0,
+                 log_sigma=self.log_sigma, cost=self.cost, nfev=self.nfev, message=self.message,
+                 correlation_time_s=self.correlation_time_s, spec=self.spec.to_json(),
+                 stated_noise=json.dumps(self.stated_noise), n_linearized=len(self.at_estimate), **lins)
+
+    @classmethod
+    def load(cls, path, known_effects=None) -> "PointEstimate":
+        """Read `save`; ``known_effects`` (library and plugins, by name) are needed by the
+        steps that evaluate the model's effects again."""
+        z = np.load(path, allow_pickle=False)
+        n_lin = int(z["n_linearized"]) if "n_linearized" in z.files else 0  # none in files of earlier versions
+        return cls(ModelSpec.from_json(str(z["spec"]), known_effects), z["theta"], z["cov"], z["biases"],
+                   z["chi0"], z["log_sigma"], float(z["cost"]), int(z["nfev"]), str(z["message"]),
+                   float(z["correlation_time_s"]), json.loads(str(z["stated_noise"])),
+                   tuple(errormodel.Linearization.from_arrays(z, f"lin{m}_") for m in range(n_lin)),
+                   tuple(str(z[f"lin{m}_key"]) for m in range(n_lin)))
+
+
+def _unpack(x, theta0, free, n_man, n_ch):
+    """The full parameter vector (prior-only entries held at ``theta0``), initial errors and biases."""
+    n_free = int(free.sum())
+    theta = theta0.copy()
+    theta[free] = x[:n_free]
+    nuis = x[n_free:].reshape(n_man, 3 + n_ch)
+    return theta, nuis[:, :3], nuis[:, 3:]
+
+
+def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, biases0=None, chi00=None,
+        correlation_time_s=0.0, lins0=None) -> PointEstimate:
+    """Weighted least squares over every maneuver with `scipy.optimize.least_squares`.
+
+    Unknowns: the model's parameters, and per maneuver the initial attitude error and
+    the bias of each channel. Each maneuver's unknowns touch only its own rows, so the
+    Jacobian is sparse and the trust-region steps come from LSMR, solved to 1e-12 so that
+    its Gauss-Newton directions are exact (as many iterations as the dense solver here):
+    the cost grows linearly with the number of maneuvers, where a dense Jacobian's SVD
+    grows with its cube. It stops once a step lowers the cost by less than 1e-8 of it: with a
+    chi-square of n, the parameters are then within ``sqrt(1e-8 n)`` (0.02 on MOM) of their
+    sd from the optimum. The exact nonlinear model is re-propagated at every step; weights
+    come from the banded noise covariance (star tracker across and about its
+    boresight, gyro random walk). Prior-only parameters stay at ``theta0``; their rows of
+    the covariance are NaN. ``lins0``, the maneuvers' linearisations at the start (a caller that
+    has them), is not computed again: the noise structure and the first step both use it.
+    """
+    n_ch, n_man = len(spec.channels), len(maneuvers)
+    free = spec.free
+    n_par = int(free.sum())
+    boresight = stated_noise["boresight_body"]
+    theta0 = np.zeros(len(spec)) if theta0 is None else np.asarray(theta0, dtype=float)
+    biases0 = np.zeros((n_man, n_ch)) if biases0 is None else biases0
+    chi00 = np.zeros((n_man, 3)) if chi00 is None else chi00
+    x0 = np.concatenate([theta0[free], np.column_stack([chi00, biases0]).ravel()])
+    var = variances(log_sigma)
+    first = lins0 if lins0 is not None else [errormodel.linearize(d, spec, theta0, biases0[m])
+                                              for m, d in enumerate(maneuvers)]
+    noises = [noise.build(lin, boresight, correlation_time_s) for lin in first]
+    chols = [nz.factor(var) for nz in noises]
+    cache = {}
+    at_start = {x0.tobytes(): first}
+
+    def evaluate(x):
+        key = x.tobytes()
+        if key in cache:
+            return cache[key]
+        theta, chi0, biases = _unpack(x, theta0, free, n_man, n_ch)
+        lins = at_start.pop(key, None) or [errormodel.linearize(d, spec, theta, biases[m])
+                                           for m, d in enumerate(maneuvers)]
+        res, shared, own = [], [], []
+        for m, (lin, nz) in enumerate(zip(lins, noises)):
+            r = noise.difference(lin.z - chi0[m]).reshape(nz.n, 1)
+            nuis = noise.difference(noise.nuisance_design(lin)).reshape(nz.n, -1)
+            j_theta = -noise.difference(lin.design[..., free]).reshape(nz.n, -1)
+            white = nz.whiten(chols[m], np.asfortranarray(np.concatenate([r, j_theta, nuis], axis=1)))
+            res.append(white[:, 0])
+            shared.append(white[:, 1:1 + n_par])
+            own.append(-white[:, 1 + n_par:])
+        cache.clear()
+        cache[key] = (np.concatenate(res), sparse.hstack([sparse.csr_array(np.vstack(shared)),
+                                                          sparse.block_diag(own, format="csr")], format="csr"), lins)
+        return cache[key]
+
+    result = least_squares(lambda x: evaluate(x)[0], x0, jac=lambda x: evaluate(x)[1],
+                           method="trf", x_scale="jac", ftol=1e-8, xtol=1e-8, gtol=1e-10, max_nfev=30,
+                           tr_options={"regularize": False, "atol": 1e-12, "btol": 1e-12})
+    _, jac, at_estimate = evaluate(result.x)
+    cov_free = np.linalg.inv((jac.T @ jac).toarray())[:n_par, :n_par]
+    cov = np.full((len(spec), len(spec)), np.nan)
+    cov[np.ix_(free, free)] = cov_free
+    theta, chi0, biases = _unpack(result.x, theta0, free, n_man, n_ch)
+    estimate = PointEstimate(spec, theta, cov, biases, chi0,
+                             np.asarray(log_sigma, dtype=float), float(2 * result.cost), int(result.nfev),
+                             str(result.message), float(correlation_time_s), dict(stated_noise))
+    estimate.at_estimate = tuple(at_estimate)
+    estimate.at_estimate_keys = tuple(estimate.linearization_key(d, m) for m, d in enumerate(maneuvers))
+    return estimate
+
+
+class EstimateError(RuntimeError):
+    """The point estimate is not physical; the message names the parameter and the maneuver."""
+
+
+NOISE_PLAUSIBLE = 1e3
+"""A fitted noise scale more than this factor away from the stated one (either way) is not a noise
+the sensors can have: the residuals are structure the model lacks."""
+
+
+def check_noise(maneuvers, est: PointEstimate):
+    """Stop before sampling when REML puts a noise scale `NOISE_PLAUSIBLE` times off the stated one;
+    the message gives each maneuver's residual RMS about roll, pitch and yaw."""
+    ratio = np.exp(est.log_sigma - noise.log_sigma_of(est.stated_noise))
+    off = (ratio > NOISE_PLAUSIBLE) | (ratio < 1.0 / NOISE_PLAUSIBLE)
+    if off.any():
+        fitted, stated = noise.stated_scales(est.log_sigma), noise.stated_scales(noise.log_sigma_of(est.stated_noise))
+        listed = "; ".join(f"{k} {fitted[k]:.3g} (stated {stated[k]:.3g})" for k, bad in zip(fitted, off) if bad)
+        lins, _ = linearize_all(maneuvers, est)
+        rms = [np.sqrt(np.mean((lin.body_error[:, 0] - lin.body_error[:, 0].mean(axis=0)) ** 2, axis=0))
+               / units.ARCSEC_RAD for lin in lins]
+        residuals = "; ".join(f"{d.id} {r[0]:.0f}, {r[1]:.0f}, {r[2]:.0f}" for d, r in zip(maneuvers, rms))
+        raise EstimateError(
+            f"point estimate of model {est.spec.model}: the fitted noise is not a noise these sensors can have: "
+            f"{listed}. The residuals hold structure far above the noise that the model lacks (RMS about roll, "
+            f"pitch, yaw, arcsec: {residuals}); validate the campaign (gyrocal validate) and read its warnings, "
+            "or add the effect they point to")
+
+
+def check_physical(maneuvers, est: PointEstimate, bound_si):
+    """Stop before sampling when the WLS puts a parameter beyond its physical bound by more than
+    `identification.DETECTION_SD` of its own standard error: the data then say it is out (a
+    unit slip, a gap, a wrong label), not the confounding of two parameters that only the prior
+    holds apart. Names the parameter and the maneuver the model fits worst."""
+    sd = np.sqrt(np.diag(est.cov))
+    beyond = est.spec.free & (np.abs(est.theta) - bound_si > identification.DETECTION_SD * sd)
+    if not beyond.any():
+        return
+    _, noises = linearize_all(maneuvers, est)
+    stats = [maneuver_stats(nz, variances(est.log_sigma)) for nz in noises]
+    misfit = np.array([s.c / s.n for s in stats])
+    worst = int(np.argmax(misfit))
+    spec = est.spec
+    values = spec.to_unit(est.theta)
+    listed = "; ".join(f"{spec.labels[i]} = {values[i]:.6g} {spec.units[i]} (bound {spec.to_unit(bound_si)[i]:g}, "
+                       f"WLS sd {sd[i] / spec.si_per_unit[i]:.3g})" for i in np.flatnonzero(beyond))
+    raise EstimateError(
+        f"point estimate of model {spec.model}: beyond the physical bounds, so sampling would not start: {listed}. "
+        f"The model fits maneuver {maneuvers[worst].id} worst (weighted residual {misfit[worst]:.3g} per sample, "
+        f"1 expected): check its data and labels (gyrocal validate) and the noise knowledge")
+
+
+MIN_REST_SAMPLES = 10
+"""Star-tracker samples of a maneuver that must remain when any one leave-one-block-out block is
+left out: fewer cannot pin down the maneuver's nuisance (initial attitude and biases)."""
+
+
+def check_blocks(maneuvers, block_s: float):
+    """Stop before sampling when a maneuver is too short for the leave-one-block-out predictive:
+    each ``block_s`` block is predicted from the rest of its maneuver alone, which must then keep
+    `MIN_REST_SAMPLES` (a single block would leave nothing, and the factorisation would fail)."""
+    short = []
+    for d in maneuvers:
+        counts = np.bincount(np.floor((d.st_time - d.st_time[0]) / block_s).astype(int))
+        if len(d.st_time) - counts.max() < MIN_REST_SAMPLES:
+            short.append(f"{d.id} spans {d.st_time[-1] - d.st_time[0]:.0f} s ({len(d.st_time)} samples, "
+                         f"{len(d.st_time) - counts.max()} outside its largest block)")
+    if short:
+        raise EstimateError(
+            f"too short for the leave-one-block-out predictive (blocks of sampler.block_s = {block_s:g} s, each "
+            f"predicted from the rest of its maneuver, which needs at least {MIN_REST_SAMPLES} star-tracker samples): "
+            f"{'; '.join(short)}. Lengthen its holds, or make sampler.block_s shorter than the maneuver")
+
+
+def linearize_all(maneuvers, estimate: PointEstimate):
+    """Linearisations and noise structures of every maneuver about a point estimate."""
+    lins = [estimate.linearize(maneuvers, m) for m in range(len(maneuvers))]
+    return lins, [noise.build(lin, estimate.boresight, estimate.correlation_time_s) for lin in lins]
+
+
+def correlation_time(lins) -> float:
+    """Correlation time of the star-tracker noise from the residuals (s; 0 if white).
+
+    For first-order Gauss-Markov noise with coefficient phi per sample, the first
+    differences have lag-1 autocorrelation -(1 - phi)/2, and -1/2 when white; the slow
+    signal and the gyro walk barely touch the differences.
+    """
+    num = den = 0.0
+    steps = []
+    for lin in lins:
+        x = np.diff(lin.body_error[:, 0, :], axis=0)
+        num += float(np.sum(x[1:] * x[:-1]))
+        den += float(np.sum(x * x))
+        steps.append(np.median(lin.st_dt[1:]))
+    phi = 1.0 + 2.0 * num / den
+    if phi <= 0.05:
+        return 0.0
+    return float(-np.median(steps) / np.log(min(phi, 0.999)))
+
+
+def profile_reml(noises, ratios):
+    """REML of the noise with the cross-boresight variance profiled out in closed form.
+
+    ``ratios`` are ``log(sigma_about / sigma_cross)`` and ``log(arw / sigma_cross)``
+    (arw per sqrt(s)); the covariance is ``sigma_cross^2`` times one built from them.
+    Returns the negative log-likelihood (up to a constant) and ``log sigma_cross``.
+    Prior-only parameters have no column, so they are left out.
+    """
+    stats = campaign_stats(noises, variances([0.0, ratios[0], ratios[1]]))
+    informed = np.diag(stats.A) > 0
+    factor = np.linalg.cholesky(stats.A[np.ix_(informed, informed)])
+    explained = np.linalg.solve(factor, stats.b[informed])
+    n = stats.n - int(informed.sum())
+    scale = (stats.c - explained @ explained) / n
+    negative = 0.5 * (n * np.log(scale) + stats.logdet + 2 * np.sum(np.log(np.diag(factor))))
+    return negative, 0.5 * np.log(scale)
+
+
+def estimate_noise(noises, log_sigma0) -> np.ndarray:
+    """Type-II maximum likelihood (REML) of ``log [sigma_cross, sigma_about, arw]``.
+
+    The channel parameters and the nuisance are integrated out under flat priors.
+    """
+    log_sigma0 = np.asarray(log_sigma0, dtype=float)
+    start = log_sigma0[1:] - log_sigma0[0]
+    opt = minimize(lambda r: profile_reml(noises, r)[0], start, method="Nelder-Mead",
+                   options={"xatol": 1e-3, "fatol": 1e-3})
+    log_cross = profile_reml(noises, opt.x)[1]
+    return np.array([log_cross, log_cross + opt.x[0], log_cross + opt.x[1]])
+
+
+def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estimate_scales=True) -> PointEstimate:
+    """REML noise scales about a starting point (the classic estimate), then WLS from it.
+
+    Parameters the maneuvers cannot inform are marked prior-only first and held at their
+    prior mean (`identification`). Where the classic method gave nothing (maneuvers that turn
+    both ways, or have no holds), a WLS with the stated noise gives the start. The classic
+    estimate is within a few tens of ppm of the optimum, so the model is linear enough about
+    it for the noise scales; the WLS then needs a few steps. A model with correlated
+    star-tracker noise first estimates its correlation time there.
+    """
+    spec = spec.with_prior_only(identification.unflown(maneuvers, spec))
+    log_sigma = noise.log_sigma_of(stated_noise)
+    n_man, n_ch = len(maneuvers), len(spec.channels)
+
+    def start_at(spec):
+        theta = np.where(spec.free, theta0, spec.prior_mean_si)
+        return PointEstimate(spec, theta, None, np.zeros((n_man, n_ch)), None, log_sigma, np.nan, 0, "classic",
+                             0.0, stated_noise)
+
+    start = start_at(spec)
+    if not np.any(theta0):
+        start = wls(maneuvers, spec, stated_noise, log_sigma, start.theta)
+    lins, noises = linearize_all(maneuvers, start)
+    weak = identification.uninformed(campaign_stats(noises, variances(log_sigma)), spec)
+    if weak:
+        start = start_at(spec.with_prior_only(weak))
+        lins, noises = linearize_all(maneuvers, start)
+    tau = 0.0
+    if spec.correlated_noise:
+        tau = correlation_time(lins)
+        noises = [noise.build(lin, start.boresight, tau) for lin in lins]
+    if estimate_scales:
+        log_sigma = estimate_noise(noises, log_sigma)
+    return wls(maneuvers, start.spec, stated_noise, log_sigma, start.theta, start.biases, start.chi0,
+               correlation_time_s=tau, lins0=lins)

@@ -1,0 +1,201 @@
+"""What the posterior step writes: the InferenceData, its summary and the fit table.
+
+`assemble` turns a sampled `posterior.Posterior` into an arviz InferenceData holding
+the thinned posterior (in each parameter's unit), the leave-one-block-out pointwise
+log-likelihood PSIS-LOO needs, and a posterior predictive of the attitude errors;
+with it, the per-sample fit table behind the report's figures, the posterior summary
+and the sampler record. The array maths lives in `predictive`; this is the xarray layer.
+"""
+
+import logging
+import warnings
+
+import arviz as az
+import numpy as np
+import pandas as pd
+import xarray as xr
+from arviz.stats.stats_utils import logsumexp
+
+from gyrocal import __version__
+from gyrocal.criticism.comparison import PARETO_K_MAX
+from gyrocal.inference import predictive, preprocess
+from gyrocal.inference.noise import NOISE_LABELS, NOISE_SCALES, scales_in_units, stated_scales
+from gyrocal.model import channels as ch
+from gyrocal.model.units import AXES, rad_to_arcsec
+
+log = logging.getLogger("gyrocal")
+
+
+def loo(idata, model: str):
+    """PSIS-LOO of one model (arviz). arviz warns about blocks with Pareto k > `PARETO_K_MAX` (the
+    posterior cannot importance-sample their leave-out posterior); the log says how many and what
+    it means instead, and `comparison.compare` counts them in its table."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Estimated shape parameter of Pareto", category=UserWarning)
+        result = az.loo(idata, pointwise=True)
+    high = int(np.sum(result.pareto_k.values > PARETO_K_MAX))
+    if high:
+        log.info("PSIS-LOO for model %s: %d of %d blocks have Pareto k > %g, so its elpd_loo is less "
+                 "reliable; typical of a misfitting model, whose residual blocks are influential",
+                 model, high, result.pareto_k.size, PARETO_K_MAX)
+    return result
+
+
+def loo_blocks(idata, model: str) -> pd.DataFrame:
+    """``elpd_blocks.csv``: PSIS-LOO per block (`loo`), with each block's lppd (arviz's) and share of
+    p_loo (its lppd less its elpd), so that the model's elpd_loo, its se and p_loo follow from the
+    table alone, as arviz's ``loo`` gives them (`comparison.loo_totals`), and the comparison needs
+    neither arviz nor the InferenceData."""
+    result = loo(idata, model)
+    loglik = idata.log_likelihood["attitude_error"]
+    flat = loglik.values.reshape(-1, loglik.sizes["block"])
+    lppd = logsumexp(flat, b_inv=len(flat), axis=0)
+    elpd = result.loo_i.values
+    return pd.DataFrame({"block": [str(b) for b in loglik.coords["block"].values], "elpd_loo": elpd,
+                         "lppd": lppd, "p_loo": lppd - elpd, "pareto_k": result.pareto_k.values})
+
+
+def posterior_dataset(draws, theta_hat, spec) -> az.InferenceData:
+    """(chains, draws, P + 3) sampled offsets and log noise scales, in the parameters' units."""
+    p = len(spec)
+    values = spec.to_unit(theta_hat + draws[..., :p])
+    noise = scales_in_units(draws[..., p:])
+    return az.from_dict(
+        posterior={"channel_param": values, **{s.key: noise[..., i] for i, s in enumerate(NOISE_SCALES)}},
+        coords={"parameter": spec.labels}, dims={"channel_param": ["parameter"]})
+
+
+CI_PROB = 0.95
+"""The credible interval of the summary: central, as arviz's ``summary`` gives its ETI."""
+
+
+def summarize(idata, per_walker, labels, convergence: dict) -> pd.DataFrame:
+    """Mean, sd and central 95 % interval over every draw, computed as arviz's ``summary`` does
+    (xarray over chain and draw; the interval's tails at ``(1 - CI_PROB) / 2``), to the bit, without
+    the HDI it also sorts every parameter for; r_hat across the independent ensembles (each one
+    chain, step-major) and bulk ESS over every walker's own chain (arviz)."""
+    rhat = az.rhat(idata)
+    ess = az.ess(per_walker, method="bulk")
+    draws = idata.posterior
+    mean, sd = draws.mean(dim=("chain", "draw")), draws.std(dim=("chain", "draw"), ddof=1)
+    tail = (1 - CI_PROB) / 2
+    low, high = (draws.quantile(q, dim=("chain", "draw")) for q in (tail, 1 - tail))
+    rows = []
+    for label in list(labels) + NOISE_LABELS:
+        if label in NOISE_LABELS:
+            name, sel = label.removeprefix("noise."), {}
+        else:
+            name, sel = "channel_param", {"parameter": label}
+        value = {k: float(v[name].sel(sel)) for k, v in (("mean", mean), ("sd", sd), ("ci95_low", low),
+                                                          ("ci95_high", high), ("r_hat", rhat), ("ess_bulk", ess))}
+        rows.append({"label": label, **value})
+    frame = pd.DataFrame(rows)
+    frame["converged"] = (frame["r_hat"] < convergence["r_hat_max"]) & (frame["ess_bulk"] >= convergence["ess_bulk_min"])
+    return frame
+
+
+def sampler_record(post, summary, sampler_cfg: dict, seed: int) -> dict:
+    """``sampler.json``: the convergence verdict and what it rests on."""
+    res, est = post.result, post.estimate
+    return {
+        "converged": bool(summary["converged"].all() and res.converged_length),
+        "chain_length_ok": res.converged_length,
+        "steps": res.steps, "burn_steps": res.burn, "walkers": res.walkers,
+        "ensembles": int(res.chains.shape[0]), "seed": seed,
+        "tau_max_steps": float(res.tau.max()), "steps_over_tau": float(res.steps / res.tau.max()),
+        "acceptance": res.acceptance.tolist(),
+        "grid": {"nodes": post.grid.nodes, "start": post.grid.start.tolist(), "step": post.grid.step.tolist()},
+        "settings": dict(sampler_cfg),
+        "point_estimate": {"cost": est.cost, "nfev": est.nfev, "message": est.message,
+                           "noise": stated_scales(est.log_sigma), "st_correlation_time_s": est.correlation_time_s},
+        "failed_parameters": summary.loc[~summary["converged"], "label"].tolist(),
+    }
+
+
+def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
+    """Pointwise leave-one-block-out log-likelihood, the fit table and predictive draws."""
+    p = post.n_params
+    n_chain, n_draw = kept.shape[:2]
+    flat = kept.reshape(-1, kept.shape[-1])
+    dtheta, ratios, scale2 = predictive.split_draws(flat, p)
+    n_pred = min(sampler_cfg["predictive_draws"], n_draw)
+    pred_rows = (np.arange(n_chain)[:, None] * n_draw + np.arange(n_pred)[None]).ravel()
+    rng = np.random.default_rng([seed, 99])
+    loglik, block_names, fit_tables = [], [], []
+    pp_values, obs_values, sample_maneuver, sample_time = [], [], [], []
+    zeros = ch.ChannelParams.zeros(maneuvers[0].channels)
+    for data, lin, nz in zip(maneuvers, post.lins, post.noises):
+        wm = predictive.WhitenedManeuver(nz, ratios)
+        blocks = predictive.block_index(lin, data.st_time, sampler_cfg["block_s"])
+        loglik.append(predictive.leave_block_out_loglik(lin, wm, dtheta, scale2, blocks))
+        block_names += [f"{data.id}:{b}" for b in range(blocks.max() + 1)]
+        resid = predictive.residuals_body(lin, dtheta[pred_rows], wm.nuisance(dtheta[pred_rows]))
+        noise_rep = predictive.undifference_body(lin, wm.noise_draws(scale2[pred_rows], rng))
+        for s, channel_set in enumerate(lin.sets):
+            observed = preprocess.error_angles(data, channel_set, zeros)
+            mean_pred = observed[None] - resid[:, :, s]
+            replicate = mean_pred + noise_rep[:, :, s]
+            lo, hi = np.quantile(replicate, [0.025, 0.975], axis=0)
+            table = {"maneuver": data.id, "set": s, "channels": "+".join(channel_set), "time": data.st_time}
+            mean = mean_pred.mean(axis=0)
+            for i, axis in enumerate(AXES):
+                table[f"observed_{axis}"] = rad_to_arcsec(observed[:, i])
+                table[f"mean_{axis}"] = rad_to_arcsec(mean[:, i])
+                table[f"lo_{axis}"] = rad_to_arcsec(lo[:, i])
+                table[f"hi_{axis}"] = rad_to_arcsec(hi[:, i])
+                table[f"residual_{axis}"] = rad_to_arcsec(observed[:, i] - mean[:, i])
+                table[f"outside_{axis}"] = (observed[:, i] < lo[:, i]) | (observed[:, i] > hi[:, i])
+            fit_tables.append(pd.DataFrame(table))
+            if s == 0:
+                keep = np.arange(0, len(data.st_time), max(1, len(data.st_time) // 300))
+                pp_values.append(rad_to_arcsec(replicate[:, keep]))
+                obs_values.append(rad_to_arcsec(observed[keep]))
+                sample_maneuver += [data.id] * len(keep)
+                sample_time.append(data.st_time[keep])
+    loglik = np.concatenate(loglik, axis=1).reshape(n_chain, n_draw, -1)
+    pp = np.concatenate(pp_values, axis=1).reshape(n_chain, n_pred, -1, 3)
+    sample_coords = {"axis": list(AXES), "maneuver": ("sample", sample_maneuver),
+                     "time": ("sample", np.concatenate(sample_time))}
+    groups = {
+        "log_likelihood": xr.Dataset({"attitude_error": (("chain", "draw", "block"), loglik)},
+                                     coords={"chain": np.arange(n_chain), "draw": np.arange(n_draw),
+                                             "block": block_names}),
+        "posterior_predictive": xr.Dataset({"attitude_error": (("chain", "draw", "sample", "axis"), pp)},
+                                           coords={"chain": np.arange(n_chain), "draw": np.arange(n_pred),
+                                                   **sample_coords}),
+        "observed_data": xr.Dataset({"attitude_error": (("sample", "axis"), np.concatenate(obs_values))},
+                                    coords=sample_coords),
+    }
+    return groups, pd.concat(fit_tables, ignore_index=True)
+
+
+def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
+    """Everything the posterior step writes: ``(idata, summary, fit, sampler record)``.
+
+    The summary and convergence use every draw; the InferenceData keeps
+    ``loglik_draws`` evenly spaced draws per ensemble, with the pointwise
+    log-likelihood per ``block_s`` block and ``predictive_draws`` predictive draws.
+    """
+    spec, theta_hat = post.estimate.spec, post.estimate.theta
+    draws = post.ensemble_draws()
+    full = posterior_dataset(draws, theta_hat, spec)
+    with warnings.catch_warnings():
+        # every walker is a chain here, and a short run may have more walkers than steps
+        warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
+        per_walker = posterior_dataset(post.walker_draws(), theta_hat, spec)
+    summary = summarize(full, per_walker, spec.labels, convergence)
+    record = sampler_record(post, summary, sampler_cfg, seed)
+    if not record["converged"]:
+        log.warning("THE SAMPLER DID NOT CONVERGE: %s; numbers are not reliable",
+                    record["failed_parameters"] or "chains shorter than the autocorrelation limit")
+    thin = np.linspace(0, draws.shape[1] - 1, sampler_cfg["loglik_draws"]).astype(int)
+    kept = draws[:, thin]
+    groups, fit = _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed)
+    idata = posterior_dataset(kept, theta_hat, spec)
+    idata.add_groups(**groups)
+    units = ", ".join(f"{label} {unit}" for label, unit in zip(spec.labels, spec.units))
+    idata.posterior.attrs.update({"gyrocal_version": __version__, "seed": seed, "units": units,
+                                  "prior_only": ", ".join(p.label for p in spec.parameters if p.prior_only)})
+    for group in idata.groups():
+        idata[group].attrs.pop("created_at", None)  # same config and seed, same bytes
+    return idata, summary, fit, record

@@ -1,0 +1,382 @@
+"""The posterior of the channel parameters and the noise scales, sampled with emcee.
+
+The error model is linearised about the WLS point estimate (see `errormodel`), the
+nuisance is integrated out exactly (see `likelihood`), and what emcee samples is the
+24 channel parameters (as offsets ``dtheta`` from the point estimate) and the three
+noise scales ``log [sigma_cross, sigma_about, arw]``. The noise covariance is
+``sigma_cross^2`` times a matrix fixed by two ratios; the scale enters in closed form
+and the likelihood's sufficient statistics are tabulated on a grid over the ratios,
+spanning many posterior standard deviations, and interpolated (cubic Lagrange).
+"""
+
+import logging
+from dataclasses import dataclass
+
+import arviz as az
+import emcee
+import numpy as np
+
+from gyrocal.inference.estimate import linearize_all, profile_reml
+from gyrocal.inference.likelihood import (
+    LOG_2PI,
+    campaign_stats,
+    conditional_posterior,
+    leave_one_out_log_evidence,
+    maneuver_stats,
+    total,
+)
+from gyrocal.inference.noise import log_sigma_of, variances
+
+NOISE_NAMES = ("sigma_cross", "sigma_about", "arw")
+
+
+@dataclass
+class Priors:
+    """Normal priors with bounds that say what is physical (SI), and log-normal noise priors."""
+
+    mean: np.ndarray
+    sd: np.ndarray
+    bound: np.ndarray
+    log_sigma_center: np.ndarray
+    log_sigma_sd: np.ndarray
+
+    @classmethod
+    def from_spec(cls, spec, stated_noise: dict, noise_log_sd: float) -> "Priors":
+        """The spec's priors (as declared, or overridden by `ModelSpec.with_priors`); the noise
+        scales' priors are centred on the stated noise."""
+        return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, log_sigma_of(stated_noise),
+                   np.full(3, float(noise_log_sd)))
+
+
+MAX_HALF_WIDTH_LOG_RATIO = 8.0
+"""The grid spans at most this either way of each ratio's estimate (a factor e^8 = 3 000 in the
+noise): where the ratios' profile is flat and the grid falls back on their prior (sd 2.1 with
+``noise_log_sd`` 1.5), +-8 sd would reach e^17, where the covariance is numerically singular
+(a 30-sample maneuver's banded Cholesky fails from e^10; a RepoIMU trial's posterior crashed)."""
+
+
+class RatioGrid:
+    """Unit-scale sufficient statistics on a grid over the two noise ratios.
+
+    Ratios are ``log(sigma_about/sigma_cross)`` and ``log(arw/sigma_cross)``; at each
+    node the statistics are computed with ``sigma_cross = 1``. The grid spans ``half_width_sd``
+    sd either way, at most `MAX_HALF_WIDTH_LOG_RATIO`.
+    """
+
+    def __init__(self, noises, center, sd, nodes: int, half_width_sd: float):
+        self.nodes = nodes
+        half_width = np.minimum(half_width_sd * np.asarray(sd, dtype=float), MAX_HALF_WIDTH_LOG_RATIO)
+        self.start = center - half_width
+        self.step = 2 * half_width / (nodes - 1)
+        n_par = noises[0].n_params
+        self.n_params = n_par
+        values = []
+        for i in range(nodes):
+            for j in range(nodes):
+                r = self.start + self.step * np.array([i, j])
+                s = campaign_stats(noises, variances([0.0, r[0], r[1]]))
+                values.append(np.concatenate([s.A.ravel(), s.b, [s.c, s.logdet]]))
+                self.n = s.n
+        self.values = np.array(values)
+
+    def weights(self, ratios: np.ndarray):
+        """(W, nodes^2) cubic Lagrange weights, and a mask of points inside the grid."""
+        t = (ratios - self.start) / self.step
+        inside = np.all((t >= 1) & (t <= self.nodes - 2), axis=1)
+        i = np.clip(np.floor(t), 1, self.nodes - 3).astype(int)
+        f = t - i
+        w1 = np.stack([-f * (f - 1) * (f - 2) / 6, (f + 1) * (f - 1) * (f - 2) / 2,
+                       -(f + 1) * f * (f - 2) / 2, (f + 1) * f * (f - 1) / 6], axis=-1)
+        weights = np.zeros((len(ratios), self.nodes, self.nodes))
+        offsets = np.arange(-1, 3)
+        rows = np.arange(len(ratios))[:, None, None]
+        weights[rows, (i[:, 0, None] + offsets)[:, :, None], (i[:, 1, None] + offsets)[:, None, :]] = (
+            w1[:, 0, :, None] * w1[:, 1, None, :])
+        return weights.reshape(len(ratios), self.nodes**2), inside
+
+    def stats(self, ratios: np.ndarray):
+        """Interpolated unit-scale ``A, b, c, logdet`` per row of ``ratios``."""
+        weights, inside = self.weights(np.atleast_2d(ratios))
+        v = weights @ self.values
+        p = self.n_params
+        return v[:, :p * p].reshape(-1, p, p), v[:, p * p:p * p + p], v[:, -2], v[:, -1], inside
+
+
+class LogPosterior:
+    """Vectorised log posterior of ``x = [dtheta (P), log sigma_cross, log sigma_about, log arw]``."""
+
+    def __init__(self, grid: RatioGrid, theta_hat: np.ndarray, priors: Priors):
+        self.grid = grid
+        self.theta_hat = theta_hat
+        self.priors = priors
+        self.n_params = len(theta_hat)
+
+    def __call__(self, x):
+        x = np.atleast_2d(x)
+        p = self.n_params
+        d, log_sigma = x[:, :p], x[:, p:]
+        A, b, c, logdet, inside = self.grid.stats(log_sigma[:, 1:] - log_sigma[:, :1])
+        scale = np.exp(2 * log_sigma[:, 0])
+        quad = (d[:, None, :] @ A @ d[:, :, None])[:, 0, 0] - 2 * np.sum(b * d, axis=1) + c
+        loglik = -0.5 * (quad / scale + logdet + self.grid.n * (np.log(scale) + LOG_2PI))
+        theta = self.theta_hat + d
+        pr = self.priors
+        logprior = -0.5 * np.sum(((theta - pr.mean) / pr.sd) ** 2, axis=1)
+        logprior += -0.5 * np.sum(((log_sigma - pr.log_sigma_center) / pr.log_sigma_sd) ** 2, axis=1)
+        ok = inside & np.all(np.abs(theta) <= pr.bound, axis=1)
+        value = loglik + logprior
+        return np.where(ok & np.isfinite(value), value, -np.inf)
+
+
+def ratio_curvature(noises, ratios, fallback_sd, step=0.02):
+    """Standard deviations of the two ratios from the REML profile's Hessian; where the profile is
+    flat or not convex there (a noise scale the data cannot tell, as when the model misses
+    structure far above the noise), ``fallback_sd`` (their prior's), with a warning."""
+    f = lambda r: profile_reml(noises, r)[0]
+    h = np.zeros((2, 2))
+    f0 = f(ratios)
+    e = np.eye(2) * step
+    for i in range(2):
+        h[i, i] = (f(ratios + e[i]) - 2 * f0 + f(ratios - e[i])) / step**2
+    h[0, 1] = h[1, 0] = (f(ratios + e[0] + e[1]) - f(ratios + e[0] - e[1])
+                         - f(ratios - e[0] + e[1]) + f(ratios - e[0] - e[1])) / (4 * step**2)
+    if not np.all(np.isfinite(h)) or np.any(np.linalg.eigvalsh(h) <= 0):
+        logging.getLogger("gyrocal").warning(
+            "the REML profile of the noise ratios is not convex at %s: the grid spans their prior instead", ratios)
+        return np.full(2, float(fallback_sd))
+    cov = np.linalg.inv(h)
+    return np.sqrt(np.clip(np.diag(cov), 1e-10, None))
+
+
+class SamplingError(RuntimeError):
+    """The posterior cannot be sampled from this point estimate; the message says why."""
+
+
+class StudentProposal:
+    """Independence proposal from a multivariate Student-t: around the Laplace approximation to
+    start, then fitted to burn-in draws (`fitted_proposal`).
+
+    Used as an emcee ``MHMove``: the posterior of this linear-Gaussian model is close to
+    Gaussian, so independence proposals from its Laplace approximation (heavier-tailed
+    and wider) are accepted most of the time and decorrelate in a few steps, where the
+    differential-evolution moves need ~100 steps in 27 dimensions.
+    """
+
+    def __init__(self, mean, cov, dof=5.0, inflate=1.2):
+        self.mean = np.asarray(mean, dtype=float)
+        self.chol = np.linalg.cholesky(cov) * inflate
+        self.dof = dof
+
+    def log_density(self, x):
+        z = np.linalg.solve(self.chol, (x - self.mean).T).T
+        return -0.5 * (self.dof + len(self.mean)) * np.log1p(np.sum(z**2, axis=1) / self.dof)
+
+    def draw(self, rng_normal, rng_chisq):
+        return self.mean + (rng_normal @ self.chol.T) * np.sqrt(self.dof / rng_chisq)[:, None]
+
+    def __call__(self, x, random):
+        """emcee ``MHMove`` proposal: new positions and the log proposal ratio."""
+        n, dim = x.shape
+        new = self.draw(random.standard_normal((n, dim)), random.chisquare(self.dof, n))
+        return new, self.log_density(x) - self.log_density(new)
+
+
+def fitted_proposal(draws, theta_cov, dof=30.0, inflate=1.05) -> StudentProposal:
+    """Independence proposal fitted to burn-in draws of ``[dtheta, log sigma]``, keeping the
+    channel parameters' covariance given the noise scales at the Laplace one.
+
+    Given the noise scales the linearised model is Gaussian in ``dtheta``; ``theta_cov`` is that
+    conditional covariance at the point estimate's noise (it scales with ``sigma_cross^2`` and moves
+    a little with the ratios elsewhere). The draws give the mean, the noise scales' covariance and
+    the regression of ``dtheta`` on them: ``4P + 9`` numbers where a full fit estimates
+    ``(P + 3)(P + 6) / 2`` (on MOM's bias-drift model, P = 30: 129 against 594). A few thousand
+    correlated burn-in draws give those far more precisely, and the proposal is accepted more often.
+    """
+    p = len(theta_cov)
+    theta, hyper = draws[:, :p], draws[:, p:]
+    mean = draws.mean(axis=0)
+    hyper_cov = np.atleast_2d(np.cov(hyper.T))
+    eig = np.linalg.eigvalsh(hyper_cov)
+    if not eig[0] > 1e-12 * eig[-1]:
+        raise SamplingError(f"posterior: the noise scales did not move during burn-in (their covariance over "
+                            f"{len(draws)} draws is singular), so no proposal can be fitted to them")
+    cross = (theta - mean[:p]).T @ (hyper - mean[p:]) / (len(draws) - 1)
+    slope = np.linalg.solve(hyper_cov, cross.T).T
+    cov = np.empty((p + hyper.shape[1],) * 2)
+    cov[:p, :p] = theta_cov + slope @ cross.T
+    cov[:p, p:] = cross
+    cov[p:, :p] = cross.T
+    cov[p:, p:] = hyper_cov
+    return StudentProposal(mean, cov, dof=dof, inflate=inflate)
+
+
+@dataclass
+class SamplerResult:
+    chains: np.ndarray
+    """(ensembles, steps, walkers, dim) production samples."""
+    tau: np.ndarray
+    """(ensembles, dim) integrated autocorrelation times, in steps."""
+    steps: int
+    burn: int
+    acceptance: np.ndarray
+    converged_length: bool
+    walkers: int
+
+
+AUTOCORR_WINDOW_C = 5.0
+"""Sokal's window constant, emcee's default for `emcee.autocorr.integrated_time`."""
+
+
+def _autocorr_times(chain) -> np.ndarray:
+    """emcee's integrated autocorrelation time per parameter of a (steps, walkers, dim) chain:
+    the walkers' mean autocorrelation and Sokal's window (`emcee.autocorr.auto_window`), with
+    every walker and parameter in one FFT (`arviz.autocorr`) where emcee takes one at a time
+    (eight times as fast, the same times to 1e-15). A walker that never moves leaves its
+    parameter's time undefined (NaN), as in emcee. The caller compares the length with them."""
+    rho = az.autocorr(np.moveaxis(chain, 0, -1), axis=-1).mean(axis=0)
+    taus = 2.0 * np.cumsum(rho, axis=-1) - 1.0
+    window = [emcee.autocorr.auto_window(t, AUTOCORR_WINDOW_C) for t in taus]
+    tau = taus[np.arange(len(taus)), window]
+    tau[np.any(np.ptp(chain, axis=0) == 0, axis=0)] = np.nan
+    return tau
+
+
+DE_SHARE = 0.1
+"""Share of differential-evolution moves: local steps that keep every walker moving where the
+independence proposal fits the posterior badly (a misfit model, a noise ratio at its grid's edge).
+On MOM, 0.3 made the autocorrelation time 4.3 steps, 0.1 made it 2.8 and none 2.5."""
+
+
+def _sampler(logpost, walkers, dim, proposal, seed):
+    """An emcee sampler with its own random state, seeded: numpy's global state is untouched."""
+    moves = [(emcee.moves.MHMove(proposal), 1.0 - DE_SHARE), (emcee.moves.DEMove(), DE_SHARE)]
+    sampler = emcee.EnsembleSampler(walkers, dim, logpost, vectorize=True, moves=moves)
+    sampler.random_state = np.random.RandomState(seed).get_state()
+    return sampler
+
+
+START_REDRAWS = 100
+"""Start points with zero posterior density are redrawn at most this often, then sampling stops."""
+
+
+def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict, seed: int) -> SamplerResult:
+    """Independent emcee ensembles, run until every chain is at least k autocorrelation times.
+
+    Moves: independence proposals (`StudentProposal`) mixed with differential
+    evolution (`DE_SHARE`). Each ensemble burns in with a proposal from the Laplace
+    approximation, fits its own proposal to that (`fitted_proposal`), burns in again, refits,
+    and keeps that proposal fixed for production, so adaptation never touches the production
+    chain and the ensembles stay independent. Every sampler of ensemble e starts its own random
+    state from the same seed of e; the start points come from a generator of its own.
+    """
+    dim = len(proposal_mean)
+    walkers = max(int(cfg["walkers"]), 2 * dim + 2)
+    walkers += walkers % 2
+    n_ens, burn = int(cfg["ensembles"]), int(cfg["burn_steps"])
+    chunk, multiple, max_steps = int(cfg["chunk_steps"]), float(cfg["min_tau_multiple"]), int(cfg["max_steps"])
+    laplace = StudentProposal(proposal_mean, proposal_cov)
+    theta_cov = proposal_cov[:dim - len(NOISE_NAMES), :dim - len(NOISE_NAMES)]
+    start = StudentProposal(proposal_mean, proposal_cov, dof=5.0, inflate=2.0)
+    samplers = []
+    for e in range(n_ens):
+        sampler_seed = (seed * 7919 + e) % 2**32
+        rng = np.random.default_rng([seed, e])
+        p0 = start.draw(rng.standard_normal((walkers, dim)), rng.chisquare(start.dof, walkers))
+        bad = ~np.isfinite(logpost(p0))
+        for _ in range(START_REDRAWS):
+            if not bad.any():
+                break
+            p0[bad] = laplace.draw(rng.standard_normal((bad.sum(), dim)), rng.chisquare(laplace.dof, bad.sum()))
+            bad = ~np.isfinite(logpost(p0))
+        if bad.any():
+            raise SamplingError(f"posterior: after {START_REDRAWS} redraws, {bad.sum()} of {walkers} start points of "
+                                f"ensemble {e} still have zero posterior density (outside the physical bounds or the "
+                                f"noise-ratio grid): the point estimate is not a usable start")
+        proposal, state = laplace, p0
+        for _ in range(2):
+            warm = _sampler(logpost, walkers, dim, proposal, sampler_seed)
+            state = warm.run_mcmc(state, burn // 2)
+            proposal = fitted_proposal(warm.get_chain(discard=burn // 4, flat=True), theta_cov)
+        samplers.append([_sampler(logpost, walkers, dim, proposal, sampler_seed), state])
+    steps = 0
+    while True:
+        n_new = int(cfg["initial_steps"]) if steps == 0 else chunk
+        for pair in samplers:
+            pair[1] = pair[0].run_mcmc(pair[1], n_new)
+        steps += n_new
+        tau = np.array([_autocorr_times(s.get_chain()) for s, _ in samplers])
+        if steps >= multiple * tau.max() or steps + chunk > max_steps:
+            break
+    chains = np.stack([s.get_chain() for s, _ in samplers])
+    acceptance = np.array([s.acceptance_fraction.mean() for s, _ in samplers])
+    return SamplerResult(chains, tau, steps, burn, acceptance, bool(steps >= multiple * tau.max()), walkers)
+
+
+def start_covariance(cond_cov, n_obs, ratio_sd):
+    """Laplace covariance of ``[dtheta, log sigma_cross, log sigma_about, log arw]``.
+
+    ``log sigma_cross`` is known to about ``1/sqrt(2n)``; the other two are it plus
+    the ratios, whose spread comes from the REML Hessian.
+    """
+    p = len(cond_cov)
+    lift = np.array([[1.0, 0, 0], [1, 1, 0], [1, 0, 1]])
+    hyper = lift @ np.diag([1.0 / (2 * n_obs), ratio_sd[0] ** 2, ratio_sd[1] ** 2]) @ lift.T
+    cov = np.zeros((p + 3, p + 3))
+    cov[:p, :p] = cond_cov
+    cov[p:, p:] = hyper
+    return cov
+
+
+@dataclass
+class Posterior:
+    """Everything the sampling step produces, before it is written out."""
+
+    estimate: object
+    lins: list
+    noises: list
+    grid: RatioGrid
+    result: SamplerResult
+    labels: list
+    parts: list
+    """Each maneuver's `likelihood.Stats` at the point estimate's noise scales."""
+
+    @property
+    def n_params(self):
+        return len(self.labels)
+
+    def ensemble_draws(self) -> np.ndarray:
+        """(ensembles, steps * walkers, dim), step-major: split-R-hat across ensembles then
+        compares early with late steps, so a drift after burn-in shows."""
+        c = self.result.chains
+        return c.reshape(c.shape[0], -1, c.shape[-1])
+
+    def walker_draws(self) -> np.ndarray:
+        """(ensembles * walkers, steps, dim): every walker a chain, so the ESS follows
+        each walker's autocorrelation in time."""
+        c = self.result.chains
+        return np.transpose(c, (0, 2, 1, 3)).reshape(-1, c.shape[1], c.shape[-1])
+
+
+def leave_one_maneuver_out(post: Posterior, priors: Priors) -> np.ndarray:
+    """Exact ``log p(maneuver m | all others)`` per maneuver, the parameters refitted without it.
+
+    The maneuvers are independent given the parameters (each has its own nuisance), and the
+    linearised model is Gaussian given the noise scales (held at the point estimate's), so
+    each refit is a ratio of two closed-form evidences: no importance sampling.
+    """
+    return leave_one_out_log_evidence(post.parts, priors.mean - post.estimate.theta, priors.sd)
+
+
+def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dict, seed: int) -> Posterior:
+    """Linearise about the point estimate, tabulate the noise ratios and run the ensembles."""
+    lins, noises = linearize_all(maneuvers, estimate)
+    ratios = estimate.log_sigma[1:] - estimate.log_sigma[0]
+    ratio_sd = ratio_curvature(noises, ratios, np.sqrt(2.0) * priors.log_sigma_sd[0])
+    grid = RatioGrid(noises, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"])
+    logpost = LogPosterior(grid, estimate.theta, priors)
+    parts = [maneuver_stats(nz, variances(estimate.log_sigma)) for nz in noises]
+    stats = total(parts)
+    mean, cov = conditional_posterior(stats, priors.mean - estimate.theta, priors.sd)
+    start_mean = np.concatenate([mean, estimate.log_sigma])
+    result = run_ensembles(logpost, start_mean, start_covariance(cov, stats.n, ratio_sd), sampler_cfg, seed)
+    return Posterior(estimate, lins, noises, grid, result, list(estimate.spec.labels), parts)

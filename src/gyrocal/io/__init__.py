@@ -1,0 +1,2 @@
+"""The edges: campaign directories and their CSV and YAML files, importer mappings, scenario
+files, and results written whole or not at all."""

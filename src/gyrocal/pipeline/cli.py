@@ -1,0 +1,85 @@
+"""The ``gyrocal`` command: simulate, import or validate a campaign; compare two calibrations; plan a campaign;
+measure a gyro's noise at rest; check the linear model against the exact one."""
+
+import argparse
+import sys
+
+from gyrocal import __version__
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(prog="gyrocal", description=__doc__)
+    parser.add_argument("--version", action="version", version=f"gyrocal {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+    sim = sub.add_parser("simulate", help="simulate a campaign from a scenario YAML")
+    sim.add_argument("scenario")
+    sim.add_argument("outdir")
+    sim.add_argument("--seed", type=int, default=None, help="default: the scenario's seed")
+    imp = sub.add_parser("import", help="write a campaign directory from tabular telemetry, through a mapping")
+    imp.add_argument("mapping", help="a shipped mapping (repoimu) or a mapping file (.yaml)")
+    imp.add_argument("outdir")
+    imp.add_argument("files", nargs="+", help="one maneuver per file, named after its stem")
+    imp.add_argument("--reference-interval", type=float, default=None, metavar="S",
+                     help="keep the reference only every S seconds (0: every row); default: the mapping's "
+                          "reference.sample_interval_s")
+    val = sub.add_parser("validate", help="check a campaign directory against the contract")
+    val.add_argument("directory")
+    cmp_ = sub.add_parser("compare-campaigns", help="compare two calibration.csv parameter by parameter")
+    cmp_.add_argument("first")
+    cmp_.add_argument("second")
+    cmp_.add_argument("--z-max", type=float, default=3.0, help="agreement limit on |z| (default 3)")
+    aln = sub.add_parser("allan", help="the gyro noise of a static recording: Allan deviation and angle random walk")
+    aln.add_argument("mapping", help="a shipped mapping (repoimu) or a mapping file (.yaml)")
+    aln.add_argument("file", help="a recording with the gyros at rest")
+    lin = sub.add_parser("linearity", help="the exact model against the linear one where the posterior lives")
+    lin.add_argument("results", help="a run's results/<campaign> folder")
+    lin.add_argument("--model", default="baseline", help="the model variant (default baseline)")
+    lin.add_argument("--plugin", action="append", default=[], metavar="FILE", help="a plugin file the model uses")
+    pln = sub.add_parser("plan", help="predict what a planned campaign (a scenario YAML) will tell, before flying it")
+    pln.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="one scenario, or two to compare side by side")
+    pln.add_argument("--out", default=".", help="where plan.csv, plan_detection.csv and plan.png go (default .)")
+    pln.add_argument("--config", default="config/config.yaml", help="gyrocal config (priors, models, thresholds)")
+    pln.add_argument("--model", default="baseline", help="the model variant to plan for (default baseline)")
+    args = parser.parse_args(argv)
+    if args.command == "plan" and len(args.scenarios) > 2:
+        parser.error("plan takes one scenario, or two to compare")
+
+    from gyrocal.io.telemetry import TelemetryError
+    try:
+        if args.command == "simulate":
+            from gyrocal.simulation.simulate import run
+            campaign, truth = run(args.scenario, args.outdir, args.seed)
+            print(f"wrote {args.outdir}/campaign ({len(campaign.maneuvers)} maneuvers, seed {truth['seed']}) "
+                  f"and {args.outdir}/truth.json")
+        elif args.command == "import":
+            from gyrocal.io.importer import import_files, report
+            print(report(*import_files(args.mapping, args.outdir, args.files, args.reference_interval), args.outdir))
+        elif args.command == "validate":
+            from gyrocal.checks.consistency import read_checked, summary
+            print(summary(*read_checked(args.directory)))
+        elif args.command == "compare-campaigns":
+            from gyrocal.criticism.agreement import compare_files
+            text, agree = compare_files(args.first, args.second, args.z_max)
+            print(text)
+            return 0 if agree else 1
+        elif args.command == "allan":
+            from gyrocal.io.importer import read_file, read_mapping
+            from gyrocal.planning.allan import static_report
+            mapping = read_mapping(args.mapping)
+            print(static_report(read_file(args.file, mapping), list(mapping["gyro"]["columns"]), args.file))
+        elif args.command == "linearity":
+            from gyrocal.criticism.linearity import run
+            print(run(args.results, args.model, args.plugin))
+        elif args.command == "plan":
+            import matplotlib
+            matplotlib.use("Agg")
+            from gyrocal.planning.plan import run
+            print(run(args.scenarios, args.config, args.out, args.model))
+    except (TelemetryError, ValueError, FileNotFoundError) as exc:
+        print(f"gyrocal {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,2 @@
+"""What a reviewer reads: the pre-uplink HTML report, its figures and the fleet summary. It renders
+findings and decides nothing."""

@@ -1,0 +1,1 @@
+"""A Mars-Orbiter-like spacecraft simulated from a scenario: the truth, telemetry and campaign files."""

@@ -1,0 +1,254 @@
+"""A Mars-Orbiter-like spacecraft: three two-axis DTGs, a star tracker, single-axis maneuvers.
+
+Every setting comes from a scenario YAML (``config/scenarios/*.yaml``). The true body
+rate is piecewise constant on a fine grid, so the true attitude is propagated exactly;
+the gyros integrate that rate through the channel model (docs/interface.md section 2) plus
+angle random walk and pulse quantisation, and the star tracker samples the true
+attitude with anisotropic, optionally time-correlated noise.
+"""
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from gyrocal.io.scenario import load_scenario
+from gyrocal.io.telemetry import Campaign, Maneuver, write_campaign
+from gyrocal.model import channels as ch
+from gyrocal.model import kinematics
+from gyrocal.model.spec import ModelSpec, baseline
+from gyrocal.model.units import (
+    AXIS_INDEX,
+    PPM,
+    STANDARD_GRAVITY_M_S2,
+    arcsec_to_rad,
+    arw_to_rad_sqrt_s,
+    deg_h_to_rad_s,
+    rad_s_to_deg_h,
+)
+
+
+@dataclass
+class ManeuverProfile:
+    """Timing of one single-axis maneuver: hold, ramp up, coast, ramp down, hold."""
+
+    id: str
+    axis: str
+    sign: float
+    t_start: float
+    rate_rad_s: float
+    accel_rad_s2: float
+    hold_s: float
+    coast_s: float
+
+    @property
+    def ramp_s(self):
+        return self.rate_rad_s / self.accel_rad_s2
+
+    @property
+    def t_end(self):
+        return self.t_start + 2 * self.hold_s + 2 * self.ramp_s + self.coast_s
+
+    def rate(self, t):
+        """Commanded rate about the maneuver axis at times ``t`` (rad/s)."""
+        tau = np.asarray(t) - self.t_start - self.hold_s
+        r, c = self.ramp_s, self.coast_s
+        up = np.clip(tau / r, 0.0, 1.0)
+        down = np.clip((tau - r - c) / r, 0.0, 1.0)
+        return self.sign * self.rate_rad_s * (up - down)
+
+
+def build_profiles(scenario) -> list:
+    d = scenario["maneuver_defaults"]
+    t = scenario["t0_s"] + d["gap_s"]
+    profiles = []
+    for entry in scenario["maneuvers"]:
+        m = {**d, **entry}
+        rate = np.deg2rad(m["rate_deg_s"])
+        accel = np.deg2rad(m["accel_deg_s2"])
+        angle = np.deg2rad(m["angle_deg"])
+        coast = angle / rate - rate / accel
+        if coast < 0:
+            raise ValueError(f"maneuver {m['id']}: angle too small to reach the rate; lower rate_deg_s")
+        p = ManeuverProfile(m["id"], m["axis"], 1.0 if m["direction"] == "+" else -1.0, t,
+                            rate, accel, m["hold_s"], coast)
+        profiles.append(p)
+        t = p.t_end + m["gap_s"]
+    return profiles
+
+
+def _uncontrolled_rates(t, amplitude_rad_s, rng):
+    """Small limit-cycle rates on every axis: a few slow sinusoids with random phases."""
+    periods = rng.uniform(60.0, 400.0, size=(3, 3))
+    phases = rng.uniform(0, 2 * np.pi, size=(3, 3))
+    weights = rng.uniform(0.3, 1.0, size=(3, 3))
+    weights /= weights.sum(axis=1, keepdims=True)
+    arg = 2 * np.pi * t[:, None, None] / periods[None] + phases[None]
+    return amplitude_rad_s * np.sum(weights[None] * np.sin(arg), axis=2)
+
+
+def _temperatures(t, dtgs, swing_K, rng):
+    """Slow DTG temperature excursions (K about a 0 reference), one series per DTG."""
+    if swing_K == 0:
+        return {}
+    span = t[-1] - t[0]
+    out = {}
+    for dtg in dtgs:
+        period = span * rng.uniform(0.6, 1.2)
+        phase = rng.uniform(0, 2 * np.pi)
+        out[f"temp_dtg{dtg}"] = swing_K * np.sin(2 * np.pi * (t - t[0]) / period + phase)
+    return out
+
+
+def truth_parameters(spec: ModelSpec, truth: ch.ChannelParams) -> dict:
+    """``truth.json``'s parameters: the channel model in the contract's units and each bias in deg/h."""
+    out = spec.contract(truth)
+    for i, c in enumerate(spec.channels):
+        out[c.name]["bias_deg_h"] = rad_s_to_deg_h(truth.bias_rad_s[i])
+    return {c: {k: round(float(v), 9) for k, v in entry.items()} for c, entry in out.items()}
+
+
+def scenario_channels(scenario: dict) -> tuple:
+    """The gyro channels a scenario flies."""
+    return tuple(ch.Channel(n, int(v["dtg"]), v["axis"]) for n, v in scenario["channels"].items())
+
+
+def simulate(scenario: dict, seed=None):
+    """Simulate a campaign; returns ``(Campaign, truth_dict)``."""
+    seed = scenario["seed"] if seed is None else seed
+    rng = np.random.default_rng(seed)
+    channels = scenario_channels(scenario)
+    spec = baseline(channels)
+    truth = spec.params_from_contract(scenario["truth"])
+    gyro_cfg, st_cfg, eff = scenario["gyro"], scenario["star_tracker"], scenario["effects"]
+    given_bias = [scenario["truth"].get(c.name, {}).get("bias_deg_h") for c in channels]
+    truth.bias_rad_s[:] = deg_h_to_rad_s([0.0 if b is None else b for b in given_bias])
+    idx = [i for i, b in enumerate(given_bias) if b is None]
+    if idx:
+        truth.bias_rad_s[idx] = deg_h_to_rad_s(rng.normal(0, gyro_cfg["bias_sd_deg_h"], len(idx)))
+
+    profiles = build_profiles(scenario)
+    dt_g = 1.0 / scenario["gyro_hz"]
+    n_sub = int(scenario["truth_substeps"])
+    t0 = scenario["t0_s"]
+    t_final = profiles[-1].t_end + scenario["maneuver_defaults"]["gap_s"]
+    n_gyro = int(np.ceil((t_final - t0) / dt_g))
+    dt_sub = dt_g / n_sub
+    t_fine = t0 + dt_sub * np.arange(n_gyro * n_sub + 1)
+    t_mid = 0.5 * (t_fine[1:] + t_fine[:-1])
+
+    rate = _uncontrolled_rates(t_mid, np.deg2rad(scenario["maneuver_defaults"]["uncontrolled_rate_deg_s"]), rng)
+    for p in profiles:
+        rate[:, AXIS_INDEX[p.axis]] += p.rate(t_mid)
+    increments_fine = rate * dt_sub
+    attitude0 = Rotation.random(random_state=rng.integers(2**32))
+    attitudes_fine = kinematics.propagate(attitude0, increments_fine)
+
+    # Gyro channels: model of docs/interface.md section 2 with the optional effects.
+    temps = _temperatures(t_mid, sorted({c.dtg for c in channels}), eff["temperature_swing_K"], rng)
+    extra_scale = np.zeros((len(t_mid), len(channels)))
+    if eff["sf_nonlinearity_ppm_per_deg2_s2"]:
+        own = np.rad2deg(rate[:, ch.input_axes(channels)])
+        extra_scale += eff["sf_nonlinearity_ppm_per_deg2_s2"] * PPM * own**2
+    if temps:
+        for i, c in enumerate(channels):
+            extra_scale[:, i] += eff["sf_temperature_ppm_per_K"] * PPM * temps[f"temp_dtg{c.dtg}"]
+    fine = ch.measure(increments_fine, truth, dt_s=np.full(len(t_mid), dt_sub), extra_scale=extra_scale)
+    drift = deg_h_to_rad_s(eff["bias_drift_deg_h_per_h"]) / 3600.0  # rad/s per s
+    fine += drift * (t_mid - t0)[:, None] * dt_sub
+    gravity = scenario["accelerometer"]["gravity_m_s2"]
+    if gravity:  # a lab: at rest the accelerometers sense +g along the room's vertical (inertial z)
+        mid = kinematics.compose(attitudes_fine[:-1], Rotation.from_rotvec(0.5 * increments_fine))
+        force_fine = mid.inv().apply([0.0, 0.0, gravity])
+        g_rad_s = np.deg2rad(eff["g_sensitivity_deg_s_per_g"]) / STANDARD_GRAVITY_M_S2
+        fine += (g_rad_s * force_fine.sum(axis=1) * dt_sub)[:, None]
+    continuous = fine.reshape(n_gyro, n_sub, len(channels)).sum(axis=1)
+    arw = arw_to_rad_sqrt_s(gyro_cfg["arw_deg_sqrt_h"])
+    continuous += rng.normal(0.0, arw * np.sqrt(dt_g), continuous.shape)
+    pulse = arcsec_to_rad(gyro_cfg["pulse_arcsec"])
+    if pulse > 0:
+        counts = np.floor(np.cumsum(continuous, axis=0) / pulse)
+        gyro_increments = pulse * np.diff(np.vstack([np.zeros(len(channels)), counts]), axis=0)
+    else:
+        gyro_increments = continuous
+    t_gyro = t0 + dt_g * np.arange(1, n_gyro + 1)
+
+    # Star tracker: true attitude at its (possibly late) sample times, times its noise.
+    dt_st = 1.0 / scenario["star_tracker_hz"]
+    t_st = t0 + eff["st_latency_s"] + dt_st * np.arange(int((t_final - t0 - eff["st_latency_s"]) / dt_st))
+    true_st = kinematics.attitude_at(t_fine, attitudes_fine, increments_fine, t_st - eff["st_latency_s"])
+    noise = star_tracker_noise(len(t_st), dt_st, st_cfg, eff["st_correlation_time_s"], rng)
+    measured = true_st * Rotation.from_rotvec(noise)
+    if eff["gravity_offset_arcsec_per_g"]:
+        force_st = true_st.inv().apply([0.0, 0.0, gravity]) / STANDARD_GRAVITY_M_S2
+        offset = arcsec_to_rad(eff["gravity_offset_arcsec_per_g"]) * (force_st.sum(axis=1, keepdims=True) - force_st)
+        measured = measured * Rotation.from_rotvec(offset)
+    quat = measured.as_quat()
+    valid = np.ones(len(t_st), dtype=int)
+    n_bad = round(st_cfg["invalid_fraction"] * len(t_st))
+    if n_bad:
+        bad = rng.choice(len(t_st), n_bad, replace=False)
+        valid[bad] = 0
+        quat[bad] = Rotation.random(n_bad, random_state=rng.integers(2**32)).as_quat()
+
+    gyro_columns = {c.name: gyro_increments[:, i] for i, c in enumerate(channels)}
+    for name, series in temps.items():
+        gyro_columns[name] = series.reshape(n_gyro, n_sub).mean(axis=1) + rng.normal(0, 0.01, n_gyro)
+    if gravity:  # each interval's mean specific force, as an accelerometer logged beside the gyros
+        force = force_fine.reshape(n_gyro, n_sub, 3).mean(axis=1)
+        force += rng.normal(0.0, scenario["accelerometer"]["noise_m_s2"], force.shape)
+        for i, a in enumerate("xyz"):
+            gyro_columns[f"acc_{a}"] = force[:, i]
+    campaign = Campaign(
+        name=scenario["name"],
+        channels=channels,
+        star_tracker={k: st_cfg[k] for k in ("sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body")},
+        gyro={"arw_deg_sqrt_h": gyro_cfg["arw_deg_sqrt_h"]},
+        maneuvers=tuple(Maneuver(p.id, p.axis, "+" if p.sign > 0 else "-", p.t_start, p.t_end,
+                                 tuple(scenario["in_loop"])) for p in profiles),
+        st_time=t_st, st_quat=quat, st_valid=valid,
+        gyro_time=t_gyro, gyro_columns=gyro_columns,
+    )
+    truth_out = {
+        "seed": int(seed),
+        "parameters": truth_parameters(spec, truth),
+        "noise": {"sigma_cross_arcsec": st_cfg["sigma_cross_arcsec"],
+                  "sigma_about_arcsec": st_cfg["sigma_about_arcsec"],
+                  "arw_deg_sqrt_h": gyro_cfg["arw_deg_sqrt_h"]},
+        "effects": {k: v for k, v in eff.items() if v},
+    }
+    return campaign, truth_out
+
+
+def star_tracker_noise(n, dt_s, st_cfg, correlation_time_s, rng):
+    """Body-frame attitude noise (rad): sigma across and about a boresight, optionally AR(1)."""
+    boresight = np.asarray(st_cfg["boresight_body"], dtype=float)
+    boresight /= np.linalg.norm(boresight)
+    helper = np.eye(3)[np.argmin(np.abs(boresight))]
+    e1 = np.cross(boresight, helper)
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(boresight, e1)
+    white = rng.normal(size=(n, 3))
+    if correlation_time_s > 0:
+        from scipy.signal import lfilter  # 0.7 s to import, for this case alone
+
+        phi = np.exp(-dt_s / correlation_time_s)
+        white[0] /= np.sqrt(1 - phi**2)
+        white = lfilter([np.sqrt(1 - phi**2)], [1.0, -phi], white, axis=0)
+    cross = arcsec_to_rad(st_cfg["sigma_cross_arcsec"])
+    about = arcsec_to_rad(st_cfg["sigma_about_arcsec"])
+    return cross * (white[:, :1] * e1 + white[:, 1:2] * e2) + about * white[:, 2:] * boresight
+
+
+def run(scenario_path, outdir, seed=None):
+    """``gyrocal simulate``: write ``OUTDIR/campaign/`` and ``OUTDIR/truth.json``."""
+    scenario = load_scenario(scenario_path)
+    campaign, truth = simulate(scenario, seed)
+    outdir = Path(outdir)
+    write_campaign(campaign, outdir / "campaign")
+    tmp = outdir / "truth.json.tmp"
+    tmp.write_text(json.dumps(truth, indent=2, sort_keys=True))
+    tmp.replace(outdir / "truth.json")
+    return campaign, truth

@@ -1,0 +1,2 @@
+"""The Monte Carlo validation study: simulated campaigns through the pipeline, and the tables and
+figures of coverage, efficiency against the Cramér-Rao bound and SBC."""
