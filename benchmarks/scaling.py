@@ -41,7 +41,7 @@ def longer(scenario: dict, k: int) -> dict:
 
 
 def stage_times(scenario: dict, cfg: dict) -> dict:
-    from gyrocal.checks import consistency
+    from gyrocal import checks
     from gyrocal.inference import classic, inferencedata, posterior, preprocess
     from gyrocal.inference.estimate import point_estimate
     from gyrocal.inference.noise import noise_knowledge
@@ -61,7 +61,7 @@ def stage_times(scenario: dict, cfg: dict) -> dict:
         path = Path(tmp) / "scenario.yaml"
         path.write_text(yaml.safe_dump(scenario))
         timed("simulate (and write)", lambda: simulate.run(path, tmp))
-        campaign, _ = timed("validate (read and check)", lambda: consistency.read_checked(Path(tmp) / "campaign"))
+        campaign, _ = timed("validate (read and check)", lambda: checks.read_checked(Path(tmp) / "campaign"))
     maneuvers = timed("preprocess", lambda: [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers])
     spec = baseline(campaign.channels)
     stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])

@@ -6,7 +6,7 @@ import pytest
 import yaml
 from scipy.spatial.transform import Rotation
 
-from gyrocal.checks import consistency
+from gyrocal import checks
 from gyrocal.io.telemetry import TelemetryError
 
 import mutations
@@ -33,24 +33,24 @@ def mounted(tiny, tmp_path, declared):
 
 def test_an_undeclared_mounting_is_refused_pointing_at_the_mounting(tiny, tmp_path):
     with pytest.raises(TelemetryError, match="mounting"):
-        consistency.read_checked(mounted(tiny, tmp_path, None))
+        checks.read_checked(mounted(tiny, tmp_path, None))
 
 
 def test_an_estimated_mounting_recovers_the_true_one(tiny, tmp_path):
-    _, findings = consistency.read_checked(mounted(tiny, tmp_path, "estimate"))
+    _, findings = checks.read_checked(mounted(tiny, tmp_path, "estimate"))
     estimated = Rotation.from_quat(findings.mounting["quat"])
     assert findings.mounting["source"] == "estimated from the data"
     assert np.rad2deg((estimated * MOUNTING.inv()).magnitude()) * 3600 < 60.0
 
 
 def test_a_nominal_mounting_is_applied_as_declared(tiny, tmp_path):
-    _, findings = consistency.read_checked(mounted(tiny, tmp_path, MOUNTING.as_quat().tolist()))
+    _, findings = checks.read_checked(mounted(tiny, tmp_path, MOUNTING.as_quat().tolist()))
     assert findings.mounting["source"] == "nominal (campaign.yaml)"
     assert findings.mounting["angle_deg"] == pytest.approx(np.rad2deg(MOUNTING.magnitude()))
 
 
 def test_a_nominal_mounting_far_off_is_refined_by_the_data(tiny, tmp_path):
-    _, findings = consistency.read_checked(mounted(tiny, tmp_path, [0.0, 0.0, 0.0, 1.0]))
+    _, findings = checks.read_checked(mounted(tiny, tmp_path, [0.0, 0.0, 0.0, 1.0]))
     assert findings.mounting["source"] == "nominal, refined by the data's alignment"
     estimated = Rotation.from_quat(findings.mounting["quat"])
     assert np.rad2deg((estimated * MOUNTING.inv()).magnitude()) * 3600 < 60.0

@@ -16,9 +16,10 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from gyrocal.checks import consistency
+from gyrocal import checks
+from gyrocal.checks.fit import EstimateError, check_physical
 from gyrocal.inference import classic, preprocess
-from gyrocal.inference.estimate import EstimateError, check_physical, point_estimate
+from gyrocal.inference.estimate import point_estimate
 from gyrocal.inference.posterior import Priors
 from gyrocal.io.telemetry import TelemetryError
 from gyrocal.model.spec import baseline
@@ -96,7 +97,7 @@ def time_bound(seconds):
 def calibrate(directory):
     """What the pipeline does up to the point estimate, as the rules call it; returns the
     estimate (its WLS covariance is what the posterior is centred on)."""
-    campaign, findings = consistency.read_checked(directory)
+    campaign, findings = checks.read_checked(directory)
     outliers = [o.time_s for o in findings.outliers]
     maneuvers = [preprocess.slice_maneuver(campaign, m.id, outliers) for m in campaign.maneuvers]
     spec = baseline(campaign.channels)

@@ -10,7 +10,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from gyrocal.checks import consistency
+from gyrocal import checks
 from gyrocal.io import importer
 from gyrocal.io.telemetry import TelemetryError
 
@@ -18,7 +18,7 @@ from conftest import ROOT, run_campaign
 
 DATA = Path(__file__).resolve().parents[2] / "shared" / "data" / "repoimu"
 pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason=f"the RepoIMU recordings are not at {DATA} "
-                                "(see README, 'Telemetry in another format, and real data')")
+                                "(see docs/real-data.md, 'Quick start')")
 TRIALS = ["TStick_Test02_Trial1", "TStick_Test03_Trial1", "TStick_Test04_Trial1"]
 
 
@@ -30,7 +30,7 @@ def xyz(tmp_path_factory):
 
 
 def test_the_x_y_z_trials_import_and_pass_validation(xyz):
-    campaign, findings = consistency.read_checked(xyz)
+    campaign, findings = checks.read_checked(xyz)
     assert [m.id for m in campaign.maneuvers] == TRIALS
     assert [m.axis for m in campaign.maneuvers] == ["roll", "pitch", "yaw"]
     assert 2.0 < findings.mounting["angle_deg"] < 3.5
@@ -43,7 +43,7 @@ def test_the_y_trials_two_vicon_excursions_are_left_out(xyz):
     the few samples the outlier screen took first. A few
     shorter ones elsewhere (0.1 to 2 s, thousands of arcsec) go too; all of them together are a
     small part of the data."""
-    campaign, findings = consistency.read_checked(xyz)
+    campaign, findings = checks.read_checked(xyz)
     away = [o for o in findings.outliers if o.kind == "excursion"]
     y = np.array([o.time_s for o in findings.outliers if o.maneuver == TRIALS[1]])
     for start, end in ((152.1, 153.7), (171.8, 173.5)):
@@ -67,7 +67,7 @@ def test_the_x_y_z_trials_with_the_reference_kept_every_second_pass_validation(t
     sensors' disagreement about their neighbours, not that motion (it refused these trials)."""
     out = tmp_path / "tstick_1s"
     _, counts = importer.import_files("repoimu", out, [DATA / f"{t}.csv" for t in TRIALS], reference_interval_s=1.0)
-    campaign, findings = consistency.read_checked(out)
+    campaign, findings = checks.read_checked(out)
     assert [c["reference_kept"] for c in counts.values()] == [91, 91, 90]
     assert len(campaign.st_time) == 272 and len(campaign.gyro_time) == 26799
     assert 2.0 < findings.mounting["angle_deg"] < 3.5
@@ -77,7 +77,7 @@ def test_the_fast_trial_is_refused_for_clipping(tmp_path):
     out = tmp_path / "fast"
     importer.import_files("repoimu", out, [DATA / "TStick_Test05_Trial1.csv"])
     with pytest.raises(TelemetryError, match=r"clips at its range"):
-        consistency.read_checked(out)
+        checks.read_checked(out)
 
 
 def test_the_fast_trial_with_the_reference_every_second_is_refused_as_undersampled(tmp_path):
@@ -86,21 +86,21 @@ def test_the_fast_trial_with_the_reference_every_second_is_refused_as_undersampl
     out = tmp_path / "fast_1s"
     importer.import_files("repoimu", out, [DATA / "TStick_Test05_Trial1.csv"], reference_interval_s=1.0)
     with pytest.raises(TelemetryError, match=r"ambiguous there.*peak rate, 424 deg/s, keep the reference at least every 0.21 s"):
-        consistency.read_checked(out)
+        checks.read_checked(out)
 
 
 def test_the_reference_quaternions_are_unit_and_scalar_last(xyz):
-    campaign, _ = consistency.read_checked(xyz)
+    campaign, _ = checks.read_checked(xyz)
     assert np.allclose(np.linalg.norm(campaign.st_quat, axis=1), 1.0, atol=1e-6)
 
 
 @pytest.fixture(scope="module")
 def xyz_run(tmp_path_factory, config):
-    """The README's real-data run, baseline model only: the x, y, z trials with the reference kept
-    every second, the default config updated by config/repoimu.yaml as --configfile does."""
+    """The real-data quick start's run (docs/real-data.md), baseline model only: the x, y, z trials with the reference kept
+    every second, the default config updated by config/tstick.yaml as --configfile does."""
     from snakemake.utils import update_config
     cfg = copy.deepcopy(config)
-    update_config(cfg, yaml.safe_load((ROOT / "config" / "repoimu.yaml").read_text()))
+    update_config(cfg, yaml.safe_load((ROOT / "config" / "tstick.yaml").read_text()))
     cfg["models"] = {"baseline": cfg["models"]["baseline"]}
     root = tmp_path_factory.mktemp("tstick_run")
     importer.import_files("repoimu", root / "campaign", [DATA / f"{t}.csv" for t in TRIALS], reference_interval_s=1.0)

@@ -8,14 +8,18 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal.checks import consistency
+from gyrocal import checks
+from gyrocal.checks import outliers, physics, sampling, sensing
+from gyrocal.checks.fit import EstimateError
 from gyrocal.inference import preprocess
-from gyrocal.inference.estimate import EstimateError
+from gyrocal.io.telemetry import read_campaign
+from gyrocal.model.units import rad_to_arcsec
 from gyrocal.pipeline import cli
+from gyrocal.pipeline.settings import PosteriorSettings
 from gyrocal.pipeline.steps import posterior as posterior_step
 
 import mutations
-from conftest import run_campaign
+from conftest import rerun_from, run_campaign
 
 EXPECTED = {
     "gyro increments in degrees": "57.",
@@ -61,7 +65,7 @@ def test_every_refused_case_has_its_expected_message():
 def test_quaternions_rounded_to_5_decimals_are_renormalised_and_counted(tiny, tmp_path, capsys):
     directory = tmp_path / "campaign"
     mutations.corrupted_copy(tiny[0], directory, mutations.quaternion_decimals(5))
-    campaign, _ = consistency.read_checked(directory)
+    campaign, _ = checks.read_checked(directory)
     assert campaign.st_renormalised > 0.5 * (campaign.st_valid == 1).sum()
     assert np.allclose(np.linalg.norm(campaign.st_quat[campaign.st_valid == 1], axis=1), 1.0, atol=1e-12)
 
@@ -77,7 +81,7 @@ def test_a_window_without_holds_is_a_warning_and_classic_gives_no_number(tiny, t
     from gyrocal.inference import classic, preprocess
     directory = tmp_path / "campaign"
     mutations.corrupted_copy(tiny[0], directory, mutations.no_hold)
-    campaign, findings = consistency.read_checked(directory)
+    campaign, findings = checks.read_checked(directory)
     assert any("yaw_pos: no inertial hold before or after" in w for w in findings.warnings)
     assert classic.classic(preprocess.slice_maneuver(campaign, "yaw_pos")).empty
 
@@ -87,12 +91,12 @@ def test_a_maneuver_without_holds_reports_the_error_between_its_first_and_last_r
     reference every 1 s reached it and crashed). Corrected with the truth, the error left by
     the rotation (scale errors of about 1000 ppm over 90 deg: hundreds of arcsec) shrinks to
     the noise."""
-    from gyrocal.report import review as report
+    from gyrocal.criticism import verdict as report
 
     from conftest import truth_vector
     directory = tmp_path / "campaign"
     mutations.corrupted_copy(tiny[0], directory, mutations.no_hold)
-    campaign, _ = consistency.read_checked(directory)
+    campaign, _ = checks.read_checked(directory)
     data = preprocess.slice_maneuver(campaign, "yaw_pos")
     truth = truth_vector(data.channels, tiny[1])
     n = len(truth.channels)
@@ -103,15 +107,15 @@ def test_a_maneuver_without_holds_reports_the_error_between_its_first_and_last_r
 
 
 def test_a_clean_campaign_raises_no_warning_outlier_or_excursion(tiny):
-    _, findings = consistency.read_checked(tiny[0])
+    _, findings = checks.read_checked(tiny[0])
     assert findings.warnings == [] and findings.outliers == []
 
 
 def test_neighbour_residual_is_zero_on_a_line_and_isolates_a_spike():
     x = np.column_stack([np.arange(20.0), -2.0 * np.arange(20.0)])
-    assert np.allclose(consistency.neighbour_residual(x), 0.0)
+    assert np.allclose(sensing.neighbour_residual(x), 0.0)
     x[7] += [10.0, 0.0]
-    r = consistency.neighbour_residual(x)
+    r = sensing.neighbour_residual(x)
     assert r[7, 0] == pytest.approx(10.0)
     assert np.allclose(np.delete(r, 7, axis=0), 0.0)
 
@@ -124,11 +128,11 @@ def test_the_reference_noise_seen_by_the_checks_does_not_grow_when_the_reference
     mutations.corrupted_copy(tiny[0], thinned, lambda d: (d / "star_tracker.csv").write_text(
         "".join(line for i, line in enumerate((d / "star_tracker.csv").read_text().splitlines(True)) if i % 5 < 1)))
     for directory, step in ((tiny[0], 1.0), (thinned, 5.0)):
-        campaign = consistency.read_campaign(directory)
+        campaign = read_campaign(directory)
         for m in campaign.maneuvers:
-            sensed = consistency.sense(consistency.preprocess.slice_maneuver(campaign, m.id))
+            sensed = sensing.sense(preprocess.slice_maneuver(campaign, m.id))
             assert np.median(sensed.dt) == pytest.approx(step)
-            assert 4.0 < consistency.rad_to_arcsec(consistency.reference_noise_rad(sensed)) < 30.0
+            assert 4.0 < rad_to_arcsec(sensing.reference_noise_rad(sensed)) < 30.0
 
 
 def test_robust_covariance_recovers_the_bulk_despite_gross_outliers():
@@ -136,7 +140,7 @@ def test_robust_covariance_recovers_the_bulk_despite_gross_outliers():
     cov = np.array([[4.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 9.0]])
     x = rng.multivariate_normal(np.zeros(3), cov, size=4000)
     x[:40] += 200.0
-    assert np.allclose(consistency.robust_covariance(x), cov, rtol=0.1, atol=0.15)
+    assert np.allclose(outliers.robust_covariance(x), cov, rtol=0.1, atol=0.15)
 
 
 def test_a_parameter_with_no_information_is_prior_only_and_one_with_little_is_not(tiny):
@@ -185,7 +189,7 @@ def test_five_outliers_move_no_estimate_by_more_than_half_an_sd(outlier_run, tin
 def test_a_reference_excursion_is_listed_as_one_and_left_out(tiny, tmp_path):
     directory = tmp_path / "campaign"
     lines = mutations.corrupted_copy(tiny[0], directory, mutations.st_excursion)
-    campaign, findings = consistency.read_checked(directory)
+    campaign, findings = checks.read_checked(directory)
     away = [o for o in findings.outliers if o.kind == "excursion"]
     assert sorted(o.line for o in away) == lines and len(lines) == 2
     assert all(1500 < o.size_arcsec < 2500 for o in away)
@@ -203,17 +207,17 @@ def test_an_excursion_comes_back_inside_the_maneuver_within_its_time_and_jumps()
     near = beyond.copy()
     near[[3, 6]] = True
     jumps = beyond.copy()
-    assert list(np.flatnonzero(consistency.excursion_runs(near, beyond, jumps, t, 5.0))) == [3, 4, 5, 6]
-    assert not consistency.excursion_runs(near, beyond, jumps, t, 2.5).any()
-    assert not consistency.excursion_runs(near, beyond, np.zeros(12, dtype=bool), t, 5.0).any()
-    assert not consistency.excursion_runs(near, np.zeros(12, dtype=bool), jumps, t, 5.0).any()
+    assert list(np.flatnonzero(outliers.excursion_runs(near, beyond, jumps, t, 5.0))) == [3, 4, 5, 6]
+    assert not outliers.excursion_runs(near, beyond, jumps, t, 2.5).any()
+    assert not outliers.excursion_runs(near, beyond, np.zeros(12, dtype=bool), t, 5.0).any()
+    assert not outliers.excursion_runs(near, np.zeros(12, dtype=bool), jumps, t, 5.0).any()
     near[[0, 1, 11]] = beyond[[0, 1, 11]] = jumps[[0, 1, 11]] = True
-    assert list(np.flatnonzero(consistency.excursion_runs(near, beyond, jumps, t, 5.0))) == [3, 4, 5, 6]
+    assert list(np.flatnonzero(outliers.excursion_runs(near, beyond, jumps, t, 5.0))) == [3, 4, 5, 6]
     near[[0, 1, 11]] = beyond[[0, 1, 11]] = jumps[[0, 1, 11]] = False
     near[7:10] = True                 # edges that stretch it past the limit: the core's time decides
-    assert list(np.flatnonzero(consistency.excursion_runs(near, beyond, jumps, t, 4.0))) == [3, 4, 5, 6, 7, 8, 9]
+    assert list(np.flatnonzero(outliers.excursion_runs(near, beyond, jumps, t, 4.0))) == [3, 4, 5, 6, 7, 8, 9]
     near[7:11] = True                 # past twice the limit: only the core goes
-    assert list(np.flatnonzero(consistency.excursion_runs(near, beyond, jumps, t, 4.0))) == [4, 5]
+    assert list(np.flatnonzero(outliers.excursion_runs(near, beyond, jumps, t, 4.0))) == [4, 5]
 
 
 @pytest.fixture(scope="module")
@@ -258,15 +262,15 @@ def test_the_verdict_names_the_missing_maneuver(unflown_run):
 
 def test_a_point_estimate_beyond_the_bounds_stops_before_sampling_naming_parameter_and_maneuver(
         tiny_run, config, tmp_path):
-    out, npz = tiny_run
+    out, _ = tiny_run
     with pytest.raises(EstimateError) as err:
-        posterior_step.run(npz, out / "baseline/point_estimate.npz", [], {**config["priors"], "sf_bound_ppm": 100.0},
-                           None, config["sampler"], config["grid"], config["convergence"], config["seed"],
-                           *(tmp_path / name for name in ("p.nc", "s.csv", "f.csv", "j.json", "e.csv", "b.csv")))
+        paths, ids = rerun_from(out, tmp_path)
+        settings = PosteriorSettings.of({**config, "priors": {**config["priors"], "sf_bound_ppm": 100.0}})
+        posterior_step.run(paths, ids, "baseline", settings)
     message = str(err.value)
     assert "dtg1_roll.sf_pos = 14" in message and "(bound 100," in message
     assert "fits maneuver" in message
-    assert not (tmp_path / "p.nc").exists()
+    assert not (tmp_path / "baseline/posterior.nc").exists()
 
 
 def test_every_json_output_is_strict_json(tiny_run):
@@ -303,8 +307,9 @@ def test_posterior_netcdf_differs_by_nothing_but_content(tiny, tiny_run, config,
 def test_a_noise_no_sensor_can_have_stops_before_sampling_with_the_residuals(tiny_run):
     import dataclasses
 
+    from gyrocal.checks.fit import check_noise
     from gyrocal.inference import preprocess
-    from gyrocal.inference.estimate import PointEstimate, check_noise
+    from gyrocal.inference.estimate import PointEstimate
     out, npz = tiny_run
     est = PointEstimate.load(out / "baseline/point_estimate.npz")
     collapsed = dataclasses.replace(est, log_sigma=est.log_sigma + np.array([-8.0, 0.0, 0.0]))
@@ -330,19 +335,19 @@ def sensed_turn(clip_rad_s=None, seed=0):
                                  st_interval=lambda: (np.clip(np.searchsorted(gyro_time, st_time) - 1, 0, None), None))
     d_gyro = body.reshape(-1, 10, 3).sum(axis=1)
     d_st = true.reshape(-1, 10, 3).sum(axis=1) + rng.normal(0, 1e-4, (len(st_time) - 1, 3))
-    return consistency.Sensed(data, body, d_gyro, d_st, np.diff(st_time))
+    return sensing.Sensed(data, body, d_gyro, d_st, np.diff(st_time))
 
 
 @pytest.mark.parametrize("seed", range(5))
 def test_saturation_is_not_called_on_an_axis_that_only_sees_noise(seed):
-    findings = consistency.Findings()
-    assert not consistency.saturation_findings(sensed_turn(seed=seed), 0.02, findings)
+    findings = checks.Findings()
+    assert not physics.saturation_findings(sensed_turn(seed=seed), 0.02, findings)
     assert findings.errors == []
 
 
 def test_a_gyro_clipped_below_the_turn_rate_is_refused_with_its_count():
-    findings = consistency.Findings()
-    assert consistency.saturation_findings(sensed_turn(clip_rad_s=0.4), 0.02, findings)
+    findings = checks.Findings()
+    assert physics.saturation_findings(sensed_turn(clip_rad_s=0.4), 0.02, findings)
     assert "2000 gyro samples about roll" in findings.errors[0] and "1.250 times as fast" in findings.errors[0]
 
 
@@ -357,14 +362,14 @@ def test_a_reference_too_sparse_for_the_turn_is_named_with_the_interval_it_needs
     st_time = gyro_time[::every]
     data = types.SimpleNamespace(id="roll_pos", dt=np.diff(gyro_time), st_time=st_time)
     d_gyro = body.reshape(-1, every, 3).sum(axis=1)
-    why = consistency.undersampled(consistency.Sensed(data, body, d_gyro, d_gyro, np.diff(st_time)))
+    why = physics.undersampled(sensing.Sensed(data, body, d_gyro, d_gyro, np.diff(st_time)))
     if every == 10:
         assert why == ""
     else:
         assert "turns 115 deg between the reference samples at 0 s and 4 s (50 intervals" in why
         assert "peak rate, 29 deg/s, keep the reference at least every 3.1 s" in why
     slip = body * 40
-    assert consistency.undersampled(consistency.Sensed(data, slip, slip.reshape(-1, every, 3).sum(axis=1),
+    assert physics.undersampled(sensing.Sensed(data, slip, slip.reshape(-1, every, 3).sum(axis=1),
                                                        d_gyro, np.diff(st_time))) == ""
 
 
@@ -372,7 +377,7 @@ def test_a_maneuver_too_short_for_the_leave_one_block_out_predictive_is_refused_
     """Each LOO block is predicted from the rest of its maneuver: a maneuver of one block (or one
     whose rest holds a handful of samples) used to crash in a Cholesky factorisation; it is
     refused with its span and the fix."""
-    from gyrocal.inference.estimate import check_blocks
+    from gyrocal.checks.fit import check_blocks
     enough = types.SimpleNamespace(id="yaw_pos", st_time=np.arange(0.0, 70.0))
     one_block = types.SimpleNamespace(id="roll_neg", st_time=np.arange(0.0, 59.0))
     nearly = types.SimpleNamespace(id="pitch_pos", st_time=np.arange(0.0, 69.0))
@@ -389,5 +394,5 @@ def test_the_clock_offset_is_found_to_a_fraction_of_a_sample(tiny, tmp_path, shi
     mutations.corrupted_copy(tiny[0], tmp_path / "c", mutations.st_clock_offset(shift_s))
     campaign = read_campaign(tmp_path / "c")
     for m in ("yaw_pos", "roll_neg"):
-        found = consistency.clock_offset_s(consistency.sense(preprocess.slice_maneuver(campaign, m)))
+        found = sampling.clock_offset_s(sensing.sense(preprocess.slice_maneuver(campaign, m)))
         assert found == pytest.approx(-shift_s, abs=0.02)  # the star tracker late: the gyro's clock early

@@ -1,2 +1,8 @@
 """Every check of gyrocal as one kind of `Finding`: the input's format and physics, the outlier
 screen, the reference mounting, and the refusals before a posterior is sampled."""
+
+from gyrocal.checks.campaign import check, read_checked, summary
+from gyrocal.checks.finding import Finding, Findings, Status
+from gyrocal.checks.mounting import align, aligned, estimate_mounting
+
+__all__ = ["Finding", "Findings", "Status", "align", "aligned", "check", "estimate_mounting", "read_checked", "summary"]

@@ -2,10 +2,10 @@
 it passes, warns or refuses, and what to do. Input checks, residual diagnostics, model choice and
 the verdict all speak in findings; the report renders them and decides nothing."""
 
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, field
 from enum import Enum
 
-__all__ = ["Finding", "Status", "refusals", "warnings"]
+__all__ = ["Finding", "Findings", "Status", "refusals", "warnings"]
 
 
 class Status(str, Enum):
@@ -63,3 +63,31 @@ def refusals(findings) -> list:
 def warnings(findings) -> list:
     """The findings that warn."""
     return [f for f in findings if f.status is Status.WARN]
+
+
+@dataclass
+class Findings:
+    """What the input checks found about one campaign: refusals stop it before any fit; warnings,
+    the outliers left out and the mounting applied are recorded in ``input.json``."""
+
+    items: list = field(default_factory=list)
+    """The `Finding` of every check that refused or warned, in the order they were made."""
+    outliers: list = field(default_factory=list)
+    mounting: dict = field(default_factory=dict)
+    """The reference's mounting applied (`gyrocal.checks.mounting.align`): quaternion, source and angle."""
+
+    def refuse(self, check: str, why: str, **details):
+        self.items.append(Finding(check, Status.REFUSE, why, **details))
+
+    def warn(self, check: str, why: str, **details):
+        self.items.append(Finding(check, Status.WARN, why, **details))
+
+    @property
+    def errors(self) -> list:
+        """What refuses the campaign, in words."""
+        return [f.why for f in refusals(self.items)]
+
+    @property
+    def warnings(self) -> list:
+        """What was recorded as a warning, in words."""
+        return [f.why for f in warnings(self.items)]

@@ -11,10 +11,10 @@ import numpy as np
 import pandas as pd
 
 from gyrocal.criticism.modelchoice import classify, paired_se, reviewed_model, stacking_weights
+from gyrocal.inference.inferencedata import PARETO_K_MAX
 from gyrocal.inference.noise import NOISE_LABELS
 
-PARETO_K_MAX = 0.7
-"""Above this Pareto k a block's PSIS estimate is unreliable (Vehtari et al. 2017)."""
+__all__ = ["compare", "loo_totals", "moved"]
 
 
 def loo_totals(blocks: pd.DataFrame) -> dict:

@@ -24,6 +24,8 @@ from gyrocal.inference import errormodel, noise
 from gyrocal.inference.estimate import linearize_all
 from gyrocal.model.units import ARCSEC_RAD
 
+__all__ = ["LEVEL", "SHRINK", "check", "probe_steps", "split", "summary"]
+
 LEVEL = 0.99
 """The probe points sit on this credible ellipsoid of the WLS covariance."""
 
@@ -145,25 +147,3 @@ def summary(table: pd.DataFrame) -> str:
             f"curvature would move a parameter by at most {table['curvature_shift_sd'].max():.2g} posterior sd; "
             f"the model's averaged columns (an intended difference from the exact derivative) by at most "
             f"{table['columns_shift_sd'].max():.2g} sd")
-
-
-def run(results, model: str, plugin_paths=()) -> str:
-    """``gyrocal linearity``: the check on one model of a finished run (its preprocessed maneuvers,
-    in the campaign's order, and its point estimate), as a table and a summary line."""
-    import json
-    from pathlib import Path
-
-    from gyrocal.inference.estimate import PointEstimate
-    from gyrocal.pipeline.steps.common import known_effects, load_maneuvers
-    results = Path(results)
-    point = results / model / "point_estimate.npz"
-    if not point.is_file():
-        raise FileNotFoundError(f"{point}: no point estimate of model {model!r} in {results} (run the pipeline first)")
-    ids = json.loads((results / "input.json").read_text())["maneuvers"]
-    maneuvers = load_maneuvers([results / "preprocess" / f"{i}.npz" for i in ids])
-    estimate = PointEstimate.load(point, known_effects(list(plugin_paths)))
-    if estimate.biases.shape[0] != len(maneuvers):
-        raise ValueError(f"{point}: {estimate.biases.shape[0]} maneuvers' biases, but {results}/input.json lists "
-                         f"{len(maneuvers)} maneuvers")
-    table = check(maneuvers, estimate)
-    return f"{results}, model {model}\n{table.round(3).to_string()}\n{summary(table)}"

@@ -17,13 +17,17 @@ import xarray as xr
 from arviz.stats.stats_utils import logsumexp
 
 from gyrocal import __version__
-from gyrocal.criticism.comparison import PARETO_K_MAX
 from gyrocal.inference import predictive, preprocess
 from gyrocal.inference.noise import NOISE_LABELS, NOISE_SCALES, scales_in_units, stated_scales
 from gyrocal.model import channels as ch
 from gyrocal.model.units import AXES, rad_to_arcsec
 
+__all__ = ["CI_PROB", "PARETO_K_MAX", "assemble", "loo", "loo_blocks", "posterior_dataset", "sampler_record", "summarize"]
+
 log = logging.getLogger("gyrocal")
+
+PARETO_K_MAX = 0.7
+"""Above this Pareto k a block's PSIS estimate is unreliable (Vehtari et al. 2017)."""
 
 
 def loo(idata, model: str):

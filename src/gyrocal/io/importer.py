@@ -31,6 +31,11 @@ from gyrocal.io.telemetry import NAME_PATTERN, Campaign, Maneuver, TelemetryErro
 from gyrocal.model.channels import Channel
 from gyrocal.model.units import AXES
 
+__all__ = [
+    "ANGLE_UNITS", "ORDERS", "RATE_UNITS", "Imported", "build_campaign", "import_files", "maneuver_axis", "mapping_path",
+    "read_file", "read_mapping", "reference_rows", "report"
+]
+
 ORDERS = {"xyzw": [0, 1, 2, 3], "wxyz": [1, 2, 3, 0]}
 """Where scalar-last ``q1..q4`` come from in each quaternion order a mapping may declare."""
 

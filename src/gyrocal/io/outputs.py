@@ -8,6 +8,8 @@ import shutil
 from contextlib import contextmanager
 from pathlib import Path
 
+__all__ = ["atomic", "atomic_dir", "strict", "write_csv", "write_json", "write_text", "write_with"]
+
 
 @contextmanager
 def atomic(path):
@@ -74,9 +76,3 @@ def write_with(save, path):
     """Write through ``save(handle)`` (e.g. an object's ``save`` method or a figure's)."""
     with atomic(path) as tmp, open(tmp, "wb") as handle:
         save(handle)
-
-
-MODEL_FILES = {"calibration": "calibration.csv", "diagnostics": "diagnostics.json", "sampler": "sampler.json",
-               "correction": "correction.json", "fit": "fit.csv", "posterior": "posterior.nc",
-               "point": "point_estimate.npz"}
-"""Each model's files the report reads, by the name its rule and step give them."""

@@ -12,6 +12,8 @@ import yaml
 
 from gyrocal.model import channels as ch
 
+__all__ = ["DEFAULTS", "EFFECT_DEFAULTS", "load_scenario", "peek"]
+
 DEFAULTS = {
     "name": "simulated",
     "seed": 0,

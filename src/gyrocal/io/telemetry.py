@@ -7,8 +7,6 @@ wrong; rows are counted as in a spreadsheet: the header is line 1.
 
 import hashlib
 import io
-import itertools
-import re
 import shutil
 import tempfile
 from dataclasses import dataclass, field
@@ -18,47 +16,27 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from gyrocal.model.channels import Channel, channel_sets
-from gyrocal.model.units import AXES
+from gyrocal.io.campaign_yaml import (
+    CHANNEL_PATTERN,
+    NAME_PATTERN,
+    NORM_REFUSE_TOL,
+    Maneuver,
+    TelemetryError,
+    default_name,
+    fail,
+    read_meta,
+)
+
+__all__ = ["NAME_PATTERN", "QUAT_COLUMNS", "UNIT_NORM_TOL", "Campaign", "Maneuver", "TelemetryError", "checksums",
+           "default_name", "read_campaign", "read_meta", "summary", "write_campaign"]
 
 QUAT_COLUMNS = ["q1", "q2", "q3", "q4"]
 UNIT_NORM_TOL = 1e-6
 """Quaternions whose norm is further than this from 1 are renormalised and counted."""
-NORM_REFUSE_TOL = 1e-3
-"""Further than this from 1 a quaternion is refused: rounding to as few as three decimals stays
-inside, a wrong column does not."""
-NAME_PATTERN = re.compile(r"^[A-Za-z0-9_]+$")
-CHANNEL_PATTERN = re.compile(r"^dtg(\d+)_(roll|pitch|yaw)$")
-DIRECTIONS = ("+", "-", "both")
-"""A maneuver turns one way, the other, or both (several turns each way, no inertial holds)."""
 
 
 READ_CSV_EXACT = {} if int(pd.__version__.split(".")[0]) >= 3 else {"float_precision": "round_trip"}
 """pandas 3 parses floats exactly by default; pandas 2 needs asking (and 3 deprecates asking)."""
-
-
-class TelemetryError(ValueError):
-    """Bad campaign input; the message names the file, the row or column and the fault."""
-
-
-@dataclass(frozen=True)
-class Maneuver:
-    id: str
-    axis: str
-    direction: str
-    t_start: float
-    t_end: float
-    in_loop: tuple = ()
-
-    @property
-    def turn(self) -> str:
-        """The rotation as reports name it: ``+yaw``, ``-roll``, or ``both yaw``."""
-        return f"both {self.axis}" if self.direction == "both" else f"{self.direction}{self.axis}"
-
-    @property
-    def sign(self) -> float:
-        """+1 or -1; 0 for a maneuver that turns both ways."""
-        return {"+": 1.0, "-": -1.0}.get(self.direction, 0.0)
 
 
 @dataclass
@@ -113,105 +91,29 @@ class Campaign:
         }
 
 
-def _fail(path, message):
-    raise TelemetryError(f"{path}: {message}")
-
-
-def _parse_channels(path, raw) -> tuple:
-    if not isinstance(raw, dict) or not raw:
-        _fail(path, "'channels' must map each gyro channel name to {axis: roll|pitch|yaw} (and, for a DTG, dtg: N)")
-    channels = []
-    for name, entry in raw.items():
-        where = f"channels.{name}"
-        if not NAME_PATTERN.match(str(name)):
-            _fail(path, f"{where}: a channel name may hold only letters, digits and '_'")
-        if not isinstance(entry, dict) or "axis" not in entry or set(entry) - {"dtg", "axis"}:
-            _fail(path, f"{where}: needs the key 'axis' (roll, pitch or yaw) and may have 'dtg' (the DTG's number)")
-        if entry["axis"] not in AXES:
-            _fail(path, f"{where}.axis: must be one of {list(AXES)}, got {entry['axis']!r}")
-        dtg = entry.get("dtg")
-        if dtg is not None and (not isinstance(dtg, int) or isinstance(dtg, bool)):
-            _fail(path, f"{where}.dtg: must be a whole number, got {dtg!r}")
-        match = CHANNEL_PATTERN.match(str(name))
-        if match and (int(match.group(1)), match.group(2)) != (dtg, entry["axis"]):
-            _fail(path, f"{where}: a name dtg<N>_<axis> needs dtg: N and that axis; got dtg/axis "
-                        f"({dtg}, {entry['axis']})")
-        channels.append(Channel(str(name), dtg, entry["axis"]))
-    return tuple(channels)
-
-
-def _parse_maneuvers(path, raw, channel_names) -> tuple:
-    if not isinstance(raw, list) or not raw:
-        _fail(path, "'maneuvers' must be a non-empty list")
-    allowed = {"id", "axis", "direction", "t_start", "t_end", "in_loop"}
-    seen = set()
-    maneuvers = []
-    for i, m in enumerate(raw):
-        where = f"maneuvers[{i}]"
-        if not isinstance(m, dict):
-            _fail(path, f"{where}: must be a mapping")
-        missing = {"id", "axis", "direction", "t_start", "t_end"} - set(m)
-        if missing:
-            _fail(path, f"{where}: missing key(s) {sorted(missing)}")
-        if set(m) - allowed:
-            _fail(path, f"{where}: unknown key(s) {sorted(set(m) - allowed)}")
-        mid = str(m["id"])
-        where = f"maneuvers[{i}] ({mid})"
-        if not NAME_PATTERN.match(mid):
-            _fail(path, f"{where}.id: only letters, digits and '_' are allowed")
-        if mid in seen:
-            _fail(path, f"{where}.id: duplicate maneuver id")
-        seen.add(mid)
-        if m["axis"] not in AXES:
-            _fail(path, f"{where}.axis: must be one of {list(AXES)}, got {m['axis']!r}")
-        if str(m["direction"]) not in DIRECTIONS:
-            _fail(path, f"{where}.direction: must be \"+\", \"-\" or both, got {m['direction']!r}")
-        for key in ("t_start", "t_end"):
-            if not _is_number(m[key]):
-                _fail(path, f"{where}.{key}: must be a time in seconds, got {m[key]!r}")
-        t0, t1 = float(m["t_start"]), float(m["t_end"])
-        if not t1 > t0:
-            _fail(path, f"{where}: t_end ({t1}) must be after t_start ({t0})")
-        in_loop = tuple(m.get("in_loop") or ())
-        for name in in_loop:
-            if name not in channel_names:
-                _fail(path, f"{where}.in_loop: unknown channel {name!r} (channels: {channel_names})")
-        if in_loop:
-            axes = sorted(name.split("_", 1)[1] for name in in_loop)
-            if axes != sorted(AXES):
-                _fail(path, f"{where}.in_loop: needs one channel per axis roll, pitch, yaw; got {list(in_loop)}")
-        maneuvers.append(Maneuver(mid, m["axis"], str(m["direction"]), t0, t1, in_loop))
-    ordered = sorted(maneuvers, key=lambda m: m.t_start)
-    for first, second in itertools.pairwise(ordered):
-        if second.t_start < first.t_end:
-            _fail(path, f"maneuvers {first.id} [{first.t_start}, {first.t_end}] s and {second.id} "
-                        f"[{second.t_start}, {second.t_end}] s overlap: their samples would count twice")
-    return tuple(maneuvers)
-
-
 def _read_csv(path, required) -> pd.DataFrame:
     """Read a CSV whose every cell is a number; ``frame.attrs["lines"]`` holds each row's line in
     the file (the header is line 1; blank lines, which pandas skips, still count)."""
     if not path.exists():
-        _fail(path, "file not found")
+        fail(path, "file not found")
     try:
         text = path.read_text()
         frame = pd.read_csv(io.StringIO(text), **READ_CSV_EXACT)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        _fail(path, f"cannot be read as CSV: {exc}")
+        fail(path, f"cannot be read as CSV: {exc}")
     kept = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()][1:]
     frame.attrs["lines"] = np.array([i for i, _ in kept])[:len(frame)]
     frame.attrs["fields"] = np.array([line.count(",") + 1 for _, line in kept])[:len(frame)]
     missing = [c for c in required if c not in frame.columns]
     if missing:
-        _fail(path, f"missing column(s) {missing}; found {list(frame.columns)}")
+        fail(path, f"missing column(s) {missing}; found {list(frame.columns)}")
     if len(frame) < 2:
-        _fail(path, "needs at least two data rows")
+        fail(path, "needs at least two data rows")
     for column in frame.columns:
         if not pd.api.types.is_numeric_dtype(frame[column]):
             bad = pd.to_numeric(frame[column], errors="coerce").isna() & frame[column].notna()
             row = int(np.flatnonzero(bad.to_numpy())[0])
-            _fail(path, f"line {frame.attrs['lines'][row]}, column '{column}': not a number: "
+            fail(path, f"line {frame.attrs['lines'][row]}, column '{column}': not a number: "
                         f"{frame[column].iloc[row]!r}")
     return frame
 
@@ -225,9 +127,9 @@ def _check_finite(path, frame, columns, rows=None):
         row, col = np.argwhere(bad)[0]
         line, fields = frame.attrs["lines"][row], frame.attrs["fields"][row]
         if fields < frame.shape[1]:
-            _fail(path, f"line {line} has {fields} of the header's {frame.shape[1]} fields (a short or truncated "
+            fail(path, f"line {line} has {fields} of the header's {frame.shape[1]} fields (a short or truncated "
                         f"row): column '{columns[col]}' has no value")
-        _fail(path, f"line {line}, column '{columns[col]}': value is NaN or infinite")
+        fail(path, f"line {line}, column '{columns[col]}': value is NaN or infinite")
 
 
 def _check_time(path, frame):
@@ -235,56 +137,9 @@ def _check_time(path, frame):
     steps = np.diff(time)
     if (steps <= 0).any():
         row = int(np.flatnonzero(steps <= 0)[0]) + 1
-        _fail(path, f"line {frame.attrs['lines'][row]}, column 'time': time {time[row]} does not increase "
+        fail(path, f"line {frame.attrs['lines'][row]}, column 'time': time {time[row]} does not increase "
                     f"(line {frame.attrs['lines'][row - 1]} has {time[row - 1]})")
     return time
-
-
-def read_meta(directory) -> dict:
-    """Parse and check ``campaign.yaml`` alone (name, channels, maneuvers, noise knowledge)."""
-    directory = Path(directory)
-    if not directory.is_dir():
-        raise TelemetryError(f"{directory}: campaign directory not found")
-    cpath = directory / "campaign.yaml"
-    if not cpath.exists():
-        _fail(cpath, "file not found")
-    try:
-        meta = yaml.safe_load(cpath.read_text())
-    except yaml.YAMLError as exc:
-        hint = ""
-        if "sequence entries are not allowed" in str(exc):
-            hint = ('. A bare - starts a YAML list: quote a direction, direction: "-"')
-        _fail(cpath, f"not valid YAML: {exc}{hint}")
-    if not isinstance(meta, dict):
-        _fail(cpath, "must be a mapping with 'channels' and 'maneuvers'")
-    unknown = set(meta) - {"name", "channels", "star_tracker", "gyro", "maneuvers"}
-    if unknown:
-        _fail(cpath, f"unknown key(s) {sorted(unknown)}")
-    for key in ("channels", "maneuvers"):
-        if key not in meta:
-            _fail(cpath, f"missing key '{key}'")
-    channels = _parse_channels(cpath, meta["channels"])
-    names = [c.name for c in channels]
-    try:
-        channel_sets(channels)
-    except ValueError as exc:
-        _fail(cpath, f"channels: {exc}")
-    for key in ("star_tracker", "gyro"):
-        if meta.get(key) is not None and not isinstance(meta[key], dict):
-            _fail(cpath, f"{key}: must be a mapping of its noise knowledge (e.g. {key}: "
-                         f"{{{'arw_deg_sqrt_h' if key == 'gyro' else 'sigma_cross_arcsec'}: ...}}), got {meta[key]!r}")
-    gyro = meta.get("gyro") or {}
-    if set(gyro) - {"arw_deg_sqrt_h"}:
-        _fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - {'arw_deg_sqrt_h'})}")
-    if "arw_deg_sqrt_h" in gyro and not _positive_number(gyro["arw_deg_sqrt_h"]):
-        _fail(cpath, "gyro.arw_deg_sqrt_h: must be a positive number")
-    name = str(meta.get("name") or default_name(directory))
-    if not NAME_PATTERN.match(name):
-        _fail(cpath, f"name: only letters, digits and '_' are allowed, got {name!r}")
-    return {"name": name, "channels": channels,
-            "maneuvers": _parse_maneuvers(cpath, meta["maneuvers"], names),
-            "star_tracker": _parse_star_tracker(cpath, meta.get("star_tracker") or {}),
-            "gyro": dict(gyro)}
 
 
 def read_campaign(directory) -> Campaign:
@@ -299,7 +154,7 @@ def read_campaign(directory) -> Campaign:
     st = _read_csv(spath, ["time"] + QUAT_COLUMNS)
     unknown = set(st.columns) - {"time", "valid", *QUAT_COLUMNS}
     if unknown:
-        _fail(spath, f"unknown column(s) {sorted(unknown)}; expected time, q1..q4 and optional valid")
+        fail(spath, f"unknown column(s) {sorted(unknown)}; expected time, q1..q4 and optional valid")
     _check_finite(spath, st, ["time"])
     valid = np.ones(len(st), dtype=int)
     if "valid" in st.columns:
@@ -307,7 +162,7 @@ def read_campaign(directory) -> Campaign:
         bad = ~np.isin(raw_valid, [0.0, 1.0])
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            _fail(spath, f"line {st.attrs['lines'][row]}, column 'valid': must be 0 or 1, got {raw_valid[row]:g}")
+            fail(spath, f"line {st.attrs['lines'][row]}, column 'valid': must be 0 or 1, got {raw_valid[row]:g}")
         valid = raw_valid.astype(int)
     _check_finite(spath, st, QUAT_COLUMNS, rows=valid == 1)
     st_time = _check_time(spath, st)
@@ -316,7 +171,7 @@ def read_campaign(directory) -> Campaign:
     bad = (np.abs(norm - 1.0) > NORM_REFUSE_TOL) & (valid == 1)
     if bad.any():
         row = int(np.flatnonzero(bad)[0])
-        _fail(spath, f"line {st.attrs['lines'][row]}, columns q1..q4: quaternion norm is {norm[row]:.9f}, "
+        fail(spath, f"line {st.attrs['lines'][row]}, columns q1..q4: quaternion norm is {norm[row]:.9f}, "
                      f"not 1 (tolerance {NORM_REFUSE_TOL}; an invalid sample needs valid=0)")
     renormalised = (np.abs(norm - 1.0) > UNIT_NORM_TOL) & (valid == 1)
     quat[renormalised] /= norm[renormalised, None]
@@ -325,7 +180,7 @@ def read_campaign(directory) -> Campaign:
     gy = _read_csv(gpath, ["time"] + names)
     unknown_channels = [c for c in gy.columns if CHANNEL_PATTERN.match(c) and c not in names]
     if unknown_channels:
-        _fail(gpath, f"column(s) {unknown_channels} look like gyro channels but campaign.yaml "
+        fail(gpath, f"column(s) {unknown_channels} look like gyro channels but campaign.yaml "
                      f"does not declare them (channels: {names})")
     _check_finite(gpath, gy, list(gy.columns))
     gyro_time = _check_time(gpath, gy)
@@ -334,7 +189,7 @@ def read_campaign(directory) -> Campaign:
         lo = max(st_time[0], gyro_time[0])
         hi = min(st_time[-1], gyro_time[-1])
         if m.t_start < lo or m.t_end > hi:
-            _fail(cpath, f"maneuver {m.id}: [{m.t_start}, {m.t_end}] s lies outside the data, "
+            fail(cpath, f"maneuver {m.id}: [{m.t_start}, {m.t_end}] s lies outside the data, "
                          f"which cover [{lo}, {hi}] s in both star_tracker.csv and gyro.csv")
 
     columns = {c: gy[c].to_numpy(dtype=float) for c in gy.columns if c != "time"}
@@ -345,46 +200,6 @@ def read_campaign(directory) -> Campaign:
         gyro_time=gyro_time, gyro_columns=columns, source=directory,
         lines={"star_tracker.csv": st.attrs["lines"], "gyro.csv": gy.attrs["lines"]},
         st_renormalised=int(renormalised.sum()))
-
-
-def default_name(directory) -> str:
-    """A campaign's name when ``campaign.yaml`` has none: its directory's, with every character
-    other than letters, digits and '_' made '_' (results go to ``results/<name>/``)."""
-    return re.sub(r"[^A-Za-z0-9_]", "_", Path(directory).resolve().name)
-
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value)
-
-
-def _positive_number(value) -> bool:
-    return _is_number(value) and value > 0
-
-
-def _parse_star_tracker(path, raw) -> dict:
-    allowed = {"sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "mounting"}
-    if set(raw) - allowed:
-        _fail(path, f"star_tracker: unknown key(s) {sorted(set(raw) - allowed)}")
-    for key in ("sigma_cross_arcsec", "sigma_about_arcsec"):
-        if key in raw and not _positive_number(raw[key]):
-            _fail(path, f"star_tracker.{key}: must be a positive number")
-    out = dict(raw)
-    if "boresight_body" in raw:
-        b = raw["boresight_body"]
-        if not isinstance(b, list) or len(b) != 3 or not all(_is_number(v) for v in b) or not any(b):
-            _fail(path, f"star_tracker.boresight_body: must be a non-zero 3-vector of numbers in body axes, "
-                        f"e.g. [0, 0, 1]; got {b!r}")
-        b = np.asarray(b, dtype=float)
-        if abs(np.linalg.norm(b) - 1.0) > 1e-12:
-            b = b / np.linalg.norm(b)
-        out["boresight_body"] = b.tolist()
-    if "mounting" in raw:
-        q = raw["mounting"]
-        if q != "estimate" and (not isinstance(q, list) or len(q) != 4 or not all(_is_number(v) for v in q)
-                                or abs(np.linalg.norm(q) - 1.0) > NORM_REFUSE_TOL):
-            _fail(path, "star_tracker.mounting: the reference frame's attitude in body axes, a unit quaternion "
-                        f"[q1, q2, q3, q4] (scalar last), or estimate; got {q!r}")
-    return out
 
 
 def write_campaign(campaign: Campaign, directory) -> Path:

@@ -1,0 +1,94 @@
+"""Physical consistency of a campaign, before any fit: do the gyros see what the star tracker sees?
+
+Format checks (`gyrocal.io.telemetry`) cannot tell increments in degrees from increments in radians,
+or a scalar-first quaternion from a scalar-last one. Here each maneuver's gyro rotation,
+summed between star-tracker samples, is compared with the star tracker's own rotation
+over the same interval (`physics`), the sampling and clocks are checked (`sampling`), and
+star-tracker outliers are screened (`outliers`). Each finding says what was found and its
+likely cause. The thresholds come from the physical bounds the effects declare and from the
+noise measured in the data themselves, not from one file."""
+
+from gyrocal.checks.finding import Findings
+from gyrocal.checks.mounting import align
+from gyrocal.checks.outliers import EXCURSION_MAX_S, outlier_distances, screen, trend_distances
+from gyrocal.checks.physics import rotation_findings, saturation_findings
+from gyrocal.checks.sampling import clock_findings, gap_findings
+from gyrocal.checks.sensing import physical_limits, sense
+from gyrocal.inference import classic, preprocess
+from gyrocal.io.telemetry import UNIT_NORM_TOL, Campaign, TelemetryError, read_campaign
+from gyrocal.io.telemetry import summary as format_summary
+
+__all__ = ["check", "read_checked", "summary"]
+
+
+def check(campaign: Campaign) -> Findings:
+    """Every physical check of a campaign. Outliers are screened with a threshold that keeps
+    the expected false alarms per campaign at `OUTLIER_FALSE_ALARMS`; they are listed here
+    and left out by `preprocess`."""
+    findings = Findings()
+    gap_findings(campaign, findings)
+    limits = physical_limits(campaign.channels)
+    screened = []
+    for m in campaign.maneuvers:
+        try:
+            data = preprocess.slice_maneuver(campaign, m.id)
+        except TelemetryError as exc:
+            findings.refuse("slice", str(exc))
+            continue
+        sensed = sense(data)
+        if saturation_findings(sensed, limits[0], findings) or not rotation_findings(campaign, sensed, limits, findings):
+            continue
+        clock_findings(sensed, findings)
+        missing = classic.missing_holds(data)
+        if data.direction == "both":
+            findings.warn("holds", f"maneuver {m.id}: turns both ways: the paper's classic method does not apply "
+                                     "to it (the full-trajectory fit does)")
+        elif missing:
+            findings.warn("holds", f"maneuver {m.id}: no inertial hold {' or '.join(missing)} the rotation: "
+                                     "the paper's classic method does not apply to it (the full-trajectory "
+                                     "fit does)")
+        screened.append((data, *outlier_distances(sensed), *trend_distances(sensed)))
+    screen(campaign, screened, findings)
+    return findings
+
+
+
+
+def read_checked(directory, campaign=None):
+    """Read a campaign (format, `telemetry.read_campaign`; or take ``campaign``, the directory's
+    as that read it), turn its reference into body axes (`align`) and check its physics; every
+    error found is raised at once in one `TelemetryError`. Returns the aligned campaign and its
+    `Findings`."""
+    campaign, mounting = align(read_campaign(directory) if campaign is None else campaign)
+    findings = check(campaign)
+    findings.mounting = mounting
+    if findings.errors:
+        listed = "\n".join(f"  - {e}" for e in findings.errors)
+        raise TelemetryError(f"{directory}: the data are not physically consistent "
+                             f"({len(findings.errors)} finding(s)):\n{listed}")
+    return campaign, findings
+
+
+def summary(campaign: Campaign, findings: Findings) -> str:
+    """What ``gyrocal validate`` prints: the campaign, then the warnings and outliers."""
+    lines = [format_summary(campaign)]
+    if findings.mounting:
+        lines.append(f"  reference  mounting {findings.mounting['source']}: {findings.mounting['angle_deg']:.3f} deg "
+                     f"from body axes"
+                     + ("; sd about " + ", ".join(f"{a} {v:.3g}" for a, v in findings.mounting["sd_deg"].items())
+                        + " deg" if "sd_deg" in findings.mounting else ""))
+    if campaign.st_renormalised:
+        lines.append(f"  renormalised {campaign.st_renormalised} star-tracker quaternions (norm off 1 by more "
+                     f"than {UNIT_NORM_TOL:g}, as rounding leaves them)")
+    for w in findings.warnings:
+        lines.append(f"  warning: {w}")
+    if findings.outliers:
+        away = sum(o.kind == "excursion" for o in findings.outliers)
+        lines.append(f"  star-tracker outliers, left out of the fit: {len(findings.outliers)}"
+                     + (f", {away} of them in excursions (off the error's trend and back within "
+                        f"{EXCURSION_MAX_S:g} s)" if away else "")
+                     + (" (the 20 largest; all in input.json)" if len(findings.outliers) > 20 else ""))
+        for o in sorted(findings.outliers, key=lambda o: -o.mahalanobis)[:20]:
+            lines.append(f"    {o.maneuver:<12} line {o.line:>7}  t = {o.time_s:.2f} s  {o.size_arcsec:8.1f} arcsec "
+                         f"({o.mahalanobis:.1f} sd)" + ("  excursion" if o.kind == "excursion" else ""))
+    return "\n".join(lines)

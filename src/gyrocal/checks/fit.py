@@ -1,0 +1,86 @@
+"""Refusals before a posterior is sampled: a point estimate whose noise no sensor can have, one
+beyond the physical bounds, or maneuvers too short for the leave-one-block-out predictive. Each
+raises `EstimateError` with the parameter and the maneuver it concerns."""
+
+import numpy as np
+
+from gyrocal.inference import identification, noise
+from gyrocal.inference.estimate import PointEstimate, linearize_all
+from gyrocal.inference.likelihood import maneuver_stats
+from gyrocal.inference.noise import variances
+from gyrocal.model import units
+
+__all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "EstimateError", "check_blocks", "check_noise", "check_physical"]
+
+
+class EstimateError(RuntimeError):
+    """The point estimate is not physical; the message names the parameter and the maneuver."""
+
+
+NOISE_PLAUSIBLE = 1e3
+"""A fitted noise scale more than this factor away from the stated one (either way) is not a noise
+the sensors can have: the residuals are structure the model lacks."""
+
+
+def check_noise(maneuvers, est: PointEstimate):
+    """Stop before sampling when REML puts a noise scale `NOISE_PLAUSIBLE` times off the stated one;
+    the message gives each maneuver's residual RMS about roll, pitch and yaw."""
+    ratio = np.exp(est.log_sigma - noise.log_sigma_of(est.stated_noise))
+    off = (ratio > NOISE_PLAUSIBLE) | (ratio < 1.0 / NOISE_PLAUSIBLE)
+    if off.any():
+        fitted, stated = noise.stated_scales(est.log_sigma), noise.stated_scales(noise.log_sigma_of(est.stated_noise))
+        listed = "; ".join(f"{k} {fitted[k]:.3g} (stated {stated[k]:.3g})" for k, bad in zip(fitted, off) if bad)
+        lins, _ = linearize_all(maneuvers, est)
+        rms = [np.sqrt(np.mean((lin.body_error[:, 0] - lin.body_error[:, 0].mean(axis=0)) ** 2, axis=0))
+               / units.ARCSEC_RAD for lin in lins]
+        residuals = "; ".join(f"{d.id} {r[0]:.0f}, {r[1]:.0f}, {r[2]:.0f}" for d, r in zip(maneuvers, rms))
+        raise EstimateError(
+            f"point estimate of model {est.spec.model}: the fitted noise is not a noise these sensors can have: "
+            f"{listed}. The residuals hold structure far above the noise that the model lacks (RMS about roll, "
+            f"pitch, yaw, arcsec: {residuals}); validate the campaign (gyrocal validate) and read its warnings, "
+            "or add the effect they point to")
+
+
+def check_physical(maneuvers, est: PointEstimate, bound_si):
+    """Stop before sampling when the WLS puts a parameter beyond its physical bound by more than
+    `identification.DETECTION_SD` of its own standard error: the data then say it is out (a
+    unit slip, a gap, a wrong label), not the confounding of two parameters that only the prior
+    holds apart. Names the parameter and the maneuver the model fits worst."""
+    sd = np.sqrt(np.diag(est.cov))
+    beyond = est.spec.free & (np.abs(est.theta) - bound_si > identification.DETECTION_SD * sd)
+    if not beyond.any():
+        return
+    _, noises = linearize_all(maneuvers, est)
+    stats = [maneuver_stats(nz, variances(est.log_sigma)) for nz in noises]
+    misfit = np.array([s.c / s.n for s in stats])
+    worst = int(np.argmax(misfit))
+    spec = est.spec
+    values = spec.to_unit(est.theta)
+    listed = "; ".join(f"{spec.labels[i]} = {values[i]:.6g} {spec.units[i]} (bound {spec.to_unit(bound_si)[i]:g}, "
+                       f"WLS sd {sd[i] / spec.si_per_unit[i]:.3g})" for i in np.flatnonzero(beyond))
+    raise EstimateError(
+        f"point estimate of model {spec.model}: beyond the physical bounds, so sampling would not start: {listed}. "
+        f"The model fits maneuver {maneuvers[worst].id} worst (weighted residual {misfit[worst]:.3g} per sample, "
+        f"1 expected): check its data and labels (gyrocal validate) and the noise knowledge")
+
+
+MIN_REST_SAMPLES = 10
+"""Star-tracker samples of a maneuver that must remain when any one leave-one-block-out block is
+left out: fewer cannot pin down the maneuver's nuisance (initial attitude and biases)."""
+
+
+def check_blocks(maneuvers, block_s: float):
+    """Stop before sampling when a maneuver is too short for the leave-one-block-out predictive:
+    each ``block_s`` block is predicted from the rest of its maneuver alone, which must then keep
+    `MIN_REST_SAMPLES` (a single block would leave nothing, and the factorisation would fail)."""
+    short = []
+    for d in maneuvers:
+        counts = np.bincount(np.floor((d.st_time - d.st_time[0]) / block_s).astype(int))
+        if len(d.st_time) - counts.max() < MIN_REST_SAMPLES:
+            short.append(f"{d.id} spans {d.st_time[-1] - d.st_time[0]:.0f} s ({len(d.st_time)} samples, "
+                         f"{len(d.st_time) - counts.max()} outside its largest block)")
+    if short:
+        raise EstimateError(
+            f"too short for the leave-one-block-out predictive (blocks of sampler.block_s = {block_s:g} s, each "
+            f"predicted from the rest of its maneuver, which needs at least {MIN_REST_SAMPLES} star-tracker samples): "
+            f"{'; '.join(short)}. Lengthen its holds, or make sampler.block_s shorter than the maneuver")

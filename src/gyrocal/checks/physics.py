@@ -1,0 +1,176 @@
+"""Do the gyros turn as the star tracker does? Angle, axis, direction and units of each maneuver's
+rotation, a unit slip's likely cause, a reference sampled too sparsely, and a gyro that clips."""
+
+import numpy as np
+
+from gyrocal.checks.finding import Findings
+from gyrocal.checks.sensing import (
+    Sensed,
+    blocked_sums,
+    consistent,
+    fit_rotation,
+    gyro_at_st,
+    interval_rotations,
+    nominal_body_increments,
+    reference_noise_rad,
+)
+from gyrocal.inference.identification import DETECTION_SD
+from gyrocal.io.telemetry import Campaign
+from gyrocal.model.units import AXES, AXIS_INDEX, rad_to_arcsec
+
+__all__ = [
+    "ALTERNATIVES", "CLIP_BAND", "MAX_TURN_BETWEEN_REFERENCE_DEG", "rotation_findings", "saturation_findings",
+    "undersampled"
+]
+
+ALTERNATIVES = (
+    (180.0 / np.pi, "increments in degrees rather than radians?"),
+    (1e3, "increments 1000 times too large (mrad rather than rad?)"),
+    (1e-3, "increments 1000 times too small (krad? a unit slip?)"),
+)
+"""Gyro scale factors a unit slip produces, with the likely cause; rates-for-increments and
+cumulative angles are tried as well (they depend on the sample rate)."""
+
+
+
+def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Findings) -> bool:
+    """Angle, axis, direction and units of one maneuver's rotation, gyro against star tracker;
+    whether it is consistent."""
+    m = campaign.maneuver(sensed.data.id)
+    a = AXIS_INDEX[m.axis]
+    sf_bound, mis_bound, sf_sd = limits
+    d_st, dt, d_gyro = sensed.d_st, sensed.dt, sensed.d_gyro
+    where = f"maneuver {m.id} ({m.turn})"
+    min_angle = reference_noise_rad(sensed) / sf_sd
+    blocked_dt, blocked_gyro, blocked_st = blocked_sums(dt, d_gyro, d_st)
+    fit = fit_rotation(blocked_gyro, blocked_st, blocked_dt, a)
+    gyro_excursion = np.ptp(np.cumsum(d_gyro, axis=0), axis=0)
+    if fit.excursion_rad.max() < min_angle and gyro_excursion.max() < min_angle:
+        findings.refuse("rotation",
+            f"{where}: neither the star tracker nor the gyros rotate in [{m.t_start}, {m.t_end}] s "
+            f"(at most {np.rad2deg(fit.excursion_rad.max()):.3g} deg; a scale factor needs at least "
+            f"{np.rad2deg(min_angle):.2g} deg to be told better than its prior): is the window on a hold?")
+        return False
+    if consistent(d_gyro, d_st, dt, a, sf_bound, mis_bound):
+        n_errors = len(findings.errors)
+        if fit.excursion_rad[a] < min_angle:
+            findings.refuse("rotation", f"{where}: the star tracker rotates only {np.rad2deg(fit.excursion_rad[a]):.3g} deg "
+                                   f"about {m.axis}; a scale factor needs {np.rad2deg(min_angle):.2g} deg")
+        elif m.direction == "both":
+            turned = {"+": d_st[:, a].clip(min=0).sum(), "-": -d_st[:, a].clip(max=0).sum()}
+            missing = [s for s in "+-" if turned[s] < min_angle]
+            if missing:
+                findings.refuse("rotation", f"{where}: labelled both, but the star tracker turns only "
+                                       f"{np.rad2deg(turned[missing[0]]):.3g} deg in the {missing[0]} direction")
+        elif np.sign(fit.net_rad) != m.sign:
+            findings.refuse("rotation",
+                f"{where}: the star tracker and the gyros turn {np.rad2deg(fit.net_rad):+.1f} deg about {m.axis}, "
+                f"the opposite of the label's direction {m.direction!r}")
+        return len(findings.errors) == n_errors
+    st_axis = AXES[fit.axis]
+    if st_axis != m.axis and AXES[int(np.argmax(gyro_excursion))] != m.axis:
+        findings.refuse("rotation",
+            f"{where}: the star tracker and the gyros both rotate mostly about {st_axis} "
+            f"({np.rad2deg(fit.excursion_rad[fit.axis]):.1f} deg), not {m.axis}: is the maneuver's axis label wrong?")
+        return False
+    hint = _diagnose(campaign, sensed, a, sf_bound, mis_bound) or undersampled(sensed)
+    if hint:
+        findings.refuse("rotation", f"{where}: {hint}")
+        return False
+    response = ", ".join(f"{AXES[b]} {fit.response[b]:+.4g}" for b in range(3))
+    findings.refuse("rotation",
+        f"{where}: per unit of the star tracker's rotation about {m.axis} the gyros turn {response} "
+        f"(physical: {m.axis} 1 +/- {sf_bound:.2g}, the others within {rad_to_arcsec(mis_bound):.0f} arcsec); "
+        f"the star tracker rotates mostly about {st_axis}. Check the channel columns, their axes in "
+        f"campaign.yaml and the star tracker's mounting")
+    return False
+
+
+def _diagnose(campaign, sensed: Sensed, a, sf_bound, mis_bound) -> str:
+    """The likely cause of an inconsistent rotation: the first reinterpretation that makes it consistent."""
+    data, d_gyro, d_st, dt = sensed.data, sensed.d_gyro, sensed.d_st, sensed.dt
+    scale = np.ptp(np.cumsum(d_gyro[:, a])) / np.ptp(np.cumsum(d_st[:, a]))
+    dt_gyro = float(np.median(data.dt))
+    candidates = list(ALTERNATIVES) + [
+        (1.0 / dt_gyro, f"rates in rad/s rather than increments? ({1 / dt_gyro:.4g} is the gyro's sample rate)"),
+        (180.0 / np.pi / dt_gyro, "rates in deg/s rather than increments in rad?")]
+    for factor, cause in candidates:
+        if consistent(d_gyro / factor, d_st, dt, a, sf_bound, mis_bound):
+            return f"the gyro rotation is {scale:.4g} times the star tracker's: {cause}"
+    i0 = int(np.searchsorted(campaign.gyro_time, data.gyro_time[0]))
+    raw = campaign.increments(slice(i0, i0 + len(data.gyro_time)))
+    differenced = gyro_at_st(data, nominal_body_increments(data, np.diff(raw, axis=0)))
+    if consistent(differenced, d_st, dt, a, sf_bound, mis_bound):
+        return ("the gyro columns hold a cumulative angle, not the increment since the previous row: "
+                "their differences match the star tracker")
+    for order, cause in (([1, 2, 3, 0], "scalar first (q0, q1, q2, q3)"), ([3, 0, 1, 2], "in another order")):
+        d_reordered = interval_rotations(data.st_quat[:, order])
+        if consistent(d_gyro, d_reordered, dt, a, sf_bound, mis_bound):
+            return (f"the star-tracker quaternions look {cause}: read in that order they match the gyros; "
+                    "the contract's q1..q4 are scalar last (docs/interface.md section 1)")
+    return ""
+
+
+MAX_TURN_BETWEEN_REFERENCE_DEG = 90.0
+"""The checks compare rotations between reference samples, which are ambiguous beyond half a
+turn; a clipped or mis-scaled gyro understates the turn, so they ask for half that."""
+
+
+def undersampled(sensed: Sensed) -> str:
+    """Why the reference is sampled too sparsely for this maneuver's motion, or "": where the
+    gyro turns more than `MAX_TURN_BETWEEN_REFERENCE_DEG` between two reference samples, the
+    reference's own rotation there may be wrapped by whole turns. Asked only once the rotation
+    check has failed and no unit slip explains it (a slip also makes the gyro's turn look
+    large); the answer gives the interval the gyro's peak rate needs. A gyro that turns that far
+    within one of its own samples is not told to wait for a denser reference: its own data are
+    suspect (a cumulative angle, a unit), and the generic rotation message stands."""
+    turn_deg = np.rad2deg(np.linalg.norm(sensed.d_gyro, axis=1))
+    worst = int(np.argmax(turn_deg))
+    if turn_deg[worst] <= MAX_TURN_BETWEEN_REFERENCE_DEG:
+        return ""
+    peak_deg_s = np.rad2deg(np.max(np.linalg.norm(sensed.body, axis=1) / sensed.data.dt))
+    if MAX_TURN_BETWEEN_REFERENCE_DEG / peak_deg_s < np.median(sensed.data.dt):
+        return ""
+    beyond = int(np.sum(turn_deg > MAX_TURN_BETWEEN_REFERENCE_DEG))
+    return (f"the gyro turns {turn_deg[worst]:.0f} deg between the reference samples at {sensed.data.st_time[worst]:.6g} s "
+            f"and {sensed.data.st_time[worst + 1]:.6g} s ({beyond} intervals beyond {MAX_TURN_BETWEEN_REFERENCE_DEG:.0f} "
+            "deg): the reference's rotation between samples is ambiguous there, so its rotation cannot be checked "
+            f"against the gyro's. At the gyro's peak rate, {peak_deg_s:.0f} deg/s, keep the reference at least every "
+            f"{MAX_TURN_BETWEEN_REFERENCE_DEG / peak_deg_s:.2g} s (gyrocal import --reference-interval)")
+
+
+CLIP_BAND = 0.05
+"""Gyro samples within this share of a maneuver's peak rate are tested for clipping."""
+
+
+def saturation_findings(sensed: Sensed, sf_bound, findings: Findings) -> bool:
+    """A gyro that reaches its range clips: where its rate sits near its peak, the reference turns
+    faster than the gyro says, in the gyro's direction, by more than any scale error and more
+    than `DETECTION_SD` times the noise of as many independent reference intervals (on an axis
+    that barely turns, the "peak" is noise; conservative, since over consecutive intervals the
+    reference's noise partly cancels). Such a maneuver is refused, with the count of clipped samples;
+    it is never fitted silently. Returns whether it clipped."""
+    data = sensed.data
+    rate = np.abs(sensed.body / data.dt[:, None])
+    at_st = rate[data.st_interval()[0][1:]]
+    for a in range(3):
+        peak = rate[:, a].max()
+        near = at_st[:, a] >= (1 - CLIP_BAND) * peak
+        turned_gyro = np.abs(sensed.d_gyro[near, a]).sum()
+        if near.sum() < 5 or turned_gyro == 0:
+            continue
+        turned_st = np.sum(np.sign(sensed.d_gyro[near, a]) * sensed.d_st[near, a])
+        noise = 1.4826 * np.median(np.abs(np.diff(sensed.d_st[:, a]))) / np.sqrt(2)
+        excess = turned_st / turned_gyro
+        shortfall = turned_st - (1 + 2 * sf_bound) * turned_gyro
+        if shortfall > DETECTION_SD * noise * np.sqrt(near.sum()):
+            clipped = int((rate[:, a] >= (1 - CLIP_BAND) * peak).sum())
+            findings.refuse("saturation",
+                f"maneuver {data.id}: {clipped} gyro samples about {AXES[a]} sit within {CLIP_BAND:.0%} of the peak "
+                f"rate {np.rad2deg(peak):.1f} deg/s, where the reference turns {excess:.3f} times as fast: the gyro "
+                "clips at its range, so its rotation there is not measured. Leave the maneuver out, or cut it "
+                "before the first clipped sample")
+            return True
+    return False
+
+

@@ -1,0 +1,181 @@
+"""What both sensors saw during one maneuver, and the regression of the gyro's rotation on the
+star tracker's that every physics check of the input starts from."""
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from gyrocal.inference import preprocess
+from gyrocal.inference.errormodel import cumulative_at_st
+from gyrocal.inference.identification import DETECTION_SD
+from gyrocal.model import channels as ch
+from gyrocal.model.spec import baseline
+
+__all__ = [
+    "CHECK_BLOCK_S", "OUTLIER_REACH", "RotationFit", "Sensed", "blocked_sums", "consistent", "fit_rotation", "gyro_at_st",
+    "interval_rotations", "neighbour_residual", "nominal_body_increments", "physical_limits", "reference_noise_rad",
+    "sense"
+]
+
+OUTLIER_REACH = 3
+"""The outlier screen compares a sample with the interpolations of up to this many pairs of neighbours."""
+
+
+
+@dataclass
+class RotationFit:
+    """The gyro rotation per interval regressed on the star tracker's about the maneuver axis."""
+
+    axis: int
+    """The axis the star tracker rotates about most."""
+    net_rad: float
+    """Net star-tracker rotation about the labelled axis."""
+    excursion_rad: np.ndarray
+    """(3,) range of the star tracker's cumulative rotation about each axis (its noise does not
+    accumulate: the sum of the interval rotations telescopes to the attitude change)."""
+    response: np.ndarray
+    """(3,) gyro rotation per unit star-tracker rotation about the labelled axis."""
+    response_sd: np.ndarray
+
+
+def interval_rotations(st_quat) -> np.ndarray:
+    """(M-1, 3) body-frame rotation vectors of the star tracker between consecutive samples."""
+    r = Rotation.from_quat(st_quat)
+    return (r[:-1].inv() * r[1:]).as_rotvec()
+
+
+def gyro_at_st(data, increments) -> np.ndarray:
+    """(M-1, 3) summed body increments of the first channel set between star-tracker samples."""
+    k, frac = data.st_interval()
+    cumulative = cumulative_at_st(increments, k, frac)
+    return np.diff(cumulative, axis=0)
+
+
+def nominal_body_increments(data, raw) -> np.ndarray:
+    """Body increments of the first channel set from raw channel increments (nominal model),
+    so a reinterpretation of the raw columns can be tried."""
+    first = data.sets[0]
+    index = {c.name: i for i, c in enumerate(data.channels)}
+    zeros = ch.ChannelParams.zeros(data.channels)
+    return ch.solve_body(raw[:, [index[n] for n in first]], zeros.subset(first))
+
+
+@dataclass
+class Sensed:
+    """What both sensors saw during one maneuver, computed once for every check."""
+
+    data: object
+    """The maneuver (`preprocess.ManeuverData`)."""
+    body: np.ndarray
+    """(K, 3) body increments of the first channel set at nominal parameters (rad)."""
+    d_gyro: np.ndarray
+    """(M-1, 3) those increments summed between star-tracker samples (rad)."""
+    d_st: np.ndarray
+    """(M-1, 3) the star tracker's rotation between its samples, body axes (rad)."""
+    dt: np.ndarray
+    """(M-1,) star-tracker sample intervals (s)."""
+
+    @cached_property
+    def error(self) -> np.ndarray:
+        """(M, 3) each sample's error angle between the sensors (eq. 4, nominal parameters, rad)."""
+        zeros = ch.ChannelParams.zeros(self.data.channels)
+        return preprocess.error_angles(self.data, self.data.sets[0], zeros)
+
+    @cached_property
+    def departures(self) -> np.ndarray:
+        """(M, 3) `error` less the interpolation of its neighbours (`neighbour_residual`): the
+        reference's noise estimate and the outlier screen both start from it."""
+        return neighbour_residual(self.error)
+
+
+def sense(data) -> Sensed:
+    """Both sensors' rotations of one maneuver, for every check of it."""
+    body = nominal_body_increments(data, data.increments)
+    return Sensed(data, body, gyro_at_st(data, body), interval_rotations(data.st_quat), np.diff(data.st_time))
+
+
+def fit_rotation(d_gyro, d_st, dt, axis: int, bias=True) -> RotationFit:
+    """Least squares of the gyro's interval rotations on the star tracker's about all three axes
+    and (with ``bias``) a constant rate. The response to rotation about ``axis`` is 1 + scale
+    error on that axis and the misalignments across; the other axes' columns take up any motion
+    about them (a hand-held trial turns about more than one axis)."""
+    excursion = np.ptp(np.cumsum(d_st, axis=0), axis=0)
+    x = np.column_stack([d_st, dt] if bias else [d_st])
+    coef, *_ = np.linalg.lstsq(x, d_gyro, rcond=None)
+    resid = d_gyro - x @ coef
+    sigma = 1.4826 * np.median(np.abs(resid - np.median(resid, axis=0)), axis=0) + 1e-15
+    info = np.linalg.pinv(x.T @ x)[axis, axis]
+    return RotationFit(int(np.argmax(excursion)), float(d_st[:, axis].sum()), excursion, coef[axis],
+                       sigma * np.sqrt(info))
+
+
+CHECK_BLOCK_S = 1.0
+"""The rotation checks compare the sensors over blocks of samples at least this long: over a
+fast reference's single interval, its noise and any sub-sample timing would bias the slope."""
+
+
+def blocked_sums(dt, *series):
+    """Sums of consecutive intervals over blocks of at least `CHECK_BLOCK_S` (the dt first)."""
+    size = max(1, round(CHECK_BLOCK_S / float(np.median(dt))))
+    n = len(dt) // size * size
+    return [x[:n].reshape(n // size, size, *x.shape[1:]).sum(axis=1) for x in (dt, *series)]
+
+
+def consistent(d_gyro, d_st, dt, axis, sf_bound, mis_bound) -> bool:
+    """Whether the gyro's rotation matches the star tracker's within the physical bounds, with
+    a bias fitted or (where a rotation at one steady rate leaves it confounded with the
+    scale) without; over blocks of `CHECK_BLOCK_S`."""
+    dt, d_gyro, d_st = blocked_sums(dt, d_gyro, d_st)
+    return any(_within(fit_rotation(d_gyro, d_st, dt, axis, bias), axis, sf_bound, mis_bound) for bias in (True, False))
+
+
+def _within(fit: RotationFit, axis: int, sf_bound, mis_bound) -> bool:
+    others = [b for b in range(3) if b != axis]
+    scale_ok = abs(fit.response[axis] - 1.0) <= sf_bound + DETECTION_SD * fit.response_sd[axis]
+    cross_ok = all(abs(fit.response[b]) <= mis_bound + DETECTION_SD * fit.response_sd[b] for b in others)
+    determined = DETECTION_SD * fit.response_sd[axis] <= sf_bound
+    return bool(scale_ok and cross_ok and determined and fit.axis == axis)
+
+
+def physical_limits(channels):
+    """Largest physical scale error and misalignment (SI), as the baseline effects declare them."""
+    spec = baseline(channels)
+    bounds = {p.name: b for p, b in zip(spec.parameters, spec.bound_si)}
+    sds = {p.name: s for p, s in zip(spec.parameters, spec.prior_sd_si)}
+    mis = max(v for k, v in bounds.items() if k.startswith("mis_"))
+    return bounds["sf_pos"], mis, sds["sf_pos"]
+
+
+def reference_noise_rad(sensed: Sensed) -> float:
+    """The noise of one reference sample as the data show it (rad, a robust sd over the three
+    axes): the smaller of two upper bounds. One is the spread of the sensors' error angles
+    about the interpolation of their neighbours (`neighbour_residual`), where a bias, a scale
+    error and a steady rate cancel; it holds at any sample interval, but a gyro fault (a unit
+    slip) inflates it. The other is the spread of the reference's own interval rotations, which
+    no gyro fault touches; it is the noise only where the reference barely turns between
+    samples, and otherwise the motion per interval, which grows with the interval (thinned to
+    1 s, a hand-held reference turns tens of degrees per interval) though the noise does not."""
+    d_st = sensed.d_st
+    between = 1.4826 * np.median(np.abs(sensed.departures[1:-1]))
+    own = 1.4826 * np.median(np.abs(d_st - np.median(d_st, axis=0))) / np.sqrt(2)
+    return float(min(between, own) + 1e-12)
+
+
+
+
+def neighbour_residual(x, reach=OUTLIER_REACH) -> np.ndarray:
+    """Each row of ``x`` (M, p) minus the median of its neighbours' linear interpolations
+    ``(x[k-j] + x[k+j]) / 2``, j = 1..reach: zero on any straight line, and a kink leaves only
+    its change of slope. A single outlier moves one interpolation of its neighbours, which the
+    median ignores. The first and last rows have no pair: they are returned as zero."""
+    m = len(x)
+    padded = np.concatenate([np.full((reach,) + x.shape[1:], np.nan), x, np.full((reach,) + x.shape[1:], np.nan)])
+    pairs = np.stack([0.5 * (padded[reach - j:reach - j + m] + padded[reach + j:reach + j + m])
+                      for j in range(1, reach + 1)])
+    resid = np.zeros_like(x)
+    resid[1:-1] = x[1:-1] - np.nanmedian(pairs[:, 1:-1], axis=0)
+    return resid
+
+

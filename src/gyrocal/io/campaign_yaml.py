@@ -1,0 +1,221 @@
+"""``campaign.yaml`` (docs/interface.md section 3): its channels, maneuvers and noise knowledge,
+parsed and checked. Bad input is refused with a `TelemetryError` naming the file, the key and
+what is wrong."""
+
+import itertools
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from gyrocal.model.channels import Channel, channel_sets
+from gyrocal.model.units import AXES
+
+__all__ = [
+    "CHANNEL_PATTERN",
+    "DIRECTIONS",
+    "NAME_PATTERN",
+    "NORM_REFUSE_TOL",
+    "Maneuver",
+    "TelemetryError",
+    "default_name",
+    "fail",
+    "read_meta",
+]
+
+NORM_REFUSE_TOL = 1e-3
+"""Further than this from 1 a quaternion is refused: rounding to as few as three decimals stays
+inside, a wrong column does not."""
+NAME_PATTERN = re.compile(r"^[A-Za-z0-9_]+$")
+CHANNEL_PATTERN = re.compile(r"^dtg(\d+)_(roll|pitch|yaw)$")
+DIRECTIONS = ("+", "-", "both")
+"""A maneuver turns one way, the other, or both (several turns each way, no inertial holds)."""
+
+
+class TelemetryError(ValueError):
+    """Bad campaign input; the message names the file, the row or column and the fault."""
+
+
+@dataclass(frozen=True)
+class Maneuver:
+    id: str
+    axis: str
+    direction: str
+    t_start: float
+    t_end: float
+    in_loop: tuple = ()
+
+    @property
+    def turn(self) -> str:
+        """The rotation as reports name it: ``+yaw``, ``-roll``, or ``both yaw``."""
+        return f"both {self.axis}" if self.direction == "both" else f"{self.direction}{self.axis}"
+
+    @property
+    def sign(self) -> float:
+        """+1 or -1; 0 for a maneuver that turns both ways."""
+        return {"+": 1.0, "-": -1.0}.get(self.direction, 0.0)
+
+
+def fail(path, message):
+    raise TelemetryError(f"{path}: {message}")
+
+
+def _parse_channels(path, raw) -> tuple:
+    if not isinstance(raw, dict) or not raw:
+        fail(path, "'channels' must map each gyro channel name to {axis: roll|pitch|yaw} (and, for a DTG, dtg: N)")
+    channels = []
+    for name, entry in raw.items():
+        where = f"channels.{name}"
+        if not NAME_PATTERN.match(str(name)):
+            fail(path, f"{where}: a channel name may hold only letters, digits and '_'")
+        if not isinstance(entry, dict) or "axis" not in entry or set(entry) - {"dtg", "axis"}:
+            fail(path, f"{where}: needs the key 'axis' (roll, pitch or yaw) and may have 'dtg' (the DTG's number)")
+        if entry["axis"] not in AXES:
+            fail(path, f"{where}.axis: must be one of {list(AXES)}, got {entry['axis']!r}")
+        dtg = entry.get("dtg")
+        if dtg is not None and (not isinstance(dtg, int) or isinstance(dtg, bool)):
+            fail(path, f"{where}.dtg: must be a whole number, got {dtg!r}")
+        match = CHANNEL_PATTERN.match(str(name))
+        if match and (int(match.group(1)), match.group(2)) != (dtg, entry["axis"]):
+            fail(path, f"{where}: a name dtg<N>_<axis> needs dtg: N and that axis; got dtg/axis "
+                        f"({dtg}, {entry['axis']})")
+        channels.append(Channel(str(name), dtg, entry["axis"]))
+    return tuple(channels)
+
+
+def _parse_maneuvers(path, raw, channel_names) -> tuple:
+    if not isinstance(raw, list) or not raw:
+        fail(path, "'maneuvers' must be a non-empty list")
+    allowed = {"id", "axis", "direction", "t_start", "t_end", "in_loop"}
+    seen = set()
+    maneuvers = []
+    for i, m in enumerate(raw):
+        where = f"maneuvers[{i}]"
+        if not isinstance(m, dict):
+            fail(path, f"{where}: must be a mapping")
+        missing = {"id", "axis", "direction", "t_start", "t_end"} - set(m)
+        if missing:
+            fail(path, f"{where}: missing key(s) {sorted(missing)}")
+        if set(m) - allowed:
+            fail(path, f"{where}: unknown key(s) {sorted(set(m) - allowed)}")
+        mid = str(m["id"])
+        where = f"maneuvers[{i}] ({mid})"
+        if not NAME_PATTERN.match(mid):
+            fail(path, f"{where}.id: only letters, digits and '_' are allowed")
+        if mid in seen:
+            fail(path, f"{where}.id: duplicate maneuver id")
+        seen.add(mid)
+        if m["axis"] not in AXES:
+            fail(path, f"{where}.axis: must be one of {list(AXES)}, got {m['axis']!r}")
+        if str(m["direction"]) not in DIRECTIONS:
+            fail(path, f"{where}.direction: must be \"+\", \"-\" or both, got {m['direction']!r}")
+        for key in ("t_start", "t_end"):
+            if not _is_number(m[key]):
+                fail(path, f"{where}.{key}: must be a time in seconds, got {m[key]!r}")
+        t0, t1 = float(m["t_start"]), float(m["t_end"])
+        if not t1 > t0:
+            fail(path, f"{where}: t_end ({t1}) must be after t_start ({t0})")
+        in_loop = tuple(m.get("in_loop") or ())
+        for name in in_loop:
+            if name not in channel_names:
+                fail(path, f"{where}.in_loop: unknown channel {name!r} (channels: {channel_names})")
+        if in_loop:
+            axes = sorted(name.split("_", 1)[1] for name in in_loop)
+            if axes != sorted(AXES):
+                fail(path, f"{where}.in_loop: needs one channel per axis roll, pitch, yaw; got {list(in_loop)}")
+        maneuvers.append(Maneuver(mid, m["axis"], str(m["direction"]), t0, t1, in_loop))
+    ordered = sorted(maneuvers, key=lambda m: m.t_start)
+    for first, second in itertools.pairwise(ordered):
+        if second.t_start < first.t_end:
+            fail(path, f"maneuvers {first.id} [{first.t_start}, {first.t_end}] s and {second.id} "
+                        f"[{second.t_start}, {second.t_end}] s overlap: their samples would count twice")
+    return tuple(maneuvers)
+
+
+def read_meta(directory) -> dict:
+    """Parse and check ``campaign.yaml`` alone (name, channels, maneuvers, noise knowledge)."""
+    directory = Path(directory)
+    if not directory.is_dir():
+        raise TelemetryError(f"{directory}: campaign directory not found")
+    cpath = directory / "campaign.yaml"
+    if not cpath.exists():
+        fail(cpath, "file not found")
+    try:
+        meta = yaml.safe_load(cpath.read_text())
+    except yaml.YAMLError as exc:
+        hint = ""
+        if "sequence entries are not allowed" in str(exc):
+            hint = ('. A bare - starts a YAML list: quote a direction, direction: "-"')
+        fail(cpath, f"not valid YAML: {exc}{hint}")
+    if not isinstance(meta, dict):
+        fail(cpath, "must be a mapping with 'channels' and 'maneuvers'")
+    unknown = set(meta) - {"name", "channels", "star_tracker", "gyro", "maneuvers"}
+    if unknown:
+        fail(cpath, f"unknown key(s) {sorted(unknown)}")
+    for key in ("channels", "maneuvers"):
+        if key not in meta:
+            fail(cpath, f"missing key '{key}'")
+    channels = _parse_channels(cpath, meta["channels"])
+    names = [c.name for c in channels]
+    try:
+        channel_sets(channels)
+    except ValueError as exc:
+        fail(cpath, f"channels: {exc}")
+    for key in ("star_tracker", "gyro"):
+        if meta.get(key) is not None and not isinstance(meta[key], dict):
+            fail(cpath, f"{key}: must be a mapping of its noise knowledge (e.g. {key}: "
+                         f"{{{'arw_deg_sqrt_h' if key == 'gyro' else 'sigma_cross_arcsec'}: ...}}), got {meta[key]!r}")
+    gyro = meta.get("gyro") or {}
+    if set(gyro) - {"arw_deg_sqrt_h"}:
+        fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - {'arw_deg_sqrt_h'})}")
+    if "arw_deg_sqrt_h" in gyro and not _positive_number(gyro["arw_deg_sqrt_h"]):
+        fail(cpath, "gyro.arw_deg_sqrt_h: must be a positive number")
+    name = str(meta.get("name") or default_name(directory))
+    if not NAME_PATTERN.match(name):
+        fail(cpath, f"name: only letters, digits and '_' are allowed, got {name!r}")
+    return {"name": name, "channels": channels,
+            "maneuvers": _parse_maneuvers(cpath, meta["maneuvers"], names),
+            "star_tracker": _parse_star_tracker(cpath, meta.get("star_tracker") or {}),
+            "gyro": dict(gyro)}
+
+
+def default_name(directory) -> str:
+    """A campaign's name when ``campaign.yaml`` has none: its directory's, with every character
+    other than letters, digits and ``_`` made ``_`` (results go to ``results/<name>/``)."""
+    return re.sub(r"[^A-Za-z0-9_]", "_", Path(directory).resolve().name)
+
+
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value)
+
+
+def _positive_number(value) -> bool:
+    return _is_number(value) and value > 0
+
+
+def _parse_star_tracker(path, raw) -> dict:
+    allowed = {"sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "mounting"}
+    if set(raw) - allowed:
+        fail(path, f"star_tracker: unknown key(s) {sorted(set(raw) - allowed)}")
+    for key in ("sigma_cross_arcsec", "sigma_about_arcsec"):
+        if key in raw and not _positive_number(raw[key]):
+            fail(path, f"star_tracker.{key}: must be a positive number")
+    out = dict(raw)
+    if "boresight_body" in raw:
+        b = raw["boresight_body"]
+        if not isinstance(b, list) or len(b) != 3 or not all(_is_number(v) for v in b) or not any(b):
+            fail(path, f"star_tracker.boresight_body: must be a non-zero 3-vector of numbers in body axes, "
+                        f"e.g. [0, 0, 1]; got {b!r}")
+        b = np.asarray(b, dtype=float)
+        if abs(np.linalg.norm(b) - 1.0) > 1e-12:
+            b = b / np.linalg.norm(b)
+        out["boresight_body"] = b.tolist()
+    if "mounting" in raw:
+        q = raw["mounting"]
+        if q != "estimate" and (not isinstance(q, list) or len(q) != 4 or not all(_is_number(v) for v in q)
+                                or abs(np.linalg.norm(q) - 1.0) > NORM_REFUSE_TOL):
+            fail(path, "star_tracker.mounting: the reference frame's attitude in body axes, a unit quaternion "
+                        f"[q1, q2, q3, q4] (scalar last), or estimate; got {q!r}")
+    return out
