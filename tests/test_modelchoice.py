@@ -69,7 +69,7 @@ def test_with_no_plausible_variant_the_best_elpd_is_reviewed_and_the_check_fails
     table = comparison([("baseline", BASE, True, [0, 0, 0]), ("drift", BASE + "+bias_drift", True, [5, 5, 5])])
     assert modelchoice.reviewed_model(table) == "drift"
     check = modelchoice.plausibility_check(table)
-    assert not check["passed"] and "baseline (misfit" in check["why"] and "drift (misfit)" in check["why"]
+    assert not check.passed and "baseline (misfit" in check.why and "drift (misfit)" in check.why
 
 
 def test_plausible_variants_that_disagree_beyond_their_intervals_give_no_go_naming_both_and_the_term():
@@ -77,25 +77,27 @@ def test_plausible_variants_that_disagree_beyond_their_intervals_give_no_go_nami
                         ("latency", BASE + "+st_latency", False, [1, 1.2, 0.9])])
     calibrations = {"drift": calibration(-1712.0, -1000.0), "latency": calibration(-112.0, -1010.0)}
     check = modelchoice.sensitivity_check(table, calibrations, LABELS, 3.0, LIMITS)
-    assert not check["passed"]
-    assert check["why"].startswith("the data cannot tell drift from latency: dtg2_yaw.sf_pos differs by 1,600.0 ppm "
+    assert not check.passed
+    assert check.why.startswith("the data cannot tell drift from latency: dtg2_yaw.sf_pos differs by 1,600.0 ppm "
                                    "(113.1 sd). What would separate them:")
-    assert "dtg2_yaw.sf_neg" not in check["why"]
-    assert "bias_drift: longer inertial holds" in check["why"] and "st_latency: shorter, sharper ramps" in check["why"]
+    assert "dtg2_yaw.sf_neg" not in check.why
+    assert check.figure == pytest.approx(113.1, abs=0.05) and (check.threshold, check.unit) == (3.0, "sd")
+    assert check.where == "dtg2_yaw.sf_pos, drift against latency" and check.action
+    assert "bias_drift: longer inertial holds" in check.why and "st_latency: shorter, sharper ramps" in check.why
 
 
 def test_plausible_variants_that_agree_within_their_intervals_pass():
     table = comparison([("a", BASE, False, [1, 1]), ("b", BASE + "+bias_drift", False, [1, 1])])
     check = modelchoice.sensitivity_check(table, {"a": calibration(-1712, -1000), "b": calibration(-1700, -1015)},
                                           LABELS, 3.0, LIMITS)
-    assert check["passed"] and "agree on every channel-model term within 3.0 combined sd" in check["why"]
+    assert check.passed and "agree on every channel-model term within 3.0 combined sd" in check.why
 
 
 def test_a_variant_loo_rejects_cannot_block_a_go():
     table = comparison([("a", BASE, False, [9, 9, 9]), ("b", BASE + "+bias_drift", False, [-30, -30, -30])])
     check = modelchoice.sensitivity_check(table, {"a": calibration(0, 0), "b": calibration(5000, 5000)}, LABELS, 3.0,
                                           LIMITS)
-    assert check["passed"] and "LOO rejects every variant but a" in check["why"]
+    assert check.passed and "LOO rejects every variant but a" in check.why
 
 
 def test_a_misfitting_variant_that_predicts_as_well_and_disagrees_blocks_a_go():
@@ -104,7 +106,7 @@ def test_a_misfitting_variant_that_predicts_as_well_and_disagrees_blocks_a_go():
     assert list(table["plausible"]) == [True, False] and modelchoice.reviewed_model(table) == "a"
     check = modelchoice.sensitivity_check(table, {"a": calibration(0, 0), "b": calibration(5000, 0)}, LABELS, 3.0,
                                           LIMITS)
-    assert not check["passed"] and check["why"].startswith("the data cannot tell a from b: dtg2_yaw.sf_pos differs")
+    assert not check.passed and check.why.startswith("the data cannot tell a from b: dtg2_yaw.sf_pos differs")
 
 
 def test_a_variant_the_data_cannot_rule_out_under_which_a_term_is_unknown_blocks_a_go():
@@ -112,10 +114,10 @@ def test_a_variant_the_data_cannot_rule_out_under_which_a_term_is_unknown_blocks
     table = comparison([("baseline", BASE, False, [9, 9, 9]), ("nonlin", BASE + "+sf_nonlinearity", False, [9, 8.8, 9])])
     check = modelchoice.sensitivity_check(table, {"baseline": calibration(-1700, -1000),
                                                   "nonlin": calibration(-1650, -1000, sd=510.0)}, LABELS, 3.0, LIMITS)
-    assert not check["passed"]
-    assert check["why"].startswith("the data cannot tell baseline from nonlin: under nonlin, dtg2_yaw.sf_pos is known "
+    assert not check.passed
+    assert check.why.startswith("the data cannot tell baseline from nonlin: under nonlin, dtg2_yaw.sf_pos is known "
                                    "only within 1,999 ppm (95 %; limit 200)")
-    assert "sf_nonlinearity: a second rotation rate in each direction" in check["why"]
+    assert "sf_nonlinearity: a second rotation rate in each direction" in check.why
 
 
 def test_stacking_weights_favour_the_better_predictor_and_split_between_equals():

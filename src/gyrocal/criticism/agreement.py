@@ -18,6 +18,8 @@ from scipy.spatial.transform import Rotation
 
 from gyrocal.model.units import ARCSEC_RAD, AXES, PPM
 
+__all__ = ["KEYS", "compare", "compare_files", "into_frame", "mounting_of", "turnable"]
+
 KEYS = ["channel", "parameter"]
 
 

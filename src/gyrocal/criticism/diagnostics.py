@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import chdtr, chdtrc, gammaln
 
+from gyrocal.checks.finding import Finding
 from gyrocal.inference import errormodel, noise
 from gyrocal.inference.estimate import PointEstimate, linearize_all
 from gyrocal.inference.likelihood import campaign_stats
@@ -20,6 +21,11 @@ from gyrocal.inference.noise import NOISE_SCALES, variances
 from gyrocal.inference.predictive import WhitenedManeuver
 from gyrocal.model import effects
 from gyrocal.model.units import AXES, rad_to_arcsec
+
+__all__ = [
+    "COLLINEAR_FRACTION", "ENCOMPASS_TOP", "Signature", "chi2_log_sf", "conditional_drop", "diagnose", "misfit_checks",
+    "misfit_findings", "noise_rms_arcsec", "rank", "signature_effects", "whiteness"
+]
 
 
 class Signature(effects.Effect):
@@ -239,29 +245,45 @@ def noise_rms_arcsec(maneuvers, stated_noise) -> float:
     return float(rad_to_arcsec(np.sqrt(st_var + arw**2 * np.mean(durations) / 15)))
 
 
-def misfit_checks(residual_rms, noise_rms, white, ranking, noise_posterior, stated_noise, cfg) -> list:
-    """Each check: name, passed, and a sentence a reviewer can act on."""
-    checks = []
+def misfit_findings(residual_rms, noise_rms, white, ranking, noise_posterior, stated_noise, cfg) -> list:
+    """Each misfit check as a `Finding`: its figure against the threshold of the config's ``diagnostics``."""
+    findings = []
     ratio = residual_rms / noise_rms
-    checks.append({"check": "level", "passed": bool(ratio <= cfg["rms_ratio_max"]),
-                   "why": f"residual RMS {residual_rms:.2f} arcsec is {ratio:.2f} times what the stated noise "
-                          f"predicts ({noise_rms:.2f}); limit {cfg['rms_ratio_max']}"})
+    findings.append(Finding.judged(
+        "level", bool(ratio <= cfg["rms_ratio_max"]),
+        f"residual RMS {residual_rms:.2f} arcsec is {ratio:.2f} times what the stated noise "
+        f"predicts ({noise_rms:.2f}); limit {cfg['rms_ratio_max']}",
+        figure=float(ratio), threshold=float(cfg["rms_ratio_max"]), unit="x predicted"))
     for name in (s.key for s in NOISE_SCALES):
         fitted, stated = noise_posterior[name], stated_noise[name]
         r = fitted / stated
         ok = 1 / cfg["noise_ratio_max"] <= r <= cfg["noise_ratio_max"]
-        checks.append({"check": f"noise:{name}", "passed": bool(ok),
-                       "why": f"the data ask for {name} = {fitted:.4g}, {r:.2f} times the stated {stated:.4g}; "
-                              f"allowed {1 / cfg['noise_ratio_max']:.2f} to {cfg['noise_ratio_max']:.2f}"})
-    checks.append({"check": "whiteness", "passed": bool(abs(white["z"]) <= cfg["whiteness_z_max"]),
-                   "why": f"lag-1 autocorrelation of the standardised innovations {white['lag1']:+.3f} "
-                          f"(z = {white['z']:+.1f}; limit |z| <= {cfg['whiteness_z_max']})"})
+        findings.append(Finding.judged(
+            f"noise:{name}", bool(ok),
+            f"the data ask for {name} = {fitted:.4g}, {r:.2f} times the stated {stated:.4g}; "
+            f"allowed {1 / cfg['noise_ratio_max']:.2f} to {cfg['noise_ratio_max']:.2f}",
+            figure=float(r if r >= 1 else 1 / r if r > 0 else np.inf), threshold=float(cfg["noise_ratio_max"]),
+            unit="x stated, either way"))
+    findings.append(Finding.judged(
+        "whiteness", bool(abs(white["z"]) <= cfg["whiteness_z_max"]),
+        f"lag-1 autocorrelation of the standardised innovations {white['lag1']:+.3f} "
+        f"(z = {white['z']:+.1f}; limit |z| <= {cfg['whiteness_z_max']})",
+        figure=float(abs(white["z"])), threshold=float(cfg["whiteness_z_max"]), unit="sd"))
     worst = ranking[0]
-    checks.append({"check": "structure", "passed": bool(worst["log10_p"] >= cfg["structure_log10_p_min"]),
-                   "why": f"{worst['kind']} {worst['name']} would explain chi2 {worst['chi2_drop']:.1f} on "
-                          f"{worst['df']} degrees of freedom (log10 p = {worst['log10_p']:.1f}; "
-                          f"limit {cfg['structure_log10_p_min']})"})
-    return checks
+    findings.append(Finding.judged(
+        "structure", bool(worst["log10_p"] >= cfg["structure_log10_p_min"]),
+        f"{worst['kind']} {worst['name']} would explain chi2 {worst['chi2_drop']:.1f} on "
+        f"{worst['df']} degrees of freedom (log10 p = {worst['log10_p']:.1f}; "
+        f"limit {cfg['structure_log10_p_min']})",
+        figure=float(worst["log10_p"]), threshold=float(cfg["structure_log10_p_min"]), unit="log10 p",
+        where=f"{worst['kind']} {worst['name']}"))
+    return findings
+
+
+def misfit_checks(residual_rms, noise_rms, white, ranking, noise_posterior, stated_noise, cfg) -> list:
+    """Each check as ``diagnostics.json`` records it: name, passed, and a sentence a reviewer can act on."""
+    return [f.as_check() for f in misfit_findings(residual_rms, noise_rms, white, ranking, noise_posterior,
+                                                  stated_noise, cfg)]
 
 
 def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.DataFrame, thresholds: dict,

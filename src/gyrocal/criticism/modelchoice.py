@@ -1,6 +1,6 @@
 """Which model the review rests on, and whether the answer hangs on that choice.
 
-The rule (README, "Which model is reviewed"):
+The rule (docs/usage.md, "Which model is reviewed"):
 
 1. A variant is *rejected* when its residuals misfit the noise model, or when LOO rejects
    it: its exact leave-one-maneuver-out elpd falls more than ``reject_se`` paired standard
@@ -26,6 +26,13 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import minimize
 from scipy.special import logsumexp, softmax
+
+from gyrocal.checks.finding import Finding
+
+__all__ = [
+    "MEASURES", "SEPARATED_BY", "classify", "disagreements", "interval_widths", "paired_se", "plausibility_check",
+    "reviewed_model", "sensitivity_check", "separating_advice", "stacking_weights", "too_wide", "typed"
+]
 
 SEPARATED_BY = {
     "bias_drift": "longer inertial holds before and after each rotation (a drift bends the held error)",
@@ -126,19 +133,32 @@ def separating_advice(effects_a, effects_b) -> str:
     return "; ".join(advice) or "the variants hold the same effects"
 
 
-def too_wide(calibration: pd.DataFrame, core_labels: list, width_limits: dict) -> list:
-    """Channel-model terms whose 95 % interval is wider than the limit of their unit."""
+def interval_widths(calibration: pd.DataFrame, core_labels: list, width_limits: dict) -> list:
+    """Each channel-model term's 95 % interval width (label, width, unit, limit), the limit that of its unit."""
     table = calibration.assign(label=calibration["channel"] + "." + calibration["parameter"]).set_index("label")
     table = table.loc[core_labels]
     width = table["ci95_high"] - table["ci95_low"]
     limit = np.array([width_limits[u] for u in table["unit"]])
     return [{"label": label, "width": float(w), "unit": u, "limit": float(lim)}
-            for label, w, u, lim in zip(core_labels, width, table["unit"], limit) if w > lim]
+            for label, w, u, lim in zip(core_labels, width, table["unit"], limit)]
+
+
+def too_wide(calibration: pd.DataFrame, core_labels: list, width_limits: dict) -> list:
+    """Channel-model terms whose 95 % interval is wider than the limit of their unit."""
+    return [w for w in interval_widths(calibration, core_labels, width_limits) if w["width"] > w["limit"]]
+
+
+def typed(comparison: pd.DataFrame) -> pd.DataFrame:
+    """``model_comparison.csv`` as read back, with `classify`'s columns in their types again."""
+    return comparison.assign(plausible=comparison["plausible"].astype(bool),
+                             loo_rejected=comparison["loo_rejected"].astype(bool),
+                             rejected_by=comparison["rejected_by"].astype("string").fillna(""))
 
 
 def sensitivity_check(classified: pd.DataFrame, calibrations: dict, core_labels: list, agree_sd: float,
-                      width_limits: dict) -> dict:
-    """The verdict check "the answer does not hang on the model" (rule 3 of the module).
+                      width_limits: dict) -> Finding:
+    """The verdict check "the answer does not hang on the model" (rule 3 of the module); its
+    figure is the largest disagreement between the variants LOO does not reject, in combined sd.
 
     ``width_limits`` maps a unit to the widest acceptable 95 % interval (the report's
     ``max_ci_width_<unit>``).
@@ -146,14 +166,18 @@ def sensitivity_check(classified: pd.DataFrame, calibrations: dict, core_labels:
     name = "the answer does not hang on the model"
     reviewed = reviewed_model(classified)
     members = list(classified.loc[~classified["loo_rejected"].astype(bool), "model"])
-    found = disagreements({m: calibrations[m] for m in members}, core_labels, agree_sd)
+    every = disagreements({m: calibrations[m] for m in members}, core_labels, 0.0)
+    found = [d for d in every if d["z"] > agree_sd]
+    details = {"threshold": float(agree_sd), "unit": "sd"}
+    if every:
+        details.update(figure=every[0]["z"], where=f"{every[0]['label']}, {' against '.join(every[0]['models'])}")
     wide = {m: too_wide(calibrations[m], core_labels, width_limits) for m in members if m != reviewed}
     wide = {m: w for m, w in wide.items() if w}
     if not found and not wide:
         why = (f"the variants LOO does not reject ({', '.join(members)}) agree on every channel-model term within "
                f"{agree_sd} combined sd, each within the interval limits" if len(members) > 1 else
                f"LOO rejects every variant but {', '.join(members)}")
-        return {"check": name, "passed": True, "why": why}
+        return Finding.judged(name, True, why, **details)
     effects = {r.model: r.effects.split("+") for r in classified.itertuples()}
     sentences = []
     for a, b in dict.fromkeys([d["models"] for d in found] + [(reviewed, m) for m in wide]):
@@ -166,16 +190,18 @@ def sensitivity_check(classified: pd.DataFrame, calibrations: dict, core_labels:
         shown = "; ".join(terms[:3]) + (f"; and {len(terms) - 3} more" if len(terms) > 3 else "")
         sentences.append(f"the data cannot tell {a} from {b}: {shown}. What would separate them: "
                          f"{separating_advice(effects[a], effects[b])}")
-    return {"check": name, "passed": False, "why": ". ".join(sentences)}
+    return Finding.judged(name, False, ". ".join(sentences), **details,
+                          action="fly the maneuvers that would separate the models")
 
 
-def plausibility_check(classified: pd.DataFrame) -> dict:
+def plausibility_check(classified: pd.DataFrame) -> Finding:
     """The verdict check "a plausible model": some variant neither misfits nor is LOO-rejected."""
     plausible = classified[classified["plausible"]]
     if len(plausible):
-        return {"check": "a plausible model", "passed": True,
-                "why": "plausible (no misfit, not rejected by leave-one-maneuver-out LOO): "
-                       + ", ".join(plausible["model"])}
-    return {"check": "a plausible model", "passed": False,
-            "why": "every variant is rejected: " + "; ".join(f"{r.model} ({r.rejected_by})"
-                                                              for r in classified.itertuples())}
+        return Finding.judged("a plausible model", True,
+                              "plausible (no misfit, not rejected by leave-one-maneuver-out LOO): "
+                              + ", ".join(plausible["model"]))
+    return Finding.judged("a plausible model", False,
+                          "every variant is rejected: " + "; ".join(f"{r.model} ({r.rejected_by})"
+                                                                     for r in classified.itertuples()),
+                          action="add a variant with the effect the diagnostics rank first (models:)")

@@ -11,6 +11,11 @@ import numpy as np
 
 from gyrocal.model.units import PAPER_AXES
 
+__all__ = [
+    "SAVE_DPI", "comparison_figure", "maneuver_figure", "pair_figure", "png", "render_all", "residual_figure", "save",
+    "trace_figure"
+]
+
 
 def maneuver_figure(table, title, fit=None):
     """Rate profile and error per axis (arcsec) of one maneuver. Its margins are fixed rather than

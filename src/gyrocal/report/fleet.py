@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+__all__ = ["calibration_path", "figure", "summary"]
+
 
 def summary(verdicts: list, calibrations: dict) -> pd.DataFrame:
     """One row per campaign and parameter of its reviewed model. ``verdicts`` are the campaigns'

@@ -1,0 +1,104 @@
+"""What the review is made from (`ReviewInputs`: the files the report step read, and the verdict's
+findings) and what its template shows (`ReviewContext`: every table and figure, ready to render)."""
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import pandas as pd
+from markupsafe import Markup
+
+__all__ = ["CorrectionSet", "ReviewContext", "ReviewInputs"]
+
+
+@dataclass(frozen=True)
+class ReviewInputs:
+    """The reviewed model's files, the campaign's, and the findings of `gyrocal.criticism.verdict`."""
+
+    model: str
+    """The reviewed model's name."""
+    spec: object
+    """Its `gyrocal.model.spec.ModelSpec` (the point estimate's)."""
+    maneuvers: list
+    """The campaign's preprocessed maneuvers."""
+    tables: list
+    """Their preprocess tables (``preprocess/<maneuver>.csv``), in the same order."""
+    calibration: pd.DataFrame
+    """The model's ``calibration.csv``."""
+    fit: pd.DataFrame
+    """The model's ``fit.csv``."""
+    posterior: object
+    """The model's posterior, as arviz InferenceData."""
+    diagnostics: dict
+    sampler: dict
+    correction: dict
+    """``correction.json``, as written to ``correction_path``."""
+    correction_path: Path
+    comparison: pd.DataFrame
+    """``model_comparison.csv``."""
+    info: dict
+    """``input.json``: the campaign's name, rows read, warnings, outliers, mounting and checksums."""
+    config: dict
+    """The whole config."""
+    findings: list
+    """The checks behind the verdict, as `gyrocal.checks.finding.Finding` (`gyrocal.criticism.verdict.checks`)."""
+    effect_table: pd.DataFrame
+    """The end-of-maneuver error before and after the correction (`gyrocal.criticism.verdict.estimate_effect`)."""
+    truth: dict | None = None
+    """The simulation's true parameters (channel -> parameter -> value), or None for real data."""
+
+
+@dataclass(frozen=True)
+class CorrectionSet:
+    """One channel set of the correction to uplink, as the report shows it."""
+
+    in_loop: bool
+    channels: list
+    matrices: dict
+    """``matrix_pos``, ``matrix_neg`` and ``misalignment_correction`` as tables of 9-decimal text."""
+    scale_correction_pos: str
+    scale_correction_neg: str
+
+
+@dataclass(frozen=True)
+class ReviewContext:
+    """Everything the review template shows: tables as DataFrames, figures as embedded ``<img>``."""
+
+    campaign: str
+    model: str
+    effects: list
+    version: str
+    verdict: str
+    """``GO`` or ``NO-GO``, from `gyrocal.criticism.verdict.verdict` of ``findings``."""
+    findings: list
+    simulated: bool
+    tables: dict
+    """The paper's tables 1-3 (`gyrocal.report.review.paper_tables`)."""
+    maneuver_figures: dict
+    """Per maneuver id: its fit and residual figures."""
+    posterior_figures: Markup
+    convergence: pd.DataFrame
+    confounded: pd.DataFrame
+    correlation_max: float
+    diagnostics: dict
+    misfit_checks: pd.DataFrame
+    ranking: pd.DataFrame
+    comparison: pd.DataFrame
+    comparison_figure: Markup
+    convention: str
+    correction_path: str
+    correction_sets: list
+    """`CorrectionSet` per channel set, in-loop first."""
+    effect_table: pd.DataFrame
+    mounting: str
+    accounting: pd.DataFrame
+    outliers: pd.DataFrame
+    warnings: list
+    renormalised: int
+    unit_norm_tol: float
+    checksums: str
+    """``input.json``'s SHA-256 of each input file, as indented JSON."""
+    sampler: dict
+    acceptance: float
+    """The sampler's mean acceptance fraction."""
+    config: str
+    """The whole config as YAML."""

@@ -1,0 +1,101 @@
+"""The GO/NO-GO verdict as a pure function of findings, and its checks' figures (gyrocal.criticism.verdict)."""
+
+import pandas as pd
+import pytest
+
+from gyrocal.checks.finding import Finding, Status
+from gyrocal.criticism import modelchoice, verdict
+from gyrocal.model.channels import Channel
+from gyrocal.model.spec import baseline
+
+SPEC = baseline((Channel("dtg1_roll", 1, "roll"),))
+"""One roll channel: sf_pos, sf_neg (ppm), mis_pitch, mis_yaw (arcsec)."""
+CFG = {"convergence": {"r_hat_max": 1.01, "ess_bulk_min": 400},
+       "report": {"max_ci_width_ppm": 200, "max_ci_width_arcsec": 30,
+                  "physical_bound_ppm": 20000, "physical_bound_arcsec": 3600},
+       "model_choice": {"agree_sd": 3.0}}
+SAMPLER = {"converged": True}
+
+
+def calibration(mean=(-1700.0, -1000.0, 20.0, -5.0), width=(100.0, 100.0, 25.0, 10.0), r_hat=1.001):
+    """A ``calibration.csv`` of the one channel: each term's mean and 95 % interval width."""
+    mean, width = pd.Series(mean, dtype=float), pd.Series(width, dtype=float)
+    return pd.DataFrame({"channel": "dtg1_roll", "parameter": [p.name for p in SPEC.parameters],
+                         "unit": SPEC.units, "point": mean, "mean": mean, "sd": width / 3.92,
+                         "ci95_low": mean - width / 2, "ci95_high": mean + width / 2,
+                         "r_hat": r_hat, "ess_bulk": 1000.0, "prior_only": False})
+
+
+def effect_table(before=(100.0, 50.0), after=(10.0, 40.0)):
+    return pd.DataFrame({"maneuver": ["roll_pos", "roll_neg"], "set": "dtg1_roll", "in loop": True,
+                         "before norm": before, "after norm": after})
+
+
+def test_one_failing_finding_makes_no_go_and_its_why_is_recorded():
+    findings = [Finding.judged("converged", True, "fine"),
+                Finding.judged("no misfit", False, "misfit: level: too high", figure=1.4, threshold=1.1),
+                Finding("mounting", Status.WARN, "estimated from the data")]
+    doc = verdict.verdict("mom", "baseline", findings)
+    assert doc == {"campaign": "mom", "model": "baseline", "verdict": "NO-GO",
+                   "checks": [{"check": "converged", "passed": True, "why": "fine"},
+                              {"check": "no misfit", "passed": False, "why": "misfit: level: too high"},
+                              {"check": "mounting", "passed": True, "why": "estimated from the data"}]}
+
+
+def test_all_passing_findings_make_go_whatever_their_figures_say():
+    """The verdict reads each finding's judgement, nothing else: the same findings, the same verdict."""
+    findings = (Finding.judged("a", True, "fine", figure=5.0, threshold=1.0), Finding.judged("b", True, "fine too"))
+    assert verdict.verdict("c", "m", findings)["verdict"] == "GO"
+    assert verdict.verdict("c", "m", findings) == verdict.verdict("c", "m", list(findings))
+
+
+def test_the_widest_interval_relative_to_its_limit_is_the_figure():
+    check = verdict.interval_check(calibration(), SPEC, CFG["report"])
+    assert check.passed and (check.figure, check.threshold, check.unit) == (25.0, 30.0, "arcsec")
+    assert check.where == "dtg1_roll.mis_pitch" and not check.action
+    check = verdict.interval_check(calibration(width=(250.0, 100.0, 25.0, 10.0)), SPEC, CFG["report"])
+    assert not check.passed and (check.figure, check.threshold, check.unit) == (250.0, 200.0, "ppm")
+    assert check.why == "too wide: dtg1_roll.sf_pos (250.0 ppm)" and check.action
+
+
+def test_convergence_and_bounds_name_their_worst_term_against_the_threshold():
+    table = calibration(mean=(-25000.0, -1000.0, 20.0, -5.0))
+    table.loc[2, "r_hat"] = 1.02
+    converged = verdict.convergence_check(table, SPEC, SAMPLER, CFG["convergence"])
+    assert not converged.passed and (converged.figure, converged.threshold) == (1.02, 1.01)
+    assert converged.where == "dtg1_roll.mis_pitch" and "sampler.max_steps" in converged.action
+    bounds = verdict.bounds_check(table, SPEC, CFG["report"])
+    assert not bounds.passed and (bounds.figure, bounds.threshold, bounds.unit) == (25000.0, 20000.0, "ppm")
+    assert bounds.why == "outside: dtg1_roll.sf_pos = -25000 ppm"
+
+
+def test_the_correction_check_judges_the_worst_ratio_of_the_error_after_to_before():
+    check = verdict.correction_check(effect_table())
+    assert check.passed and check.figure == pytest.approx(0.8) and check.threshold == 1.0
+    assert check.where == "roll_neg with dtg1_roll"
+    check = verdict.correction_check(effect_table(after=(10.0, 60.0)))
+    assert not check.passed and check.figure == pytest.approx(1.2)
+    assert check.why == "not reduced on: roll_neg with dtg1_roll (50.0 -> 60.0 arcsec)"
+
+
+def test_a_prior_only_term_fails_naming_it_and_its_channel():
+    spec = SPEC.with_prior_only({"dtg1_roll.sf_neg": "no -roll maneuver"})
+    check = verdict.informed_check(spec)
+    assert not check.passed and check.where == "dtg1_roll"
+    assert check.why == ("prior-only (the posterior is the prior): dtg1_roll.sf_neg (no -roll maneuver). "
+                         "No correction for dtg1_roll")
+
+
+def test_every_check_in_the_order_of_verdict_json():
+    comparison = pd.DataFrame({"model": ["baseline"], "effects": ["scale_factor+misalignment+bias"],
+                               "plausible": [True], "loo_rejected": [False], "rejected_by": [float("nan")],
+                               "elpd_lomo": [0.0]})
+    diagnostics = {"misfit": False, "checks": [{"check": "level", "passed": True, "why": "ok"}], "ranking": []}
+    findings = verdict.checks("baseline", {"baseline": calibration()}, SPEC, SAMPLER, diagnostics, comparison,
+                              effect_table(), CFG)
+    assert [f.check for f in findings] == [
+        "converged", "no misfit", "every parameter informed by the data", "intervals narrow enough",
+        "within physical bounds", "correction reduces the error", "a plausible model",
+        "the answer does not hang on the model"]
+    assert verdict.verdict("mom", "baseline", findings)["verdict"] == "GO"
+    assert modelchoice.typed(comparison)["rejected_by"].iloc[0] == ""
