@@ -45,23 +45,27 @@ def truth_vector(channels, truth):
 
 
 def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
-    """Every workflow step in the order the rules run them, each given the config the rule gives it."""
-    from gyrocal.io import telemetry
-    from gyrocal.io.outputs import MODEL_FILES
-    from gyrocal.pipeline.steps import compare_models as compare
-    from gyrocal.pipeline.steps import report
-    from gyrocal.study.campaign import calibrate_steps
-    ids = [m.id for m in telemetry.read_meta(campaign_dir)["maneuvers"]]
-    npz = calibrate_steps(campaign_dir, out, cfg, models)
-    compare.run(list(models), [out / m / "elpd_blocks.csv" for m in models],
-                [out / m / "diagnostics.json" for m in models],
-                [out / m / "posterior_summary.csv" for m in models],
-                [out / m / "elpd_maneuvers.csv" for m in models], cfg["model_choice"],
-                out / "model_comparison.csv", out / "model_comparison.png")
-    files = {name: [out / m / file for m in models] for name, file in MODEL_FILES.items()}
-    report.run(list(models), files, npz, [out / f"preprocess/{m}.csv" for m in ids], out / "input.json",
-               out / "model_comparison.csv", truth_path, cfg, out / "report.html", out / "verdict.json")
-    return npz
+    """Every workflow step in the order the rules run them (`gyrocal.pipeline.run.run_campaign`);
+    the preprocessed maneuvers' files, in the campaign's order."""
+    from gyrocal.pipeline import run
+    from gyrocal.pipeline.paths import CampaignPaths
+    paths = CampaignPaths.under(out)
+    ids = run.run_campaign(campaign_dir, paths, cfg, models, truth_path)
+    return [Path(p) for p in paths.maneuvers(ids)]
+
+
+def rerun_from(out, dest, model="baseline"):
+    """A copy of a finished run's preprocessed maneuvers, input.json and one model's point estimate
+    under ``dest``, for a later step to run again there; its `CampaignPaths` and maneuver ids."""
+    import shutil
+
+    from gyrocal.pipeline.paths import CampaignPaths
+    paths = CampaignPaths.under(dest)
+    paths.mkdirs([model])
+    shutil.copytree(Path(out) / "preprocess", paths.preprocess)
+    shutil.copy(Path(out) / "input.json", paths.input_json)
+    shutil.copy(Path(out) / model / "point_estimate.npz", paths.model(model).point_estimate)
+    return paths, json.loads(Path(paths.input_json).read_text())["maneuvers"]
 
 
 def config_with(cfg, models=None, plugins=None):

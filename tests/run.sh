@@ -1,5 +1,12 @@
 #!/usr/bin/env bash
-# Install gyrocal with its test dependencies (and Chromium for the browser test), lint, run the tests.
+# The tests, by tier (README, "Tests"):
+#   bash tests/run.sh            the fast tier, what CI runs: lint, the layers contract, the docs site,
+#                                unit tests and short-chain integration tests (a few minutes on 2 cores)
+#   bash tests/run.sh --full     every test but the studies and Slurm: the statistical integration tests
+#                                with the default sampler settings too
+#   bash tests/run.sh -m slow    the long statistical studies
+# Any other arguments go to pytest. Installs gyrocal with its test and docs extras (and Chromium for the
+# browser test) first.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if ! command -v chromium >/dev/null 2>&1; then
@@ -12,7 +19,13 @@ fi
 # One BLAS thread per process, as Snakemake gives each one-thread rule: numpy's and scipy's OpenBLAS
 # otherwise spin two threads each on the posterior's small products (4x the CPU on a 2-core machine).
 export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"
-python -m pip install --quiet -e ".[test]"
+python -m pip install --quiet -e ".[test,docs]"
 python -m ruff check .
+lint-imports
 python -m snakemake --lint >/dev/null
+mkdocs build --strict --quiet --site-dir "$(mktemp -d)"
+if [ "${1:-}" = "--full" ]; then
+    shift
+    set -- -m "not slow and not slurm" "$@"
+fi
 python -m pytest "$@"

@@ -9,7 +9,8 @@ from gyrocal.inference.preprocess import slice_maneuver
 from gyrocal.io.telemetry import read_campaign
 from gyrocal.model import effects
 from gyrocal.model.units import STANDARD_GRAVITY_M_S2
-from gyrocal.study.campaign import calibrate_steps
+from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.run import calibrate_campaign
 
 import mutations
 from conftest import config_with
@@ -51,7 +52,7 @@ def test_without_accelerometer_columns_it_names_the_missing_one(tiny):
 def test_the_posterior_finds_a_known_g_sensitivity_and_no_other(tiny, tmp_path, config):
     mutations.corrupted_copy(tiny[0], tmp_path / "c", with_accelerometer)
     model = ["scale_factor", "misalignment", "bias", "g_sensitivity"]
-    calibrate_steps(tmp_path / "c", tmp_path / "out", config_with(config, {"g": model}), ("g",))
+    calibrate_campaign(tmp_path / "c", CampaignPaths.under(tmp_path / "out"), config_with(config, {"g": model}), ("g",))
     summary = pd.read_csv(tmp_path / "out" / "g" / "posterior_summary.csv", index_col=0)
     g = summary[summary.index.str.contains(r"\.g_[xyz]$")]
     assert len(g) == 18
@@ -86,7 +87,7 @@ def with_gravity_offset(d):
 def test_the_posterior_finds_a_known_gravity_offset_of_the_reference(tiny, tmp_path, config):
     mutations.corrupted_copy(tiny[0], tmp_path / "c", with_gravity_offset)
     model = ["scale_factor", "misalignment", "bias", "gravity_offset"]
-    calibrate_steps(tmp_path / "c", tmp_path / "out", config_with(config, {"o": model}), ("o",))
+    calibrate_campaign(tmp_path / "c", CampaignPaths.under(tmp_path / "out"), config_with(config, {"o": model}), ("o",))
     summary = pd.read_csv(tmp_path / "out" / "o" / "posterior_summary.csv", index_col=0)
     offset = summary[summary.index.str.startswith("gravity_offset.")]
     assert len(offset) == 6
@@ -142,7 +143,8 @@ def test_the_posterior_recovers_what_the_simulator_flew_per_g(tmp_path, config, 
     from gyrocal.simulation import simulate
     simulate.run(lab_scenario(tmp_path, **{key: value}), tmp_path / "sim")
     model = ["scale_factor", "misalignment", "bias", effect]
-    calibrate_steps(tmp_path / "sim/campaign", tmp_path / "out", config_with(config, {"e": model}), ("e",))
+    calibrate_campaign(tmp_path / "sim/campaign", CampaignPaths.under(tmp_path / "out"), config_with(config, {"e": model}),
+                       ("e",))
     summary = pd.read_csv(tmp_path / "out" / "e" / "posterior_summary.csv", index_col=0)
     coefficients = summary[summary.index.str.contains(prefix, regex=False)]
     assert len(coefficients) == (18 if effect == "g_sensitivity" else 6)

@@ -3,6 +3,7 @@
 import copy
 import dataclasses
 import json
+import shutil
 
 import numpy as np
 import pandas as pd
@@ -15,10 +16,12 @@ from gyrocal.io import telemetry
 from gyrocal.model import channels as ch
 from gyrocal.model import correction, effects
 from gyrocal.model.units import PPM
+from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.settings import PosteriorSettings
 from gyrocal.pipeline.steps import common
 from gyrocal.pipeline.steps import posterior as posterior_step
 
-from conftest import truth_vector
+from conftest import rerun_from, truth_vector
 
 
 def calibration_with_truth(out, truth):
@@ -29,11 +32,9 @@ def calibration_with_truth(out, truth):
 
 
 def posterior_again(out, npz, cfg, tmp_path):
-    """The posterior step once more on a finished run's point estimate, with ``cfg``."""
-    posterior_step.run(npz, out / "baseline/point_estimate.npz", [], cfg["priors"], None, cfg["sampler"],
-                       cfg["grid"], cfg["convergence"], cfg["seed"], tmp_path / "p.nc", tmp_path / "s.csv",
-                       tmp_path / "f.csv", tmp_path / "j.json", tmp_path / "e.csv",
-                       tmp_path / "b.csv")
+    """The posterior step once more on a finished run's point estimate, with ``cfg``, under ``tmp_path``."""
+    paths, ids = rerun_from(out, tmp_path)
+    posterior_step.run(paths, ids, "baseline", PosteriorSettings.of(cfg))
 
 
 def test_validate_step_records_rows_and_checksums(tiny_run):
@@ -61,9 +62,10 @@ def test_preprocess_step_writes_every_maneuver_whole_or_leaves_the_directory_as_
     from gyrocal.inference import preprocess
     from gyrocal.pipeline.steps import preprocess as preprocess_step
     out = tmp_path / "preprocess"
-    npz = preprocess_step.run(tiny[0], tiny_run[0] / "input.json", out, figures=False)
+    paths = CampaignPaths.under(tmp_path)
+    shutil.copy(tiny_run[0] / "input.json", paths.input_json)
     ids = [m.id for m in telemetry.read_meta(tiny[0])["maneuvers"]]
-    assert npz == [out / f"{i}.npz" for i in ids]
+    assert preprocess_step.run(tiny[0], paths, figures=False) == ids
     assert sorted(p.name for p in out.iterdir()) == sorted(f"{i}.{e}" for i in ids for e in ("npz", "csv"))
     for i in ids:
         assert (out / f"{i}.csv").read_bytes() == (tiny_run[0] / f"preprocess/{i}.csv").read_bytes()
@@ -82,9 +84,9 @@ def test_preprocess_step_writes_every_maneuver_whole_or_leaves_the_directory_as_
         earlier.write_bytes(b"earlier run")
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     with pytest.raises(RuntimeError, match="disk full"):
-        preprocess_step.run(tiny[0], tiny_run[0] / "input.json", out, figures=False)
+        preprocess_step.run(tiny[0], paths, figures=False)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
-    assert [p.name for p in tmp_path.iterdir()] == ["preprocess"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["input.json", "preprocess"]
 
 
 def test_calibration_csv_follows_the_contract(tiny_run):
@@ -109,7 +111,7 @@ def test_tiny_posterior_converges_and_covers_a_truth_that_is_not_the_papers(tiny
 def test_same_seed_same_numbers(tiny_run, config, tmp_path):
     out, npz = tiny_run
     posterior_again(out, npz, config, tmp_path)
-    assert (tmp_path / "s.csv").read_text() == (out / "baseline/posterior_summary.csv").read_text()
+    assert (tmp_path / "baseline/posterior_summary.csv").read_text() == (out / "baseline/posterior_summary.csv").read_text()
 
 
 def test_a_run_that_cannot_converge_says_so(tiny_run, config, tmp_path, caplog):
@@ -117,7 +119,7 @@ def test_a_run_that_cannot_converge_says_so(tiny_run, config, tmp_path, caplog):
     cfg = copy.deepcopy(config)
     cfg["sampler"].update(initial_steps=50, chunk_steps=10, max_steps=60, min_tau_multiple=1000)
     posterior_again(out, npz, cfg, tmp_path)
-    info = json.loads((tmp_path / "j.json").read_text())
+    info = json.loads((tmp_path / "baseline/sampler.json").read_text())
     assert info["converged"] is False and info["chain_length_ok"] is False
     assert "DID NOT CONVERGE" in caplog.text
 

@@ -126,3 +126,12 @@ def test_cli_plan_refuses_a_maneuver_it_cannot_fly_naming_the_file_and_field(tmp
     assert cli.main(["plan", str(path), "--out", str(tmp_path), "--config", str(CONFIG)]) == 2
     err = capsys.readouterr().err
     assert f"{path}: maneuvers[2].direction" in err
+
+
+def test_cli_plan_writes_under_results_plan_by_default_not_the_current_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert cli.main(["plan", str(DATA / "tiny.yaml"), "--config", str(CONFIG)]) == 0
+    assert "wrote results/plan/plan.csv" in capsys.readouterr().out
+    assert sorted(p.name for p in (tmp_path / "results" / "plan").iterdir()) == [
+        "plan.csv", "plan.png", "plan_detection.csv"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["results"]

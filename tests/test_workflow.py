@@ -4,13 +4,18 @@ import json
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pandas as pd
 import pytest
 
+from gyrocal.pipeline.paths import CampaignPaths
+
 import mutations
 from conftest import ROOT
 
+MODEL_FILES = ("point_estimate", "posterior", "summary", "fit", "sampler", "elpd_maneuvers", "elpd_blocks",
+               "calibration", "correction", "diagnostics")
 SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile")]
 
 
@@ -32,6 +37,13 @@ def test_user_campaign_runs_with_no_code_edit(workflow_run):
     classic = pd.read_csv(results / "classic.csv")
     assert len(classic) == 24 and not (results / "baseline" / "classic.csv").exists()
     assert not any("WARNING" in p.read_text() for p in (workflow_run / "logs").rglob("*.log"))
+
+
+def test_the_rules_write_every_file_the_paths_name(workflow_run):
+    paths = CampaignPaths.under(workflow_run / "results" / "tiny")
+    models = ["baseline", "bias_drift"]
+    for path in paths.outputs(models) + [getattr(paths.model(m), f) for m in models for f in MODEL_FILES]:
+        assert Path(path).exists(), path
 
 
 def dry_run_with(tiny, work, tmp_path, override: str):

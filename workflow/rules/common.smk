@@ -13,7 +13,9 @@ from pathlib import Path
 
 from gyrocal.io import scenario as _scenario
 from gyrocal.pipeline.steps import REFUSED as _REFUSED
-from gyrocal.io.outputs import MODEL_FILES as _MODEL_FILES
+from gyrocal.pipeline.paths import CampaignPaths as _CampaignPaths
+from gyrocal.pipeline.settings import canonical as _canonical
+from gyrocal.pipeline.settings import section as _section
 
 
 def _user_campaign(directory):
@@ -52,12 +54,13 @@ else:
     if not Path(config["scenario"]).exists() and Path(workflow.basedir, config["scenario"]).exists():
         config["scenario"] = str(Path(workflow.basedir, config["scenario"]))
     _meta = _scenario.peek(config["scenario"])
-    CAMPAIGNS[_meta["name"]] = {"dir": f"{results_of(_meta['name'])}/simulated/campaign",
+    CAMPAIGNS[_meta["name"]] = {"dir": _CampaignPaths(results_of(_meta["name"])).simulated,
                                 "maneuvers": _meta["maneuvers"], "simulated": True}
 
-RESULTS = results_of("{campaign}")
-PREPROCESSED = f"{RESULTS}/preprocess"
-"""The preprocess rule's directory: ``<maneuver>.{npz,csv,png}`` for each of the campaign's maneuvers."""
+PATHS = _CampaignPaths(results_of("{campaign}"))
+"""Every file of a campaign's run (`gyrocal.pipeline.paths`), with the campaign a wildcard."""
+MODEL = PATHS.model("{model}")
+"""Every file of one model variant, with the campaign and the model wildcards."""
 LOGS = "logs/{campaign}"
 MODELS = sorted(config["models"], key=lambda m: m != "baseline")  # baseline is the reference
 PLUGINS = config["plugins"]
@@ -88,6 +91,16 @@ def campaign_dir(wildcards):
     return CAMPAIGNS[wildcards.campaign]["dir"]
 
 
+def campaign_results(wildcards):
+    """The campaign's results folder: the root of its `CampaignPaths`, which each step rebuilds."""
+    return results_of(wildcards.campaign)
+
+
+def maneuver_ids(wildcards):
+    """The campaign's maneuvers, in its order (the order of the point estimate's biases)."""
+    return CAMPAIGNS[wildcards.campaign]["maneuvers"]
+
+
 def campaign_input(wildcards):
     """The campaign files a step reads: the simulator's output or the user's directory."""
     entry = CAMPAIGNS[wildcards.campaign]
@@ -99,64 +112,33 @@ def campaign_input(wildcards):
 def truth_input(wildcards):
     """The simulation's truth, for a simulated campaign's report."""
     if CAMPAIGNS[wildcards.campaign]["simulated"]:
-        return [f"{results_of(wildcards.campaign)}/simulated/truth.json"]
+        return [_CampaignPaths(results_of(wildcards.campaign)).truth]
     return []
 
 
-def maneuver_files(ext):
-    """A campaign's per-maneuver files of one kind, in the campaign's order, as a params function;
-    a rule that reads them takes the ``PREPROCESSED`` directory as its input."""
-
-    def files(wildcards):
-        return expand(f"{results_of(wildcards.campaign)}/preprocess/{{maneuver}}.{ext}",
-                      maneuver=CAMPAIGNS[wildcards.campaign]["maneuvers"])
-
-    return files
-
-
 def model_files(name):
-    """One per-model file of every model variant, in MODELS' order (a campaign's)."""
-    return expand(f"{RESULTS}/{{model}}/{name}", model=MODELS, allow_missing=True)
+    """One file of every model variant (a `ModelPaths` property), in MODELS' order, as an input."""
+    return [getattr(PATHS.model(m), name) for m in MODELS]
 
 
-def report_model_files(wildcards):
-    """Every model's files the report reads, named as gyrocal.io.outputs.MODEL_FILES, in MODELS' order."""
-    return {name: expand(f"{results_of(wildcards.campaign)}/{{model}}/{file}", model=MODELS)
-            for name, file in _MODEL_FILES.items()}
+def settings(step):
+    """The config a model step reads (`gyrocal.pipeline.settings.SECTIONS`), as its rule's param:
+    canonical, so that the order a config file gives does not rerun a job."""
+    return _section(config, step)
 
 
-def section(*keys):
-    """A config section as a rule's param, keys sorted at every level: Snakemake compares params by
-    their repr, so the order a config file happens to give must not rerun a job."""
-
-    def canonical(value):
-        return {k: canonical(value[k]) for k in sorted(value)} if isinstance(value, dict) else value
-
-    value = config
-    for key in keys:
-        value = value[key]
-    return canonical(value)
+def point_estimate_settings(wildcards):
+    """The point estimate's settings: its model's effects beside the config it reads."""
+    return {"effects": config["models"][wildcards.model], **_section(config, "point_estimate")}
 
 
-def model_effects(wildcards):
-    """The effects of one model variant: all its point estimate needs of the config's models."""
-    return config["models"][wildcards.model]
-
-
-def campaign_outputs(campaign):
-    """Everything a campaign's run leaves, as paths."""
-    results = results_of(campaign)
-    out = [f"{results}/input.json"]
-    out.append(f"{results}/preprocess")
-    for model in MODELS:
-        out += [f"{results}/{model}/calibration.csv", f"{results}/{model}/correction.json",
-                f"{results}/{model}/diagnostics.json"]
-    return out + [f"{results}/classic.csv", f"{results}/model_comparison.csv", f"{results}/report.html",
-                  f"{results}/verdict.json"]
+def whole_config():
+    """The whole config, canonical: the report shows all of it."""
+    return _canonical(config)
 
 
 def all_outputs():
-    out = [path for campaign in CAMPAIGNS for path in campaign_outputs(campaign)]
+    out = [path for campaign in CAMPAIGNS for path in _CampaignPaths(results_of(campaign)).outputs(MODELS)]
     if FLEET:
         out += [f"{results_of('fleet')}/summary.csv", f"{results_of('fleet')}/summary.png"]
     return out

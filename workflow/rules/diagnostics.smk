@@ -1,16 +1,17 @@
 rule diagnostics:
     """Misfit checks of the residuals against the noise model, and what could explain them."""
     input:
-        preprocessed=PREPROCESSED,
-        point=f"{RESULTS}/{{model}}/point_estimate.npz",
-        summary=f"{RESULTS}/{{model}}/posterior_summary.csv",
-        fit=f"{RESULTS}/{{model}}/fit.csv",
+        preprocessed=PATHS.preprocess,
+        point=MODEL.point_estimate,
+        summary=MODEL.summary,
+        fit=MODEL.fit,
         plugins=PLUGINS,
     output:
-        f"{RESULTS}/{{model}}/diagnostics.json",
+        MODEL.diagnostics,
     params:
-        maneuvers=maneuver_files("npz"),
-        thresholds=section("diagnostics"),
+        results=campaign_results,
+        maneuvers=maneuver_ids,
+        settings=settings("diagnostics"),
     conda:
         "../envs/gyrocal.yaml"
     log:

@@ -2,15 +2,15 @@ rule point_estimate:
     """The full-trajectory weighted least squares of one model, started from the classic estimate
     (computed in the job again: it takes a tenth of a second)."""
     input:
-        preprocessed=PREPROCESSED,
-        checked=f"{RESULTS}/input.json",
+        preprocessed=PATHS.preprocess,
+        checked=PATHS.input_json,
         plugins=PLUGINS,
     output:
-        f"{RESULTS}/{{model}}/point_estimate.npz",
+        MODEL.point_estimate,
     params:
-        maneuvers=maneuver_files("npz"),
-        effects=model_effects,
-        noise=section("noise"),
+        results=campaign_results,
+        maneuvers=maneuver_ids,
+        settings=point_estimate_settings,
     conda:
         "../envs/gyrocal.yaml"
     log:

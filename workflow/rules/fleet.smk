@@ -1,8 +1,8 @@
 rule fleet:
     """Every campaign of a fleet side by side: the reviewed model's parameters and the verdicts."""
     input:
-        verdicts=expand(f"{RESULTS}/verdict.json", campaign=CAMPAIGNS),
-        calibrations=expand(f"{RESULTS}/{{model}}/calibration.csv", campaign=CAMPAIGNS, model=MODELS),
+        verdicts=expand(PATHS.verdict, campaign=CAMPAIGNS),
+        calibrations=expand(MODEL.calibration, campaign=CAMPAIGNS, model=MODELS),
     output:
         table=f"{results_of('fleet')}/summary.csv",
         figure=report(f"{results_of('fleet')}/summary.png", caption="../report/fleet.rst", category="Fleet"),

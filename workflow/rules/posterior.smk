@@ -4,31 +4,28 @@ rule posterior:
     nothing but the posterior and no setting (a tenth of a second, in the same job; the steps stay
     apart in gyrocal.pipeline.steps: posterior, calibrate)."""
     input:
-        preprocessed=PREPROCESSED,
-        point=f"{RESULTS}/{{model}}/point_estimate.npz",
+        preprocessed=PATHS.preprocess,
+        point=MODEL.point_estimate,
         plugins=PLUGINS,
         prior_from=[config["prior_from"]] if config["prior_from"] else [],
     output:
-        posterior=f"{RESULTS}/{{model}}/posterior.nc",
-        summary=f"{RESULTS}/{{model}}/posterior_summary.csv",
-        fit=f"{RESULTS}/{{model}}/fit.csv",
-        sampler=f"{RESULTS}/{{model}}/sampler.json",
-        elpd=f"{RESULTS}/{{model}}/elpd_maneuvers.csv",
-        loo=f"{RESULTS}/{{model}}/elpd_blocks.csv",
+        posterior=MODEL.posterior,
+        summary=MODEL.summary,
+        fit=MODEL.fit,
+        sampler=MODEL.sampler,
+        elpd=MODEL.elpd_maneuvers,
+        loo=MODEL.elpd_blocks,
         calibration=report(
-            f"{RESULTS}/{{model}}/calibration.csv",
+            MODEL.calibration,
             caption="../report/calibration.rst",
             category="Calibration",
             subcategory="{model}",
         ),
-        correction=f"{RESULTS}/{{model}}/correction.json",
+        correction=MODEL.correction,
     params:
-        maneuvers=maneuver_files("npz"),
-        priors=section("priors"),
-        sampler=section("sampler"),
-        grid=section("grid"),
-        convergence=section("convergence"),
-        seed=config["seed"],
+        results=campaign_results,
+        maneuvers=maneuver_ids,
+        settings=settings("posterior"),
     conda:
         "../envs/gyrocal.yaml"
     log:

@@ -8,10 +8,10 @@ rule preprocess:
     input:
         unpack(campaign_input),
     output:
-        checked=f"{RESULTS}/input.json",
-        classic=f"{RESULTS}/classic.csv",
+        checked=PATHS.input_json,
+        classic=PATHS.classic,
         preprocessed=report(
-            directory(PREPROCESSED),
+            directory(PATHS.preprocess),
             patterns=["{maneuver}.png"],
             caption="../report/preprocess.rst",
             category="Maneuvers",
@@ -19,6 +19,7 @@ rule preprocess:
         ),
     params:
         campaign_dir=campaign_dir,
+        results=campaign_results,
     threads: 2  # its figures are drawn in parallel; it runs alone, before the models split the cores
     conda:
         "../envs/gyrocal.yaml"

@@ -3,8 +3,8 @@ rule simulate:
     input:
         scenario=config["scenario"],
     output:
-        campaign=directory(f"{RESULTS}/simulated/campaign"),
-        truth=f"{RESULTS}/simulated/truth.json",
+        campaign=directory(PATHS.simulated),
+        truth=PATHS.truth,
     params:
         seed=config["simulation_seed"],
     conda:

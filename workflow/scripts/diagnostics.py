@@ -1,7 +1,8 @@
+from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.settings import DiagnosticsSettings
 from gyrocal.pipeline.steps import common, diagnostics
 
+p = snakemake.params
 common.start(snakemake.log[0])
-diagnostics.run(snakemake.params.maneuvers, snakemake.input.point, snakemake.input.summary,
-                snakemake.input.fit, snakemake.input.plugins, snakemake.params.thresholds,
-                snakemake.output[0])
+diagnostics.run(CampaignPaths(p.results), p.maneuvers, snakemake.wildcards.model, DiagnosticsSettings(**p.settings))
 common.finish()

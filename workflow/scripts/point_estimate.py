@@ -1,6 +1,8 @@
+from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.settings import PointEstimateSettings
 from gyrocal.pipeline.steps import common, point_estimate
 
+p = snakemake.params
 common.start(snakemake.log[0])
-point_estimate.run(snakemake.params.maneuvers, snakemake.input.checked, snakemake.wildcards.model,
-                   snakemake.params.effects, snakemake.params.noise, snakemake.input.plugins, snakemake.output[0])
+point_estimate.run(CampaignPaths(p.results), p.maneuvers, snakemake.wildcards.model, PointEstimateSettings(**p.settings))
 common.finish()

@@ -10,6 +10,8 @@ import pandas as pd
 from gyrocal.model import channels as ch
 from gyrocal.model.spec import ModelSpec
 
+__all__ = ["COLUMNS", "calibration_table", "core_rows", "posterior_mean_params"]
+
 COLUMNS = ["channel", "parameter", "unit", "point", "mean", "sd", "ci95_low", "ci95_high", "r_hat", "ess_bulk",
            "prior_only"]
 

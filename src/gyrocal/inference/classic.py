@@ -16,6 +16,11 @@ from gyrocal.model.channels import MOVING_RATE_FRACTION
 from gyrocal.model.spec import ModelSpec
 from gyrocal.model.units import AXES, AXIS_INDEX
 
+__all__ = [
+    "MIN_HOLD_SAMPLES", "classic", "classic_start", "classic_table", "classic_vector", "hold_bias", "hold_windows",
+    "missing_holds"
+]
+
 
 def hold_windows(data: ManeuverData, channel_set=None):
     """Star-tracker masks of the inertial holds before and after the rotation: where the

@@ -14,6 +14,8 @@ import numpy as np
 from gyrocal.inference.likelihood import Stats
 from gyrocal.model.spec import ModelSpec
 
+__all__ = ["CORRELATION_MAX", "DETECTION_SD", "INFORMATION_RATIO_MIN", "confounded_pairs", "unflown", "uninformed"]
+
 DETECTION_SD = 5.0
 """A value counts as beyond a physical bound once it exceeds it by this many of its standard errors."""
 

@@ -14,6 +14,11 @@ from scipy.linalg import cho_factor, cho_solve
 
 from gyrocal.inference.noise import ManeuverNoise
 
+__all__ = [
+    "LOG_2PI", "Stats", "campaign_stats", "conditional_posterior", "leave_one_out_log_evidence", "log_evidence",
+    "maneuver_stats", "total"
+]
+
 LOG_2PI = np.log(2 * np.pi)
 
 

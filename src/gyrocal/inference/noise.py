@@ -19,6 +19,12 @@ from scipy.linalg.lapack import dtbtrs
 from gyrocal.inference.errormodel import Linearization
 from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
+__all__ = [
+    "COMPONENTS", "NOISE_LABELS", "NOISE_SCALES", "TAPER_CORRELATION_TIMES", "ManeuverNoise", "NoiseScale", "build",
+    "correlation_depth", "difference", "log_sigma_of", "noise_knowledge", "nuisance_design", "scales_in_units",
+    "star_tracker_correlation", "stated_scales", "stated_si", "variances"
+]
+
 COMPONENTS = ("cross", "about", "walk")
 
 

@@ -27,6 +27,12 @@ from gyrocal.inference.likelihood import (
 )
 from gyrocal.inference.noise import log_sigma_of, variances
 
+__all__ = [
+    "AUTOCORR_WINDOW_C", "DE_SHARE", "MAX_HALF_WIDTH_LOG_RATIO", "NOISE_NAMES", "START_REDRAWS", "LogPosterior",
+    "Posterior", "Priors", "RatioGrid", "SamplerResult", "SamplingError", "StudentProposal", "fitted_proposal",
+    "leave_one_maneuver_out", "ratio_curvature", "run_ensembles", "sample", "start_covariance"
+]
+
 NOISE_NAMES = ("sigma_cross", "sigma_about", "arw")
 
 

@@ -15,6 +15,11 @@ from gyrocal.inference.errormodel import Linearization
 from gyrocal.inference.noise import ManeuverNoise, nuisance_design, variances
 from gyrocal.inference.selectedinverse import inverse_windows, recursion_bounds
 
+__all__ = [
+    "BlockConditional", "WhitenedManeuver", "block_conditionals", "block_index", "leave_block_out_loglik",
+    "residuals_body", "sample_blocks", "split_draws", "undifference_body"
+]
+
 
 class WhitenedManeuver:
     """One maneuver whitened at fixed noise ratios (unit cross-boresight variance)."""

@@ -12,6 +12,11 @@ from gyrocal.model import channels as ch
 from gyrocal.model import kinematics
 from gyrocal.model.units import AXES, rad_to_arcsec
 
+__all__ = [
+    "ManeuverData", "body_increments", "end_of_rotation_error", "error_angles", "error_table", "propagate_set",
+    "slice_maneuver"
+]
+
 
 @dataclass
 class ManeuverData:
@@ -74,7 +79,7 @@ class ManeuverData:
 
 def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=()) -> ManeuverData:
     """Cut one maneuver out of a campaign; invalid star-tracker samples and the outliers
-    (at ``outlier_times_s``, as `consistency` lists them) are counted, not used. Only the
+    (at ``outlier_times_s``, as `gyrocal.checks` lists them) are counted, not used. Only the
     maneuver's rows are copied or rotated (the start attitude interpolates the two valid
     samples around it), so cutting every maneuver costs the campaign's length once."""
     m = campaign.maneuver(maneuver_id)

@@ -20,6 +20,8 @@ from itertools import pairwise
 import numpy as np
 from scipy.linalg.lapack import dtrtri
 
+__all__ = ["band_block", "inverse_windows", "recursion_bounds"]
+
 
 def band_block(chol: np.ndarray, rows: slice, cols: slice) -> np.ndarray:
     """Dense ``L[rows, cols]`` of a lower band-stored factor (``chol[d, j] = L[j + d, j]``),

@@ -17,6 +17,11 @@ import numpy as np
 
 from gyrocal.model.units import AXES, AXIS_INDEX
 
+__all__ = [
+    "MOM_CHANNELS", "MOVING_RATE_FRACTION", "SYMBOLS", "Channel", "ChannelParams", "channel_sets", "input_axes",
+    "measure", "response_rows", "solve_body"
+]
+
 MOVING_RATE_FRACTION = 0.05
 """A gyro sample counts as turning while its rate exceeds this share of the maneuver's peak;
 below it, a maneuver is holding inertial (the paper's holds before and after a rotation)."""

@@ -17,6 +17,8 @@ import numpy as np
 from gyrocal.model import channels as ch
 from gyrocal.model.units import AXES
 
+__all__ = ["CONVENTION", "apply", "campaign_correction", "correction_file", "correction_for_set"]
+
 CONVENTION = ("omega_body = misalignment_correction @ diag(scale_correction) @ w, w the bias-free "
               "rates of the set's channels (roll, pitch, yaw order); scale_correction takes "
               "scale_correction_pos[i] where w[i] > 0 and scale_correction_neg[i] where w[i] < 0. "

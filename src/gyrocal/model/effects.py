@@ -37,6 +37,12 @@ import numpy as np
 from gyrocal.model.channels import MOVING_RATE_FRACTION
 from gyrocal.model.units import AXES, DEG_H_RAD_S, PPM, STANDARD_GRAVITY_M_S2, arcsec_to_rad
 
+__all__ = [
+    "BASELINE", "LIBRARY", "Bias", "BiasDrift", "Effect", "GSensitivity", "GravityOffset", "ManeuverView", "Misalignment",
+    "Parameter", "PluginError", "ScaleFactor", "SfNonlinearity", "StCorrelatedNoise", "StLatency", "check_effect",
+    "known", "load_plugins", "resolve"
+]
+
 
 @dataclass(frozen=True)
 class Parameter:

@@ -11,6 +11,8 @@ from scipy.spatial.transform import Rotation
 
 from gyrocal.model.units import rad_to_arcsec
 
+__all__ = ["attitude_at", "compose", "cumulative_compose", "error_angles_arcsec", "error_angles_rad", "propagate"]
+
 
 def _compose_quat(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     """Scalar-last quaternion product of ``Rotation(p) * Rotation(q)``, row by row.

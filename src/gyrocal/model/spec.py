@@ -16,6 +16,8 @@ import numpy as np
 from gyrocal.model import channels as ch
 from gyrocal.model import effects as fx
 
+__all__ = ["CONFIG_PRIOR_KEYS", "ModelSpec", "ParameterSpec", "baseline"]
+
 
 @dataclass(frozen=True)
 class ParameterSpec:

@@ -2,6 +2,12 @@
 
 import numpy as np
 
+__all__ = [
+    "ARCSEC_RAD", "AXES", "AXIS_INDEX", "DEG_H_RAD_S", "DEG_SQRT_H_RAD_SQRT_S", "PAPER_AXES", "PAPER_AXIS_NUMBER", "PPM",
+    "STANDARD_GRAVITY_M_S2", "arcsec_to_rad", "arw_to_rad_sqrt_s", "deg_h_to_rad_s", "paper_term", "rad_s_to_deg_h",
+    "rad_to_arcsec"
+]
+
 ARCSEC_RAD = np.pi / (180.0 * 3600.0)
 """One arcsecond in radians (1 rad = 206264.806 arcsec)."""
 

@@ -6,6 +6,8 @@ import sys
 
 from gyrocal import __version__
 
+__all__ = ["main"]
+
 
 def main(argv=None):
     parser = argparse.ArgumentParser(prog="gyrocal", description=__doc__)
@@ -37,7 +39,8 @@ def main(argv=None):
     lin.add_argument("--plugin", action="append", default=[], metavar="FILE", help="a plugin file the model uses")
     pln = sub.add_parser("plan", help="predict what a planned campaign (a scenario YAML) will tell, before flying it")
     pln.add_argument("scenarios", nargs="+", metavar="SCENARIO", help="one scenario, or two to compare side by side")
-    pln.add_argument("--out", default=".", help="where plan.csv, plan_detection.csv and plan.png go (default .)")
+    pln.add_argument("--out", default=None, help="where plan.csv, plan_detection.csv and plan.png go "
+                     "(default results/plan)")
     pln.add_argument("--config", default="config/config.yaml", help="gyrocal config (priors, models, thresholds)")
     pln.add_argument("--model", default="baseline", help="the model variant to plan for (default baseline)")
     args = parser.parse_args(argv)
@@ -55,7 +58,7 @@ def main(argv=None):
             from gyrocal.io.importer import import_files, report
             print(report(*import_files(args.mapping, args.outdir, args.files, args.reference_interval), args.outdir))
         elif args.command == "validate":
-            from gyrocal.checks.consistency import read_checked, summary
+            from gyrocal.checks import read_checked, summary
             print(summary(*read_checked(args.directory)))
         elif args.command == "compare-campaigns":
             from gyrocal.criticism.agreement import compare_files
@@ -68,13 +71,13 @@ def main(argv=None):
             mapping = read_mapping(args.mapping)
             print(static_report(read_file(args.file, mapping), list(mapping["gyro"]["columns"]), args.file))
         elif args.command == "linearity":
-            from gyrocal.criticism.linearity import run
-            print(run(args.results, args.model, args.plugin))
+            from gyrocal.pipeline.readback import linearity_report
+            print(linearity_report(args.results, args.model, args.plugin))
         elif args.command == "plan":
             import matplotlib
             matplotlib.use("Agg")
-            from gyrocal.planning.plan import run
-            print(run(args.scenarios, args.config, args.out, args.model))
+            from gyrocal.pipeline.steps.plan import DEFAULT_OUT, run
+            print(run(args.scenarios, args.config, args.out or DEFAULT_OUT, args.model))
     except (TelemetryError, ValueError, FileNotFoundError) as exc:
         print(f"gyrocal {args.command}: error: {exc}", file=sys.stderr)
         return 2

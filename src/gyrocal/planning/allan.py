@@ -7,6 +7,8 @@ import pandas as pd
 
 from gyrocal.model.units import DEG_H_RAD_S
 
+__all__ = ["ARW_TAU_S", "allan_table", "angle_random_walk", "cluster_times", "static_report"]
+
 ARW_TAU_S = 1.0
 """The angle random walk is read off at this cluster time, where a rate gyro's white noise still
 dominates its bias instability: ``ARW = sigma(tau) sqrt(tau)`` on the slope -1/2 of the curve."""

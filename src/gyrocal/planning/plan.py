@@ -30,6 +30,12 @@ from gyrocal.model.spec import ModelSpec
 from gyrocal.model.units import AXES
 from gyrocal.simulation import simulate
 
+__all__ = [
+    "CONFIG_SECTIONS", "DETECTION_POWER", "NULL_FRACTION", "Plan", "comparison", "crlb_sd", "detectable_noncentrality",
+    "detection_table", "figure", "information", "noncentrality", "plan", "planned_maneuvers", "predicted_covariance",
+    "quiet", "read_config", "read_scenario", "report", "stated_noise"
+]
+
 DETECTION_POWER = 0.9
 """An effect counts as detectable at the magnitude the structure test flags this often."""
 
@@ -337,22 +343,3 @@ def report(plans, threshold: float = CORRELATION_MAX) -> str:
                 "-- detectable magnitude side by side",
                 found.to_string(index=False, float_format=lambda v: f"{v:.4g}")]
     return "\n".join(out)
-
-
-def run(scenario_paths, config_path, out_dir, model: str = "baseline") -> str:
-    """``gyrocal plan``: predict each scenario, write plan.csv, plan_detection.csv and plan.png to
-    ``out_dir``, and return the printed report."""
-    from gyrocal.io.outputs import write_csv, write_with
-    from gyrocal.report import figures as plots
-    cfg = read_config(config_path)
-    scenarios = [read_scenario(p) for p in scenario_paths]
-    names = [s["name"] for s in scenarios]
-    if len(set(names)) < len(names):
-        names = [f"{n}_{tag}" for n, tag in zip(names, "AB")]
-    plans = [plan(s, cfg, model, n) for s, n in zip(scenarios, names)]
-    out_dir = Path(out_dir)
-    write_csv(pd.concat([p.table() for p in plans]), out_dir / "plan.csv")
-    write_csv(pd.concat([p.detection.assign(plan=p.name) for p in plans]), out_dir / "plan_detection.csv")
-    fig = figure(plans)
-    write_with(lambda handle: plots.save(fig, handle), out_dir / "plan.png")
-    return report(plans) + f"\nwrote {out_dir}/plan.csv, plan_detection.csv and plan.png"

@@ -1,1 +1,3 @@
 """A Mars-Orbiter-like spacecraft simulated from a scenario: the truth, telemetry and campaign files."""
+
+__all__ = ["simulate"]

@@ -29,6 +29,8 @@ from gyrocal.model.units import (
     rad_s_to_deg_h,
 )
 
+__all__ = ["ManeuverProfile", "build_profiles", "run", "scenario_channels", "simulate", "star_tracker_noise", "truth_parameters"]
+
 
 @dataclass
 class ManeuverProfile:

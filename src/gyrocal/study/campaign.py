@@ -3,9 +3,9 @@
 Each campaign draws its channel parameters from the configured prior (the prior the posterior
 uses, so that simulation-based calibration applies), flies the scenario's maneuvers with its
 noise, residual biases and optionally one hidden library effect, and goes through gyrocal's own
-steps (validate, preprocess, classic, point estimate, posterior, diagnostics). Its record holds,
+steps (`gyrocal.pipeline.run.calibrate_campaign`). Its record holds,
 per parameter, the truth beside every estimator, the posterior's quantiles, the SBC rank of the
-truth and the Cramér-Rao bound; per model, the misfit checks and the ranking. `validation`
+truth and the Cramér-Rao bound; per model, the misfit checks and the ranking. `gyrocal.study.tables`
 aggregates the records.
 """
 
@@ -27,11 +27,16 @@ from gyrocal.inference.noise import log_sigma_of, variances
 from gyrocal.io.outputs import strict
 from gyrocal.io.telemetry import write_campaign
 from gyrocal.model import effects, spec
-from gyrocal.pipeline.steps import calibrate, diagnostics, point_estimate, posterior, preprocess, validate
-from gyrocal.pipeline.steps import classic as classic_step
+from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.run import calibrate_campaign
 from gyrocal.pipeline.steps.common import load_maneuvers
 from gyrocal.planning.plan import crlb_sd
 from gyrocal.simulation import simulate
+
+__all__ = [
+    "QUANTILES", "QUANTILE_COLUMNS", "campaign_scenario", "classic_rows", "draw_truth", "model_record",
+    "prior_spec", "run", "sampler_seed", "sbc_rank", "thinned_draws"
+]
 
 QUANTILES = (0.025, 0.05, 0.25, 0.75, 0.95, 0.975)
 """The posterior quantiles a record keeps: the central 50, 90 and 95 % intervals."""
@@ -64,32 +69,6 @@ def campaign_scenario(base: dict, truth: dict, hidden: dict, name: str, seed: in
     out.update(name=name, seed=int(seed), truth=truth)
     out["effects"] = {**out["effects"], **hidden}
     return out
-
-
-def calibrate_steps(campaign_dir, out, cfg: dict, models, figures=True, through="diagnostics") -> list:
-    """Run gyrocal's steps on one campaign, in the order the workflow's rules run them, each given
-    the config its rule is given, up to each model's diagnostics (``through="posterior"``: up to
-    its posterior). Returns the preprocessed files."""
-    out = Path(out)
-    validate.run(campaign_dir, out / "input.json")
-    npz = preprocess.run(campaign_dir, out / "input.json", out / "preprocess", figures)
-    classic_step.run(npz, out / "classic.csv")
-    plugins = cfg["plugins"]
-    for model in models:
-        d = out / model
-        point_estimate.run(npz, out / "input.json", model, cfg["models"][model],
-                           cfg["noise"], plugins, d / "point_estimate.npz")
-        posterior.run(npz, d / "point_estimate.npz", plugins, cfg["priors"], cfg["prior_from"] or None,
-                      cfg["sampler"], cfg["grid"], cfg["convergence"], cfg["seed"], d / "posterior.nc",
-                      d / "posterior_summary.csv", d / "fit.csv", d / "sampler.json", d / "elpd_maneuvers.csv",
-                      d / "elpd_blocks.csv")
-        if through == "posterior":
-            continue
-        calibrate.run(d / "point_estimate.npz", d / "posterior_summary.csv", npz, d / "calibration.csv",
-                      d / "correction.json")
-        diagnostics.run(npz, d / "point_estimate.npz", d / "posterior_summary.csv", d / "fit.csv", plugins,
-                        cfg["diagnostics"], d / "diagnostics.json")
-    return npz
 
 
 def thinned_draws(draws: np.ndarray, steps: int, walkers: int, tau_steps: float, per_chain: int) -> np.ndarray:
@@ -217,7 +196,7 @@ def run(base_scenario_path, cfg: dict, study_cfg: dict, index: int, group: str, 
         campaign_dir = Path(tmp) / "campaign"
         write_campaign(campaign, campaign_dir)
         work = Path(tmp) / "work"
-        calibrate_steps(campaign_dir, work, model_cfg, models, figures=False)
+        calibrate_campaign(campaign_dir, CampaignPaths.under(work), model_cfg, models, figures=False)
         parts, facts = [], []
         for model in models:
             rows, fact = model_record(campaign_dir, work, model, truth, hidden_units, known, cfg, study_cfg, rng)

@@ -1,9 +1,11 @@
-"""The validation study's figures, from `validation`'s tables."""
+"""The validation study's figures, from `gyrocal.study.tables`."""
 
 import matplotlib.pyplot as plt
 import numpy as np
 
 from gyrocal.study.tables import ESTIMATORS, SBC_BINS, sbc_bin_shares
+
+__all__ = ["accuracy_figure", "coverage_figure", "detection_figure", "sbc_figure"]
 
 
 def accuracy_figure(table):

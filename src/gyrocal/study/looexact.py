@@ -44,7 +44,14 @@ from gyrocal.inference.estimate import PointEstimate
 from gyrocal.inference.likelihood import maneuver_stats
 from gyrocal.inference.preprocess import ManeuverData
 from gyrocal.model import effects
-from gyrocal.study import campaign as study
+from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.run import calibrate_campaign
+
+__all__ = [
+    "BlockRefit", "FullRun", "block_curvature", "block_hessian", "block_kinds", "block_name", "block_times",
+    "campaign_without", "curvature_table", "invalidated_star_tracker", "joint_curvature", "log_mean_density",
+    "p_loo_summary", "parse_block", "posterior_draws", "refit_table", "run_maneuver_ids", "run_steps", "scale_moments"
+]
 
 # ----------------------------------------------------------------------------------------------
 # pure pieces
@@ -187,9 +194,9 @@ def scale_moments(flat: np.ndarray, n_params: int) -> tuple:
 
 
 def run_steps(campaign_dir, out, cfg: dict, model: str = "baseline") -> list:
-    """gyrocal's steps up to the posterior on one campaign directory (`study.calibrate_steps`);
+    """gyrocal's steps up to the posterior on one campaign directory (`gyrocal.pipeline.run.calibrate_campaign`);
     the model's outputs land in ``out/<model>/``. Returns the preprocessed maneuver files."""
-    return study.calibrate_steps(campaign_dir, out, cfg, [model], through="posterior")
+    return calibrate_campaign(campaign_dir, CampaignPaths.under(out), cfg, [model], through="posterior")
 
 
 def campaign_without(campaign_dir, out_dir, t_lo: float, t_hi: float) -> tuple:

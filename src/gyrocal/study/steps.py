@@ -6,6 +6,8 @@ from pathlib import Path
 from gyrocal.io.outputs import atomic, write_csv, write_json, write_with
 from gyrocal.study import campaign as study
 
+__all__ = ["read_records", "run_chunk", "summarize"]
+
 
 def run_chunk(scenario_path, cfg, study_cfg, group, indices, out_json):
     """Simulate and calibrate the campaigns ``indices`` of ``group``; their records, written whole."""

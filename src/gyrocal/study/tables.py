@@ -1,12 +1,19 @@
 """The validation study's tables: accuracy against the Cramér-Rao bound, coverage, SBC and the
-criticism loop's error rates, from the campaigns' records (`study.run`).
+criticism loop's error rates, from the campaigns' records (`gyrocal.study.campaign.run`).
 
-Pure pandas and numpy on the records; the figures are `validationplots`, the I/O `steps.study`.
+Pure pandas and numpy on the records; the figures are `gyrocal.study.figures`, the I/O `gyrocal.study.steps`.
 """
 
 import numpy as np
 import pandas as pd
 from scipy import stats as sps
+
+__all__ = [
+    "ESTIMATORS", "LEVELS", "SBC_BINS", "SUMMARY_COLUMNS", "accuracy", "binomial_interval", "clean_baseline",
+    "clustered_interval", "coverage", "detection", "efficiency_confidence", "efficiency_interval", "error_rates",
+    "extended_coverage", "markdown", "markdown_table", "model_table", "parameter_table", "plan_check",
+    "pooled_efficiency", "sbc", "sbc_bin_shares", "sbc_histogram", "uniformity_p"
+]
 
 LEVELS = {0.5: ("q25", "q75"), 0.9: ("q5", "q95"), 0.95: ("q2.5", "q97.5")}
 """Each central interval's level and the quantile columns of a record that bound it."""

@@ -15,3 +15,8 @@ REFUSED = "gyrocal: the campaign was refused:"
 """How a step's message about bad input begins, in its log and on the console. Here, not in
 `common`, because the workflow reads it when it builds its DAG and `common` imports the steps'
 numerics."""
+
+__all__ = [
+    "REFUSED", "calibrate", "classic", "common", "compare_models", "diagnostics", "fleet", "plan", "point_estimate",
+    "posterior", "preprocess", "report", "validate"
+]

@@ -8,15 +8,19 @@ from gyrocal.inference.calibration import calibration_table, posterior_mean_para
 from gyrocal.inference.estimate import PointEstimate
 from gyrocal.io.outputs import write_csv, write_json
 from gyrocal.model.correction import campaign_correction
+from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.steps.common import load_maneuvers
 
+__all__ = ["run"]
 
-def run(point_npz, summary_csv, npz_paths, out_csv, out_correction):
+
+def run(paths: CampaignPaths, maneuver_ids, model: str):
     """``calibration.csv`` per the contract and the correction file for every channel set."""
-    maneuvers = load_maneuvers(npz_paths)
-    est = PointEstimate.load(point_npz)
-    table = calibration_table(est.spec, est.theta, pd.read_csv(summary_csv).set_index("label"))
-    write_csv(table, out_csv)
+    out = paths.model(model)
+    maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
+    est = PointEstimate.load(out.point_estimate)
+    table = calibration_table(est.spec, est.theta, pd.read_csv(out.summary).set_index("label"))
+    write_csv(table, out.calibration)
     doc = campaign_correction(posterior_mean_params(est.spec, table), maneuvers, "posterior mean")
     doc["gyrocal_version"] = __version__
-    write_json(doc, out_correction)
+    write_json(doc, out.correction)

@@ -3,10 +3,13 @@
 from gyrocal.inference import classic
 from gyrocal.io.outputs import write_csv
 from gyrocal.model import spec
+from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.steps.common import load_maneuvers
 
+__all__ = ["run"]
 
-def run(npz_paths, out_csv):
+
+def run(paths: CampaignPaths, maneuver_ids):
     """The paper's method over every maneuver, once per campaign."""
-    maneuvers = load_maneuvers(npz_paths)
-    write_csv(classic.classic_table(maneuvers, spec.baseline(maneuvers[0].channels)), out_csv)
+    maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
+    write_csv(classic.classic_table(maneuvers, spec.baseline(maneuvers[0].channels)), paths.classic)

@@ -7,11 +7,13 @@ import sys
 import warnings
 from contextlib import contextmanager
 
+from gyrocal.checks.fit import EstimateError
 from gyrocal.inference import preprocess
-from gyrocal.inference.estimate import EstimateError
 from gyrocal.io.telemetry import TelemetryError
 from gyrocal.model import effects
 from gyrocal.pipeline.steps import REFUSED
+
+__all__ = ["finish", "known_effects", "load_maneuvers", "read_json", "refusal", "start"]
 
 log = logging.getLogger("gyrocal")
 
@@ -45,7 +47,7 @@ def finish():
 
 @contextmanager
 def refusal():
-    """Turn bad input (`telemetry.TelemetryError`, `estimate.EstimateError`) into its message on
+    """Turn bad input (`telemetry.TelemetryError`, `gyrocal.checks.fit.EstimateError`) into its message on
     stderr and in the step's log, and exit 1: a user reads what is wrong, not a traceback."""
     try:
         yield

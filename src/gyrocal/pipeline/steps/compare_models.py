@@ -1,21 +1,26 @@
-"""Step ``compare`` (run by the report rule's job): the model variants side by side, and which one is reviewed."""
+"""Step ``compare_models`` (run by the report rule's job): the model variants side by side, and which one is reviewed."""
 
 import pandas as pd
 
 from gyrocal.criticism import comparison
 from gyrocal.io.outputs import write_csv, write_with
+from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.settings import ModelChoiceSettings
 from gyrocal.pipeline.steps.common import read_json
 from gyrocal.report import figures as plots
 
+__all__ = ["run"]
 
-def run(models, loo_paths, diagnostics_paths, summary_paths, elpd_paths, choice_cfg, out_csv, out_png):
+
+def run(paths: CampaignPaths, models, settings: ModelChoiceSettings):
     """``model_comparison.csv``: residual RMS, PSIS-LOO (each model's ``elpd_blocks.csv``) and exact
     leave-one-maneuver-out per variant, what moved, which variants are plausible and which one is
-    reviewed."""
-    table = comparison.compare(models, [pd.read_csv(p) for p in loo_paths],
-                               [read_json(p) for p in diagnostics_paths],
-                               [pd.read_csv(p).set_index("label") for p in summary_paths],
-                               [pd.read_csv(p)["elpd"].to_numpy() for p in elpd_paths], choice_cfg["reject_se"])
-    write_csv(table, out_csv)
+    reviewed; and its figure."""
+    each = [paths.model(m) for m in models]
+    table = comparison.compare(list(models), [pd.read_csv(m.elpd_blocks) for m in each],
+                               [read_json(m.diagnostics) for m in each],
+                               [pd.read_csv(m.summary).set_index("label") for m in each],
+                               [pd.read_csv(m.elpd_maneuvers)["elpd"].to_numpy() for m in each], settings.reject_se)
+    write_csv(table, paths.comparison)
     fig = plots.comparison_figure(table)
-    write_with(lambda handle: plots.save(fig, handle), out_png)
+    write_with(lambda handle: plots.save(fig, handle), paths.comparison_figure)

@@ -6,15 +6,20 @@ from gyrocal.criticism import diagnostics
 from gyrocal.inference.estimate import PointEstimate
 from gyrocal.io.outputs import write_json
 from gyrocal.model import effects
+from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.settings import DiagnosticsSettings
 from gyrocal.pipeline.steps.common import known_effects, load_maneuvers
 
+__all__ = ["run"]
 
-def run(npz_paths, point_npz, summary_csv, fit_csv, plugin_paths, thresholds, out_json):
+
+def run(paths: CampaignPaths, maneuver_ids, model: str, settings: DiagnosticsSettings):
     """``diagnostics.json`` per docs/interface.md section 5: misfit verdict and ranking."""
-    maneuvers = load_maneuvers(npz_paths)
-    known = known_effects(plugin_paths)
-    est = PointEstimate.load(point_npz, known)
+    out = paths.model(model)
+    maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
+    known = known_effects(settings.plugins)
+    est = PointEstimate.load(out.point_estimate, known)
     plugins = [e for name, e in known.items() if name not in effects.LIBRARY]
-    doc = diagnostics.diagnose(maneuvers, est, pd.read_csv(fit_csv), pd.read_csv(summary_csv).set_index("label"),
-                               thresholds, plugins)
-    write_json(doc, out_json)
+    doc = diagnostics.diagnose(maneuvers, est, pd.read_csv(out.fit), pd.read_csv(out.summary).set_index("label"),
+                               settings.diagnostics, plugins)
+    write_json(doc, out.diagnostics)

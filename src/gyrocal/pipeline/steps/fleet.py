@@ -7,6 +7,8 @@ from gyrocal.pipeline.steps.common import read_json
 from gyrocal.report import figures as plots
 from gyrocal.report import fleet
 
+__all__ = ["run"]
+
 
 def run(verdict_paths, out_csv, out_png):
     """``results/fleet/``: every campaign's reviewed model and verdict in one table and figure."""

@@ -8,21 +8,25 @@ from gyrocal.inference.noise import noise_knowledge, stated_scales
 from gyrocal.io.outputs import write_with
 from gyrocal.model import effects
 from gyrocal.model.spec import ModelSpec
+from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.settings import PointEstimateSettings
 from gyrocal.pipeline.steps.common import load_maneuvers, read_json
+
+__all__ = ["run"]
 
 log = logging.getLogger("gyrocal")
 
 
-def run(npz_paths, input_json, model, model_effects, noise_cfg, plugin_paths, out_npz):
+def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PointEstimateSettings):
     """The full-trajectory WLS of one model, started from the classic estimate; saved
     with the model's specification, the noise knowledge it used and its linearisation. The classic
     start is computed here, for the model's own specification (a tenth of a second)."""
-    maneuvers = load_maneuvers(npz_paths)
-    fx = effects.resolve(model, model_effects, effects.load_plugins(plugin_paths or []))
+    maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
+    fx = effects.resolve(model, settings.effects, effects.load_plugins(settings.plugins or []))
     model_spec = ModelSpec.build(model, fx, maneuvers[0].channels)
-    stated = noise_knowledge(read_json(input_json), noise_cfg)
+    stated = noise_knowledge(read_json(paths.input_json), settings.noise)
     est = point_estimate(maneuvers, model_spec, stated, classic.classic_start(maneuvers, model_spec),
-                         noise_cfg["estimate_scales"])
+                         settings.noise["estimate_scales"])
     for p in est.spec.parameters:
         if p.prior_only:
             log.warning("%s is prior-only: %s", p.label, p.prior_only)
@@ -30,4 +34,4 @@ def run(npz_paths, input_json, model, model_effects, noise_cfg, plugin_paths, ou
         log.info("star-tracker noise correlation time: %.2f s", est.correlation_time_s)
     log.info("WLS: %s (%d evaluations); noise %s", est.message, est.nfev,
              stated_scales(est.log_sigma))
-    write_with(est.save, out_npz)
+    write_with(est.save, paths.model(model).point_estimate)

@@ -3,33 +3,43 @@
 import arviz as az
 import pandas as pd
 
+from gyrocal.criticism import verdict
 from gyrocal.inference.estimate import PointEstimate
 from gyrocal.io.outputs import write_json, write_text
+from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.settings import ReportSettings
 from gyrocal.pipeline.steps.common import load_maneuvers, read_json
 from gyrocal.report import review
 
+__all__ = ["run"]
 
-def run(models, model_files, npz_paths, table_paths, input_json, comparison_csv, truth_json, cfg, out_html,
-        out_verdict, processes: int = 1):
+
+def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, truth_json=None, processes: int = 1):
     """``report.html``: the pre-uplink review of a campaign (see `gyrocal.report.review`), and its verdict
     with the checks behind it in ``verdict.json``, for scripts and fleets.
 
-    ``model_files`` maps each name of `outputs.MODEL_FILES` to its paths, one per model in
-    the order of ``models``; the reviewed model's are read. Its figures are drawn by
-    ``processes`` processes.
+    The checks are `gyrocal.criticism.verdict`'s findings on the reviewed model (the one
+    ``model_comparison.csv`` names); the report renders them. Every model's ``calibration.csv``
+    is read for the model-sensitivity check. Its figures are drawn by ``processes`` processes.
     """
-    table = pd.read_csv(comparison_csv)
+    cfg = settings.config
+    table = pd.read_csv(paths.comparison)
     model = str(table.loc[table["reviewed"], "model"].iloc[0])
-    files = {name: paths[models.index(model)] for name, paths in model_files.items()}
-    calibrations = {m: pd.read_csv(p) for m, p in zip(models, model_files["calibration"])}
-    maneuvers = load_maneuvers(npz_paths)
-    est = PointEstimate.load(files["point"])
+    files = paths.model(model)
+    calibrations = {m: pd.read_csv(paths.model(m).calibration) for m in models}
+    maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
+    est = PointEstimate.load(files.point_estimate)
+    info, diagnostics, sampler = read_json(paths.input_json), read_json(files.diagnostics), read_json(files.sampler)
+    effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases)
+    findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg)
     with az.rc_context(rc={"data.load": "eager"}):  # in memory: the figures are drawn by forked processes
-        posterior = az.from_netcdf(str(files["posterior"]))
-    ctx = review.build_context(
-        model, maneuvers, [pd.read_csv(p) for p in table_paths], est, read_json(files["diagnostics"]),
-        read_json(files["sampler"]), read_json(files["correction"]), files["correction"], pd.read_csv(files["fit"]),
-        posterior, table, read_json(input_json),
-        read_json(truth_json)["parameters"] if truth_json else None, cfg, calibrations, processes)
-    write_text(review.render(ctx), out_html)
-    write_json(review.verdict(ctx), out_verdict)
+        posterior = az.from_netcdf(files.posterior)
+    inputs = review.ReviewInputs(
+        model=model, spec=est.spec, maneuvers=maneuvers,
+        tables=[pd.read_csv(p) for p in paths.maneuvers(maneuver_ids, "csv")],
+        calibration=calibrations[model], fit=pd.read_csv(files.fit), posterior=posterior, diagnostics=diagnostics,
+        sampler=sampler, correction=read_json(files.correction), correction_path=files.correction,
+        comparison=table, info=info, config=cfg, findings=findings, effect_table=effect,
+        truth=read_json(truth_json)["parameters"] if truth_json else None)
+    write_text(review.render(review.build_context(inputs, processes)), paths.report)
+    write_json(verdict.verdict(info["campaign"], model, findings), paths.verdict)

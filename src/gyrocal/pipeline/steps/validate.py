@@ -4,20 +4,22 @@ and physics, record ``input.json``."""
 import logging
 from dataclasses import asdict
 
-from gyrocal import __version__
-from gyrocal.checks import consistency
+from gyrocal import __version__, checks
 from gyrocal.io import telemetry
 from gyrocal.io.outputs import write_json
+from gyrocal.pipeline.paths import CampaignPaths
+
+__all__ = ["run"]
 
 log = logging.getLogger("gyrocal")
 
 
-def run(campaign_dir, out_json, campaign=None):
+def run(campaign_dir, paths: CampaignPaths, campaign=None):
     """Read the campaign (unless given ``campaign``, as `telemetry.read_campaign` read it) and
-    check its format and physics (`consistency`); record what was read, the warnings, the
+    check its format and physics (`gyrocal.checks`); record what was read, the warnings, the
     star-tracker outliers to leave out, its noise knowledge and the files' checksums."""
-    campaign, findings = consistency.read_checked(campaign_dir, campaign)
-    log.info("%s", consistency.summary(campaign, findings))
+    campaign, findings = checks.read_checked(campaign_dir, campaign)
+    log.info("%s", checks.summary(campaign, findings))
     write_json({
         "campaign": campaign.name,
         "gyrocal_version": __version__,
@@ -34,4 +36,4 @@ def run(campaign_dir, out_json, campaign=None):
         "star_tracker": campaign.star_tracker,
         "gyro": campaign.gyro,
         "checksums_sha256": telemetry.checksums(campaign_dir),
-    }, out_json)
+    }, paths.input_json)

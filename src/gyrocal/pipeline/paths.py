@@ -1,0 +1,73 @@
+"""The paths of a run, written once: every file a campaign's run reads or writes, and every file of
+one model variant. The rules, the study and the tests all take them from here; a root may hold
+Snakemake wildcards (``results/{campaign}``), which pass through unchanged."""
+
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["CampaignPaths", "ModelPaths"]
+
+
+def _under_root(name: str, doc: str = "") -> property:
+    """A path property: ``name`` under the object's ``root``."""
+    return property(lambda self: f"{self.root}/{name}", doc=doc or f"``{name}``")
+
+
+@dataclass(frozen=True)
+class ModelPaths:
+    """One model variant's files, under ``<campaign results>/<model>/`` (docs/interface.md section 5)."""
+
+    root: str
+
+    point_estimate = _under_root("point_estimate.npz")
+    posterior = _under_root("posterior.nc")
+    summary = _under_root("posterior_summary.csv")
+    fit = _under_root("fit.csv")
+    sampler = _under_root("sampler.json")
+    elpd_maneuvers = _under_root("elpd_maneuvers.csv")
+    elpd_blocks = _under_root("elpd_blocks.csv")
+    calibration = _under_root("calibration.csv")
+    correction = _under_root("correction.json")
+    diagnostics = _under_root("diagnostics.json")
+
+
+@dataclass(frozen=True)
+class CampaignPaths:
+    """One campaign's files, under ``results/<campaign>/``."""
+
+    root: str
+
+    input_json = _under_root("input.json", "What validation read and found (``input.json``).")
+    classic = _under_root("classic.csv")
+    preprocess = _under_root("preprocess", "The preprocess step's folder: ``<maneuver>.{npz,csv,png}`` each.")
+    comparison = _under_root("model_comparison.csv")
+    comparison_figure = _under_root("model_comparison.png")
+    report = _under_root("report.html")
+    verdict = _under_root("verdict.json")
+    simulated = _under_root("simulated/campaign", "Where a simulated campaign's directory goes.")
+    truth = _under_root("simulated/truth.json")
+
+    @classmethod
+    def under(cls, root) -> "CampaignPaths":
+        """The paths under a folder given as a string or a `pathlib.Path`."""
+        return cls(str(root))
+
+    def model(self, name: str) -> ModelPaths:
+        return ModelPaths(f"{self.root}/{name}")
+
+    def maneuvers(self, ids, ext: str = "npz") -> list:
+        """The preprocessed files of one kind of the maneuvers ``ids``, in that order."""
+        return [f"{self.preprocess}/{m}.{ext}" for m in ids]
+
+    def outputs(self, models) -> list:
+        """Everything a campaign's run leaves, as the workflow's targets."""
+        out = [self.input_json, self.preprocess]
+        for name in models:
+            m = self.model(name)
+            out += [m.calibration, m.correction, m.diagnostics]
+        return out + [self.classic, self.comparison, self.report, self.verdict]
+
+    def mkdirs(self, models=()):
+        """Create the campaign's folder and its models' (outside Snakemake, which creates its own)."""
+        for folder in [self.root] + [self.model(m).root for m in models]:
+            Path(folder).mkdir(parents=True, exist_ok=True)
