@@ -4,6 +4,7 @@ raises `EstimateError` with the parameter and the maneuver it concerns."""
 
 import numpy as np
 
+from gyrocal.errors import InputError
 from gyrocal.inference import identification, noise
 from gyrocal.inference.estimate import PointEstimate, linearize_all
 from gyrocal.inference.likelihood import maneuver_stats
@@ -13,8 +14,9 @@ from gyrocal.model import units
 __all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "EstimateError", "check_blocks", "check_noise", "check_physical"]
 
 
-class EstimateError(RuntimeError):
-    """The point estimate is not physical; the message names the parameter and the maneuver."""
+class EstimateError(InputError):
+    """The point estimate is not physical: the campaign is refused before sampling; the message names
+    the parameter and the maneuver."""
 
 
 NOISE_PLAUSIBLE = 1e3

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from gyrocal.errors import InputError
 from gyrocal.model.channels import Channel, channel_sets
 from gyrocal.model.units import AXES
 
@@ -34,7 +35,7 @@ DIRECTIONS = ("+", "-", "both")
 """A maneuver turns one way, the other, or both (several turns each way, no inertial holds)."""
 
 
-class TelemetryError(ValueError):
+class TelemetryError(InputError):
     """Bad campaign input; the message names the file, the row or column and the fault."""
 
 
@@ -58,8 +59,9 @@ class Maneuver:
         return {"+": 1.0, "-": -1.0}.get(self.direction, 0.0)
 
 
-def fail(path, message):
-    raise TelemetryError(f"{path}: {message}")
+def fail(path, message, where: str = "", todo: str = ""):
+    """Refuse the file ``path``: ``message`` says what is wrong (after ``where`` in it, if given)."""
+    raise TelemetryError.at(path, message, where, todo)
 
 
 def _parse_channels(path, raw) -> tuple:

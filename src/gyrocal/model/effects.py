@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gyrocal.errors import InputError
 from gyrocal.model.channels import MOVING_RATE_FRACTION
 from gyrocal.model.units import AXES, DEG_H_RAD_S, PPM, STANDARD_GRAVITY_M_S2, arcsec_to_rad
 
@@ -226,7 +227,7 @@ LIBRARY = {e.name: e for e in (ScaleFactor(), Misalignment(), Bias(), BiasDrift(
 BASELINE = ("scale_factor", "misalignment", "bias")
 
 
-class PluginError(ValueError):
+class PluginError(InputError):
     """A plugin file that does not follow the effect API; the message says what is missing."""
 
 
