@@ -1,3 +1,10 @@
+import os
+
+# One BLAS thread, as Snakemake gives each one-thread job and tests/run.sh exports: the same numbers to
+# the last bit in this process as in the rules' (set before numpy is first imported).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import copy
 import json
 from pathlib import Path
 
@@ -16,6 +23,16 @@ def config():
     from snakemake.utils import validate
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     validate(cfg, str(ROOT / "workflow" / "schemas" / "config.schema.yaml"))
+    return cfg
+
+
+@pytest.fixture(scope="session")
+def short_chains(config):
+    """The default config with the short chains of ``tests/data/short_chains.yaml``: for tests of
+    wiring, files and determinism, which need no converged posterior."""
+    from snakemake.utils import update_config
+    cfg = copy.deepcopy(config)
+    update_config(cfg, yaml.safe_load((DATA / "short_chains.yaml").read_text()))
     return cfg
 
 
@@ -69,7 +86,6 @@ def rerun_from(out, dest, model="baseline"):
 
 
 def config_with(cfg, models=None, plugins=None):
-    import copy
     out = copy.deepcopy(cfg)
     if models is not None:
         out["models"] = models

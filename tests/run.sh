@@ -21,11 +21,12 @@ fi
 export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"
 python -m pip install --quiet -e ".[test,docs]"
 python -m ruff check .
-lint-imports
-python -m snakemake --lint >/dev/null
-mkdocs build --strict --quiet --site-dir "$(mktemp -d)"
+lint-imports --no-logo --no-cache
+python -m snakemake --lint >/dev/null 2>&1 || python -m snakemake --lint
+NO_MKDOCS_2_WARNING=1 mkdocs build --strict --quiet --site-dir "$(mktemp -d)"
 if [ "${1:-}" = "--full" ]; then
     shift
     set -- -m "not slow and not slurm" "$@"
 fi
-python -m pytest "$@"
+# Two workers, one a core; a file's tests stay on one worker, so its module fixtures run once.
+python -m pytest -n 2 --dist loadfile "$@"

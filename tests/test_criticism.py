@@ -28,53 +28,65 @@ CASES = {
                     DATA / "plugin_sf_temperature.py"),
 }
 
+FAST_CASE = "temperature"
+"""The case the fast tier runs (a plugin's effect: the loop end to end, plugin loading included);
+the library's effects run in the full tier (bash tests/run.sh --full)."""
+CASE_PARAMS = [pytest.param(case, marks=() if case == FAST_CASE else pytest.mark.full) for case in CASES]
+
+
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory, config):
-    """Each hidden-effect campaign run with the baseline and the variant that adds the effect."""
-    out = {}
-    for case, (effect, _, plugin) in CASES.items():
-        root = tmp_path_factory.mktemp(case)
-        simulate.run(DATA / f"hidden_{case}.yaml", root / "sim")
-        cfg = config_with(config, {"baseline": BASE, "extended": BASE + [effect]},
-                          [str(plugin)] if plugin else [])
-        run_campaign(root / "sim" / "campaign", root / "out", cfg, ("baseline", "extended"),
-                     root / "sim" / "truth.json")
-        out[case] = root
-    return out
+    """Each hidden-effect campaign run with the baseline and the variant that adds the effect, made
+    when a test first asks for it."""
+    made = {}
+
+    def run(case):
+        if case not in made:
+            effect, _, plugin = CASES[case]
+            root = tmp_path_factory.mktemp(case)
+            simulate.run(DATA / f"hidden_{case}.yaml", root / "sim")
+            cfg = config_with(config, {"baseline": BASE, "extended": BASE + [effect]},
+                              [str(plugin)] if plugin else [])
+            run_campaign(root / "sim" / "campaign", root / "out", cfg, ("baseline", "extended"),
+                         root / "sim" / "truth.json")
+            made[case] = root
+        return made[case]
+
+    return run
 
 
 def load(root, model):
     return json.loads((root / "out" / model / "diagnostics.json").read_text())
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", CASE_PARAMS)
 def test_baseline_misfits_on_data_with_a_hidden_effect(runs, case):
-    assert load(runs[case], "baseline")["misfit"] is True
+    assert load(runs(case), "baseline")["misfit"] is True
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", CASE_PARAMS)
 def test_the_hidden_effect_or_its_signature_ranks_first(runs, case):
-    ranking = load(runs[case], "baseline")["ranking"]
+    ranking = load(runs(case), "baseline")["ranking"]
     assert ranking[0]["name"] in CASES[case][1], ranking[:3]
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", CASE_PARAMS)
 def test_the_variant_that_adds_it_fits_within_the_noise(runs, case):
-    d = load(runs[case], "extended")
+    d = load(runs(case), "extended")
     assert abs(d["residual_rms_arcsec"] / d["noise_rms_arcsec"] - 1) < 0.10
     assert d["misfit"] is False, [c for c in d["checks"] if not c["passed"]]
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", CASE_PARAMS)
 def test_the_variant_wins_by_loo_by_more_than_4_se(runs, case):
-    table = pd.read_csv(runs[case] / "out" / "model_comparison.csv").set_index("model")
+    table = pd.read_csv(runs(case) / "out" / "model_comparison.csv").set_index("model")
     diff, se = table.loc["extended", "elpd_diff_vs_first"], table.loc["extended", "elpd_diff_se"]
     assert diff > 4 * se, (diff, se)
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", CASE_PARAMS)
 def test_the_variant_covers_the_truth_again(runs, case):
-    root = runs[case]
+    root = runs(case)
     t = json.loads((root / "sim/truth.json").read_text())["parameters"]
     spec = PointEstimate.load(root / "out" / "extended" / "point_estimate.npz").spec
     table = core_rows(spec, pd.read_csv(root / "out" / "extended" / "calibration.csv"))
@@ -83,21 +95,22 @@ def test_the_variant_covers_the_truth_again(runs, case):
     assert inside.sum() >= 22, table[~inside.to_numpy()]
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", CASE_PARAMS)
 def test_the_review_rests_on_the_true_effect(runs, case):
-    table = pd.read_csv(runs[case] / "out" / "model_comparison.csv").set_index("model")
+    table = pd.read_csv(runs(case) / "out" / "model_comparison.csv").set_index("model")
     assert table.loc["extended", "reviewed"] and table.loc["extended", "plausible"]
     assert not table.loc["baseline", "plausible"] and table.loc["baseline", "loo_rejected"]
-    assert "model reviewed: <b>extended</b>" in (runs[case] / "out" / "report.html").read_text()
+    assert "model reviewed: <b>extended</b>" in (runs(case) / "out" / "report.html").read_text()
 
 
-@pytest.mark.parametrize("case", CASES)
+@pytest.mark.parametrize("case", CASE_PARAMS)
 def test_exact_leave_one_maneuver_out_prefers_the_true_effect(runs, case):
-    table = pd.read_csv(runs[case] / "out" / "model_comparison.csv").set_index("model")
+    table = pd.read_csv(runs(case) / "out" / "model_comparison.csv").set_index("model")
     diff, se = table.loc["extended", "elpd_lomo_diff_vs_first"], table.loc["extended", "elpd_lomo_diff_se"]
     assert diff > 2.5 * se, (diff, se)
 
 
+@pytest.mark.full
 def test_on_clean_data_no_variant_wins_and_nothing_misfits(tiny, tmp_path, config):
     variants = {"baseline": BASE, "drift": BASE + ["bias_drift"], "latency": BASE + ["st_latency"]}
     run_campaign(tiny[0], tmp_path, config_with(config, variants), tuple(variants), tiny[0].parent / "truth.json")

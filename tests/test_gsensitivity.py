@@ -84,6 +84,7 @@ def with_gravity_offset(d):
     mutations._write(st, d, "star_tracker.csv")
 
 
+@pytest.mark.full
 def test_the_posterior_finds_a_known_gravity_offset_of_the_reference(tiny, tmp_path, config):
     mutations.corrupted_copy(tiny[0], tmp_path / "c", with_gravity_offset)
     model = ["scale_factor", "misalignment", "bias", "gravity_offset"]
@@ -139,6 +140,7 @@ def test_an_effect_per_g_without_gravity_is_refused(tmp_path):
     ("g_sensitivity", "g_sensitivity_deg_s_per_g", 0.003, ".g_"),
     ("gravity_offset", "gravity_offset_arcsec_per_g", 600.0, "gravity_offset."),
 ])
+@pytest.mark.full
 def test_the_posterior_recovers_what_the_simulator_flew_per_g(tmp_path, config, effect, key, value, prefix):
     from gyrocal.simulation import simulate
     simulate.run(lab_scenario(tmp_path, **{key: value}), tmp_path / "sim")

@@ -54,6 +54,7 @@ def test_hidden_effect_with_baseline_only_is_no_go_naming_the_reason(hidden_run)
     assert "Best explanation: effect bias_drift" in text or "Best explanation: signature time" in text
 
 
+@pytest.mark.full
 def test_a_plan_that_cannot_tell_two_effects_apart_gives_no_go_naming_both(tmp_path_factory, config):
     """One rate per direction: a rate-squared scale factor (hidden here, 2000 ppm at the flown
     rate) looks like the scale factor itself. Both variants fit; the baseline's intervals are

@@ -16,18 +16,13 @@ import time
 
 import pytest
 
-from conftest import ROOT
+from conftest import DATA, ROOT
 
 pytestmark = pytest.mark.slurm
 
 SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile")]
 NAMES = ("sat_a", "sat_b", "sat_c")
 TIMEOUT_S = 1800                      # each run; here 2 to 8 minutes
-# Shorter chains than the default config's: the comparison is of numbers, not of convergence.
-FAST = """\
-sampler: {walkers: 16, burn_steps: 50, initial_steps: 50, chunk_steps: 50, min_tau_multiple: 1, max_steps: 100,
-          loglik_draws: 20, predictive_draws: 10}
-"""
 
 
 def _slurm_missing():
@@ -66,7 +61,7 @@ def fleet(tiny, tmp_path_factory):
         shutil.copytree(tiny[0], root / "fleet" / name)
         meta = root / "fleet" / name / "campaign.yaml"
         meta.write_text(meta.read_text().replace("name: tiny", f"name: {name}"))
-    (root / "fast.yaml").write_text(FAST)
+    shutil.copy(DATA / "short_chains.yaml", root / "fast.yaml")
     return root
 
 

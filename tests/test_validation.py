@@ -184,6 +184,7 @@ def test_error_rates_compare_the_checks_with_their_null():
     assert rates.loc["misfit (configured thresholds)", "nominal"] == pytest.approx(8e-6 + 5.7e-7, rel=0.01)
 
 
+@pytest.mark.full
 def test_study_workflow_runs_end_to_end_on_tiny_campaigns(tmp_path):
     """Two clean campaigns and one with a bias drift through the study's Snakefile: every table is
     written, the truths come back, and the drift is caught by the baseline and recovered by its model
