@@ -14,19 +14,23 @@ from gyrocal.io import importer, telemetry
 from gyrocal.pipeline import cli
 
 
-def repoimu_like(path, rate_rad_s=0.5, n=400, dt=0.01, t0=3.0, dropouts=(50, 51)):
+def repoimu_like(path, rate_rad_s=0.5, n=400, dt=0.01, t0=3.0, dropouts=(50, 51), quat_format="{:.10g}", scale=None):
     """A RepoIMU-format file: a turn about x at a rate that varies, Vicon scalar first, gyro rates in
-    rad/s, accelerometer and magnetometer columns; all-zero quaternions at ``dropouts``."""
+    rad/s, accelerometer and magnetometer columns; all-zero quaternions at ``dropouts``; the
+    quaternions printed with ``quat_format``, those of the rows in ``scale`` (row: factor) scaled."""
     t = t0 + dt * np.arange(n)
     rate = rate_rad_s * np.sin(2 * np.pi * (t - t0) / (n * dt))
     angle = np.concatenate([[0.0], np.cumsum(0.5 * (rate[1:] + rate[:-1]) * dt)])
     quat = Rotation.from_rotvec(np.outer(angle, [1.0, 0.0, 0.0])).as_quat()
     wxyz = quat[:, [3, 0, 1, 2]]
     wxyz[list(dropouts)] = 0.0
+    for row, factor in (scale or {}).items():
+        wxyz[row] *= factor
     rows = np.column_stack([t, wxyz, np.full((n, 3), 9.81), rate, np.zeros(n), np.zeros(n), np.ones((n, 3))])
     header = "Time (s);Vicon Orientation;;;;IMU Acceleration;;;IMU Gyroscope;;;IMU Magnetometer;;;\n"
     header += ";W;X;Y;Z;X;Y;Z;X;Y;Z;X;Y;Z;\n"
-    path.write_text(header + "\n".join(";".join(f"{v:.10g}" for v in r) + ";" for r in rows) + "\n")
+    path.write_text(header + "\n".join(";".join(quat_format.format(v) if 1 <= i <= 4 else f"{v:.10g}"
+                                                 for i, v in enumerate(r)) + ";" for r in rows) + "\n")
     return t, quat, rate
 
 
@@ -66,6 +70,77 @@ def test_a_reference_interval_keeps_every_nth_reference_row_and_counts_the_rest(
     valid = again.st_valid == 1
     assert np.allclose(again.st_quat[valid], quat[kept][valid], atol=1e-9)
     assert "reference kept every 0.5 s: 9 samples, 391 left out between them" in importer.report(campaign, counts, out)
+
+
+def test_the_printed_precision_is_read_off_each_column_as_decimals_or_significant_digits():
+    """RepoIMU prints 5 significant digits (a "1" among them stands for 1.0000); a fixed format
+    prints as many decimals in every value. The unit in the last place follows."""
+    text = ["1", "0.98275", "-0.030836", "2.4976e-006", "-0"]
+    unit, words = importer.printed_quantum(text, [float(v) for v in text])
+    assert words == "5 significant digits" and unit.tolist() == pytest.approx([1e-4, 1e-5, 1e-6, 1e-10, 1e-10])
+    text = ["1.0000", "0.9876", "-0.0308", "0.0000"]
+    unit, words = importer.printed_quantum(text, [float(v) for v in text])
+    assert words == "4 decimals" and unit.tolist() == pytest.approx([1e-4] * 4)
+
+
+def test_quaternions_rounded_to_two_decimals_are_written_unit_and_counted(tmp_path, capsys):
+    """Rounded to 2 decimals, a quaternion's norm is off 1 by up to 5.8e-3 here (0.58 times the most
+    that rounding can do): each is renormalised, the report says how many and why, and the campaign
+    reader (validate's first step), which refuses a norm off 1 by more than 1e-3, finds nothing to
+    renormalise."""
+    repoimu_like(tmp_path / "Trial_A.csv", rate_rad_s=3.0, quat_format="{:.2f}")
+    out = tmp_path / "campaign"
+    assert cli.main(["import", "repoimu", str(out), str(tmp_path / "Trial_A.csv")]) == 0
+    report = capsys.readouterr().out
+    assert ("reference quaternions printed to 2 decimals: 374 renormalised (norm off 1 by up to 0.0058, at most "
+            "0.58 times what rounding to those digits can do), none off by more than 2 times") in report
+    again = telemetry.read_campaign(out)
+    assert again.st_renormalised == 0 and list(np.flatnonzero(again.st_valid == 0)) == [50, 51]
+    assert np.abs(np.linalg.norm(again.st_quat[again.st_valid == 1], axis=1) - 1).max() < 1e-12
+
+
+def test_a_quaternion_off_unit_beyond_its_printed_digits_is_refused_with_its_line(tmp_path):
+    """One quaternion scaled by 0.997 (off by 3.3 times what rounding to 3 decimals can do): not
+    rounding, so it is flagged invalid, not renormalised, and named with its line and columns."""
+    repoimu_like(tmp_path / "Trial_A.csv", rate_rad_s=3.0, quat_format="{:.3f}", scale={100: 0.997})
+    campaign, counts = importer.build_campaign([tmp_path / "Trial_A.csv"], importer.read_mapping("repoimu"), "c")
+    c = counts["Trial_A"]
+    assert (c["reference_refused"], c["reference_renormalised"], c["reference_dropouts"]) == (1, 388, 2)
+    assert c["reference_refused_first"]["line"] == 103 and c["reference_refused_first"]["times_rounding"] > 2
+    assert list(np.flatnonzero(campaign.st_valid == 0)) == [50, 51, 100]
+    assert ("1 off by more than 2 times refused and flagged invalid (not rounding: the source's own values, e.g. "
+            "interpolated across a gap); the first at line 103, columns 2, 3, 4, 5: norm 0.99") in importer.report(
+                campaign, counts, "c")
+
+
+def test_reference_columns_that_hold_no_quaternion_are_refused_with_the_first_line(tmp_path):
+    """Pointed at the accelerometer (norms near 17), most rows are off unit: the file is refused whole."""
+    repoimu_like(tmp_path / "Trial_A.csv")
+    mapping = importer.read_mapping("repoimu")
+    mapping["reference"]["columns"] = [6, 7, 8, 9]
+    with pytest.raises(telemetry.TelemetryError, match=r"Trial_A.csv: line 3, columns 6, 7, 8, 9 \(reference "
+                       r"quaternion\): the reference quaternion's norm is 16.99.*as are 400 of the file's 400 quaternions. "
+                       r"Check the mapping's reference.columns"):
+        importer.build_campaign([tmp_path / "Trial_A.csv"], mapping, "c")
+
+
+def test_a_declared_gyro_range_counts_the_samples_at_it(tmp_path):
+    """``gyro.range`` in the mapping's gyro unit (rad/s, then deg/s): the rates that reach within 1 %
+    of it are counted per channel in the report."""
+    repoimu_like(tmp_path / "Trial_A.csv", rate_rad_s=0.5)
+    mapping = importer.read_mapping("repoimu")
+    mapping["gyro"] = {**mapping["gyro"], "unit": "rad/s", "range": 0.49}
+    assert importer.declared_range_rad_s(mapping) == 0.49
+    campaign, counts = importer.build_campaign([tmp_path / "Trial_A.csv"], mapping, "c")
+    at = counts["Trial_A"]["at_range"]
+    assert at == {"gyro_x": 62, "gyro_y": 0, "gyro_z": 0}
+    assert ("gyro samples within 1% of the declared range 28.07 deg/s: gyro_x 62 (the gyro clips there"
+            in importer.report(campaign, counts, "c"))
+    mapping["gyro"] = {**mapping["gyro"], "unit": "deg/s", "range": 360}
+    assert importer.declared_range_rad_s(mapping) == pytest.approx(2 * np.pi)
+    mapping["gyro"]["range"] = -1
+    with pytest.raises(telemetry.TelemetryError, match=r"gyro\.range must be a positive number"):
+        importer.declared_range_rad_s(mapping)
 
 
 def test_a_negative_reference_interval_is_refused(tmp_path):

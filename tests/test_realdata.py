@@ -11,8 +11,11 @@ import pytest
 import yaml
 
 from gyrocal import checks
+from gyrocal.checks import physics, saturation, sensing
+from gyrocal.inference import preprocess
 from gyrocal.io import importer
-from gyrocal.io.telemetry import TelemetryError
+from gyrocal.io.telemetry import TelemetryError, read_campaign
+from gyrocal.pipeline import cli
 
 from conftest import ROOT, run_campaign
 
@@ -73,20 +76,84 @@ def test_the_x_y_z_trials_with_the_reference_kept_every_second_pass_validation(t
     assert 2.0 < findings.mounting["angle_deg"] < 3.5
 
 
-def test_the_fast_trial_is_refused_for_clipping(tmp_path):
+CLIPS = (r"maneuver TStick_Test05_Trial1: gyro channel gyro_x sits flat at its peak \+416.6 deg/s for 693 samples "
+         r"\(within 1%; 25 runs of 8 or more\) and flat at its peak -421.6 deg/s for 770 samples \(within 1%; 23 runs "
+         r"of 8 or more\), changing by a median 0.0\d deg/s between samples where its noise is 0.\d\d deg/s: the gyro "
+         r"clips at its range, so the body's rotation there is not measured. Leave the maneuver out, or cut it "
+         r"before the first clipped sample, at 7.10 s")
+"""The fast trial's refusal, at any reference interval: its x gyro sits at about 420 deg/s, where
+the Xsens unit's range ends, for 1463 samples in 48 flat runs."""
+
+
+@pytest.mark.parametrize("interval", [0, 0.1, 1.0])
+def test_the_fast_trial_is_refused_for_its_x_gyro_clipping_at_any_reference_interval(interval, tmp_path):
+    """Told from the gyro alone: at 1 s the reference turns up to 336 deg between samples, which
+    used to be blamed on the channel columns (and then on the sparse reference); the gyro's
+    clipping is the cause, and the refusal says so, with the channel, rate, samples and where to cut."""
     out = tmp_path / "fast"
-    importer.import_files("repoimu", out, [DATA / "TStick_Test05_Trial1.csv"])
-    with pytest.raises(TelemetryError, match=r"clips at its range"):
+    importer.import_files("repoimu", out, [DATA / "TStick_Test05_Trial1.csv"], reference_interval_s=interval)
+    with pytest.raises(TelemetryError, match=CLIPS) as refused:
         checks.read_checked(out)
+    assert "(1 finding(s))" in str(refused.value)
 
 
-def test_the_fast_trial_with_the_reference_every_second_is_refused_as_undersampled(tmp_path):
-    """At 1 s the fast trial turns up to 336 deg between reference samples: the checks say the
-    reference is too sparse (they blamed the channel columns), and at what interval it is not."""
-    out = tmp_path / "fast_1s"
-    importer.import_files("repoimu", out, [DATA / "TStick_Test05_Trial1.csv"], reference_interval_s=1.0)
-    with pytest.raises(TelemetryError, match=r"ambiguous there.*peak rate, 424 deg/s, keep the reference at least every 0.21 s"):
-        checks.read_checked(out)
+def test_the_fast_trial_with_the_reference_every_second_is_too_sparse_for_its_motion_as_well(tmp_path):
+    """Besides the clipping, at 1 s the fast trial turns up to 336 deg between reference samples:
+    the undersampling check (asked once the rotation check fails) says at what interval it is not."""
+    campaign, _ = importer.build_campaign([DATA / "TStick_Test05_Trial1.csv"], importer.read_mapping("repoimu"),
+                                          "fast_1s", 1.0)
+    sensed = sensing.sense(preprocess.slice_maneuver(campaign, "TStick_Test05_Trial1"))
+    assert "peak rate, 424 deg/s, keep the reference at least every 0.21 s" in physics.undersampled(sensed)
+
+
+def test_only_the_fast_trial_clips_and_only_its_x_gyro(tmp_path):
+    """From the gyro alone, whatever the reference: the four trials that turn at up to 80 deg/s
+    have no flat top; the fast one's x gyro sits flat at +416.6 and -421.6 deg/s, flatter than
+    its noise by a factor of about 10, its y and z gyros (up to 42 deg/s) not at all."""
+    mapping = importer.read_mapping("repoimu")
+    clipped = {}
+    for trial in ["TStick_Test02_Trial1", "TStick_Test03_Trial1", "TStick_Test03_Trial2", "TStick_Test04_Trial1",
+                  "TStick_Test05_Trial1"]:
+        data = preprocess.slice_maneuver(importer.build_campaign([DATA / f"{trial}.csv"], mapping, "t", 1.0)[0], trial)
+        rate = data.increments / data.dt[:, None]
+        found = [p for i, c in enumerate(data.channels) for p in saturation.plateaus(c.name, rate[:, i])]
+        if found:
+            clipped[trial] = [(p.channel, p.sign, round(float(np.rad2deg(p.level_rad_s)), 1), p.samples) for p in found]
+            assert all(p.change_rad_s < 0.2 * p.noise_rad_s for p in found)
+    assert clipped == {"TStick_Test05_Trial1": [("gyro_x", 1, 416.6, 693), ("gyro_x", -1, 421.6, 770)]}
+
+
+@pytest.mark.parametrize("interval, renormalised", [(0.2, [336, 351, 325]), (0.1, [663, 688, 662])])
+def test_the_x_y_z_trials_imported_at_a_fine_reference_interval_pass_validate(interval, renormalised, tmp_path,
+                                                                              capsys):
+    """The importer writes unit quaternions: those off 1 by more than 1e-6 are renormalised, as the
+    5 significant digits RepoIMU prints explain their error (up to 1.4 times what that rounding can
+    do at these intervals), and counted in its report; validate accepts the result."""
+    out = tmp_path / "tstick"
+    files = [str(DATA / f"{t}.csv") for t in TRIALS]
+    assert cli.main(["import", "repoimu", str(out), *files, "--reference-interval", str(interval)]) == 0
+    report = capsys.readouterr().out
+    for n in renormalised:
+        assert f"reference quaternions printed to 5 significant digits: {n} renormalised" in report
+    assert report.count("none off by more than 2 times") == 3
+    campaign = read_campaign(out)
+    assert campaign.st_renormalised == 0 and (campaign.st_valid == 1).all()
+    assert np.abs(np.linalg.norm(campaign.st_quat, axis=1) - 1).max() < 1e-12
+    assert cli.main(["validate", str(out)]) == 0
+    assert "campaign tstick: OK" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("interval, refused, line", [(0, 1032, 702), (0.1, 106, 703), (1.0, 10, 703)])
+def test_the_fast_trials_quaternions_off_unit_beyond_their_digits_are_refused_as_samples(interval, refused, line):
+    """The fast trial's Vicon quaternions dip below unit norm where the wand turns fastest (to 0.99918,
+    133 times what rounding to 5 digits can do): not rounding, so they are flagged invalid and named,
+    not renormalised into attitudes."""
+    campaign, counts = importer.build_campaign([DATA / "TStick_Test05_Trial1.csv"], importer.read_mapping("repoimu"),
+                                               "fast", interval)
+    c = counts["TStick_Test05_Trial1"]
+    assert (c["reference_refused"], c["reference_refused_first"]["line"]) == (refused, line)
+    assert c["reference_times_rounding_max"] <= importer.PRECISION_MARGIN
+    assert int((campaign.st_valid == 0).sum()) == refused
 
 
 def test_the_reference_quaternions_are_unit_and_scalar_last(xyz):

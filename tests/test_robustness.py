@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from gyrocal import checks
-from gyrocal.checks import outliers, physics, sampling, sensing
+from gyrocal.checks import outliers, physics, sampling, saturation, sensing
 from gyrocal.checks.fit import EstimateError
 from gyrocal.inference import preprocess
 from gyrocal.io.telemetry import read_campaign
@@ -341,13 +341,13 @@ def sensed_turn(clip_rad_s=None, seed=0):
 @pytest.mark.parametrize("seed", range(5))
 def test_saturation_is_not_called_on_an_axis_that_only_sees_noise(seed):
     findings = checks.Findings()
-    assert not physics.saturation_findings(sensed_turn(seed=seed), 0.02, findings)
+    assert not saturation.reference_evidence(sensed_turn(seed=seed), 0.02, findings)
     assert findings.errors == []
 
 
 def test_a_gyro_clipped_below_the_turn_rate_is_refused_with_its_count():
     findings = checks.Findings()
-    assert physics.saturation_findings(sensed_turn(clip_rad_s=0.4), 0.02, findings)
+    assert saturation.reference_evidence(sensed_turn(clip_rad_s=0.4), 0.02, findings)
     assert "2000 gyro samples about roll" in findings.errors[0] and "1.250 times as fast" in findings.errors[0]
 
 

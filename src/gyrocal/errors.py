@@ -18,5 +18,5 @@ class InputError(ValueError):
     @classmethod
     def at(cls, path, what: str, where: str = "", todo: str = "") -> "InputError":
         """The error for ``what`` is wrong at ``where`` in the file ``path``, and what to do."""
-        message = f"{path}: " + (f"{where}: " if where else "") + what + (f". {todo}" if todo else "")
+        message = f"{path}: " + (f"{where}: " if where else "") + what + (f". {todo[:1].upper()}{todo[1:]}" if todo else "")
         return cls(message, path=path, where=where, todo=todo)

@@ -11,6 +11,7 @@ import threading
 import time
 from pathlib import Path
 
+from gyrocal.errors import InputError as _InputError
 from gyrocal.io import scenario as _scenario
 from gyrocal.pipeline.steps import REFUSED as _REFUSED
 from gyrocal.pipeline.paths import CampaignPaths as _CampaignPaths
@@ -23,7 +24,7 @@ def _user_campaign(directory):
 
     try:
         meta = _telemetry.read_meta(directory)
-    except _telemetry.TelemetryError as refused:
+    except _InputError as refused:
         sys.exit(f"gyrocal: the campaign was refused:\n{refused}")
     return meta["name"], {"dir": str(directory), "maneuvers": [m.id for m in meta["maneuvers"]], "simulated": False}
 
@@ -53,7 +54,10 @@ elif config["telemetry"]:
 else:
     if not Path(config["scenario"]).exists() and Path(workflow.basedir, config["scenario"]).exists():
         config["scenario"] = str(Path(workflow.basedir, config["scenario"]))
-    _meta = _scenario.peek(config["scenario"])
+    try:
+        _meta = _scenario.peek(config["scenario"])
+    except _InputError as refused:
+        sys.exit(f"gyrocal: the scenario was refused:\n{refused}")
     CAMPAIGNS[_meta["name"]] = {"dir": _CampaignPaths(results_of(_meta["name"])).simulated,
                                 "maneuvers": _meta["maneuvers"], "simulated": True}
 

@@ -20,6 +20,7 @@ rule preprocess:
     params:
         campaign_dir=campaign_dir,
         results=campaign_results,
+        block_s=config["sampler"]["block_s"],  # validation refuses a maneuver too short for the posterior's blocks
     threads: 2  # its figures are drawn in parallel; it runs alone, before the models split the cores
     conda:
         "../envs/gyrocal.yaml"

@@ -4,5 +4,6 @@ from gyrocal.pipeline.steps import common, diagnostics
 
 p = snakemake.params
 common.start(snakemake.log[0])
-diagnostics.run(CampaignPaths(p.results), p.maneuvers, snakemake.wildcards.model, DiagnosticsSettings(**p.settings))
+with common.refusal():
+    diagnostics.run(CampaignPaths(p.results), p.maneuvers, snakemake.wildcards.model, DiagnosticsSettings(**p.settings))
 common.finish()

@@ -4,5 +4,6 @@ from gyrocal.pipeline.steps import common, point_estimate
 
 p = snakemake.params
 common.start(snakemake.log[0])
-point_estimate.run(CampaignPaths(p.results), p.maneuvers, snakemake.wildcards.model, PointEstimateSettings(**p.settings))
+with common.refusal():
+    point_estimate.run(CampaignPaths(p.results), p.maneuvers, snakemake.wildcards.model, PointEstimateSettings(**p.settings))
 common.finish()

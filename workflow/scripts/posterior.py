@@ -7,5 +7,5 @@ paths = CampaignPaths(p.results)
 common.start(snakemake.log[0])
 with common.refusal():
     posterior.run(paths, p.maneuvers, model, PosteriorSettings(**p.settings))
-calibrate.run(paths, p.maneuvers, model)
+    calibrate.run(paths, p.maneuvers, model)
 common.finish()

@@ -6,7 +6,7 @@ paths, campaign_dir = CampaignPaths(snakemake.params.results), snakemake.params.
 common.start(snakemake.log[0])
 with common.refusal():
     campaign = telemetry.read_campaign(campaign_dir)
-    validate.run(campaign_dir, paths, campaign)
-ids = preprocess.run(campaign_dir, paths, processes=snakemake.threads, campaign=campaign)
-classic.run(paths, ids)
+    validate.run(campaign_dir, paths, campaign, snakemake.params.block_s)
+    ids = preprocess.run(campaign_dir, paths, processes=snakemake.threads, campaign=campaign)
+    classic.run(paths, ids)
 common.finish()

@@ -8,11 +8,15 @@ star-tracker outliers are screened (`outliers`). Each finding says what was foun
 likely cause. The thresholds come from the physical bounds the effects declare and from the
 noise measured in the data themselves, not from one file."""
 
+import numpy as np
+
 from gyrocal.checks.finding import Findings
+from gyrocal.checks.fit import EstimateError, check_blocks
 from gyrocal.checks.mounting import align
 from gyrocal.checks.outliers import EXCURSION_MAX_S, outlier_distances, screen, trend_distances
-from gyrocal.checks.physics import rotation_findings, saturation_findings
-from gyrocal.checks.sampling import clock_findings, gap_findings
+from gyrocal.checks.physics import rotation_findings
+from gyrocal.checks.sampling import clock_findings, extreme_findings, gap_findings, interval_findings
+from gyrocal.checks.saturation import saturation_findings
 from gyrocal.checks.sensing import physical_limits, sense
 from gyrocal.inference import classic, preprocess
 from gyrocal.io.telemetry import UNIT_NORM_TOL, Campaign, TelemetryError, read_campaign
@@ -21,23 +25,30 @@ from gyrocal.io.telemetry import summary as format_summary
 __all__ = ["check", "read_checked", "summary"]
 
 
-def check(campaign: Campaign) -> Findings:
+def check(campaign: Campaign, block_s: float | None = None) -> Findings:
     """Every physical check of a campaign. Outliers are screened with a threshold that keeps
     the expected false alarms per campaign at `OUTLIER_FALSE_ALARMS`; they are listed here
-    and left out by `preprocess`."""
+    and left out by `preprocess`. With ``block_s`` (the sampler's leave-one-block-out block), a
+    maneuver too short for it is refused here, as the posterior step would refuse it later."""
     findings = Findings()
+    if extreme_findings(campaign, findings) or interval_findings(campaign, findings):
+        return findings
     gap_findings(campaign, findings)
     limits = physical_limits(campaign.channels)
-    screened = []
+    range_rad_s = np.deg2rad(campaign.gyro["range_deg_s"]) if "range_deg_s" in campaign.gyro else None
+    screened, sliced = [], []
     for m in campaign.maneuvers:
         try:
             data = preprocess.slice_maneuver(campaign, m.id)
         except TelemetryError as exc:
             findings.refuse("slice", str(exc))
             continue
-        sensed = sense(data)
-        if saturation_findings(sensed, limits[0], findings) or not rotation_findings(campaign, sensed, limits, findings):
+        sliced.append(data)
+        every_set = [sense(data, s) for s in range(len(data.sets))]  # redundant channels too
+        clipped = any(saturation_findings(sensed, limits[0], findings, range_rad_s) for sensed in every_set)  # once
+        if clipped or not all([rotation_findings(campaign, sensed, limits, findings) for sensed in every_set]):
             continue
+        sensed = every_set[0]
         clock_findings(sensed, findings)
         missing = classic.missing_holds(data)
         if data.direction == "both":
@@ -49,18 +60,23 @@ def check(campaign: Campaign) -> Findings:
                                      "fit does)")
         screened.append((data, *outlier_distances(sensed), *trend_distances(sensed)))
     screen(campaign, screened, findings)
+    if block_s and sliced:
+        try:
+            check_blocks(sliced, block_s)
+        except EstimateError as short:
+            findings.refuse("blocks", str(short))
     return findings
 
 
 
 
-def read_checked(directory, campaign=None):
+def read_checked(directory, campaign=None, block_s: float | None = None):
     """Read a campaign (format, `telemetry.read_campaign`; or take ``campaign``, the directory's
-    as that read it), turn its reference into body axes (`align`) and check its physics; every
-    error found is raised at once in one `TelemetryError`. Returns the aligned campaign and its
-    `Findings`."""
-    campaign, mounting = align(read_campaign(directory) if campaign is None else campaign)
-    findings = check(campaign)
+    as that read it), turn its reference into body axes (`align`) and check its physics (`check`,
+    with the sampler's ``block_s`` where given); every error found is raised at once in one
+    `TelemetryError`. Returns the aligned campaign and its `Findings`."""
+    campaign, mounting, refused = align(read_campaign(directory) if campaign is None else campaign)
+    findings = check(campaign, block_s) if refused is None else Findings([refused])  # the rest would check a wrong frame
     findings.mounting = mounting
     if findings.errors:
         listed = "\n".join(f"  - {e}" for e in findings.errors)

@@ -14,12 +14,11 @@ from gyrocal.checks.sensing import (
     nominal_body_increments,
     reference_noise_rad,
 )
-from gyrocal.inference.identification import DETECTION_SD
 from gyrocal.io.telemetry import Campaign
 from gyrocal.model.units import AXES, AXIS_INDEX, rad_to_arcsec
 
 __all__ = [
-    "ALTERNATIVES", "CLIP_BAND", "MAX_TURN_BETWEEN_REFERENCE_DEG", "rotation_findings", "saturation_findings",
+    "ALTERNATIVES", "MAX_TURN_BETWEEN_REFERENCE_DEG", "rotation_findings",
     "undersampled"
 ]
 
@@ -40,7 +39,7 @@ def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Find
     a = AXIS_INDEX[m.axis]
     sf_bound, mis_bound, sf_sd = limits
     d_st, dt, d_gyro = sensed.d_st, sensed.dt, sensed.d_gyro
-    where = f"maneuver {m.id} ({m.turn})"
+    where = sensed.where
     min_angle = reference_noise_rad(sensed) / sf_sd
     blocked_dt, blocked_gyro, blocked_st = blocked_sums(dt, d_gyro, d_st)
     fit = fit_rotation(blocked_gyro, blocked_st, blocked_dt, a)
@@ -97,9 +96,15 @@ def _diagnose(campaign, sensed: Sensed, a, sf_bound, mis_bound) -> str:
     for factor, cause in candidates:
         if consistent(d_gyro / factor, d_st, dt, a, sf_bound, mis_bound):
             return f"the gyro rotation is {scale:.4g} times the star tracker's: {cause}"
+    negated = d_gyro * np.where(np.arange(3) == a, -1.0, 1.0)
+    if consistent(negated, d_st, dt, a, sf_bound, mis_bound):
+        channel = data.sets[sensed.set_index][a]
+        signed = float(d_gyro[:, a] @ d_st[:, a] / (d_st[:, a] @ d_st[:, a]))
+        return (f"channel {channel} turns opposite to the star tracker about {AXES[a]} ({signed:+.4g} times its "
+                f"rotation): its sign is flipped. Negate its column in gyro.csv, or check its axis in campaign.yaml")
     i0 = int(np.searchsorted(campaign.gyro_time, data.gyro_time[0]))
     raw = campaign.increments(slice(i0, i0 + len(data.gyro_time)))
-    differenced = gyro_at_st(data, nominal_body_increments(data, np.diff(raw, axis=0)))
+    differenced = gyro_at_st(data, nominal_body_increments(data, np.diff(raw, axis=0), sensed.set_index))
     if consistent(differenced, d_st, dt, a, sf_bound, mis_bound):
         return ("the gyro columns hold a cumulative angle, not the increment since the previous row: "
                 "their differences match the star tracker")
@@ -137,40 +142,3 @@ def undersampled(sensed: Sensed) -> str:
             "deg): the reference's rotation between samples is ambiguous there, so its rotation cannot be checked "
             f"against the gyro's. At the gyro's peak rate, {peak_deg_s:.0f} deg/s, keep the reference at least every "
             f"{MAX_TURN_BETWEEN_REFERENCE_DEG / peak_deg_s:.2g} s (gyrocal import --reference-interval)")
-
-
-CLIP_BAND = 0.05
-"""Gyro samples within this share of a maneuver's peak rate are tested for clipping."""
-
-
-def saturation_findings(sensed: Sensed, sf_bound, findings: Findings) -> bool:
-    """A gyro that reaches its range clips: where its rate sits near its peak, the reference turns
-    faster than the gyro says, in the gyro's direction, by more than any scale error and more
-    than `DETECTION_SD` times the noise of as many independent reference intervals (on an axis
-    that barely turns, the "peak" is noise; conservative, since over consecutive intervals the
-    reference's noise partly cancels). Such a maneuver is refused, with the count of clipped samples;
-    it is never fitted silently. Returns whether it clipped."""
-    data = sensed.data
-    rate = np.abs(sensed.body / data.dt[:, None])
-    at_st = rate[data.st_interval()[0][1:]]
-    for a in range(3):
-        peak = rate[:, a].max()
-        near = at_st[:, a] >= (1 - CLIP_BAND) * peak
-        turned_gyro = np.abs(sensed.d_gyro[near, a]).sum()
-        if near.sum() < 5 or turned_gyro == 0:
-            continue
-        turned_st = np.sum(np.sign(sensed.d_gyro[near, a]) * sensed.d_st[near, a])
-        noise = 1.4826 * np.median(np.abs(np.diff(sensed.d_st[:, a]))) / np.sqrt(2)
-        excess = turned_st / turned_gyro
-        shortfall = turned_st - (1 + 2 * sf_bound) * turned_gyro
-        if shortfall > DETECTION_SD * noise * np.sqrt(near.sum()):
-            clipped = int((rate[:, a] >= (1 - CLIP_BAND) * peak).sum())
-            findings.refuse("saturation",
-                f"maneuver {data.id}: {clipped} gyro samples about {AXES[a]} sit within {CLIP_BAND:.0%} of the peak "
-                f"rate {np.rad2deg(peak):.1f} deg/s, where the reference turns {excess:.3f} times as fast: the gyro "
-                "clips at its range, so its rotation there is not measured. Leave the maneuver out, or cut it "
-                "before the first clipped sample")
-            return True
-    return False
-
-

@@ -9,8 +9,18 @@ from gyrocal.io.telemetry import Campaign
 from gyrocal.model.units import AXIS_INDEX, rad_to_arcsec
 
 __all__ = [
-    "CLOCK_SEARCH_POINTS", "GAP_FACTOR", "MAX_CLOCK_SEARCH_S", "SHORT_GAP_FACTOR", "clock_findings", "clock_offset_s",
-    "gap_findings", "lost_increments"
+    "CLOCK_SEARCH_POINTS",
+    "GAP_FACTOR",
+    "MAX_CLOCK_SEARCH_S",
+    "MAX_GYRO_RATE_RAD_S",
+    "MAX_GYRO_STEP_S",
+    "SHORT_GAP_FACTOR",
+    "clock_findings",
+    "clock_offset_s",
+    "extreme_findings",
+    "gap_findings",
+    "interval_findings",
+    "lost_increments"
 ]
 
 GAP_FACTOR = 3.0
@@ -23,6 +33,70 @@ MAX_CLOCK_SEARCH_S = 60.0
 CLOCK_SEARCH_POINTS = 400
 """Shifts of the clock-offset search's coarse pass; a fine pass at a quarter of a star-tracker
 step follows about its best (the misfit varies smoothly with the shift)."""
+
+
+MAX_GYRO_RATE_RAD_S = 100.0
+"""No gyro of a spacecraft or an IMU senses a rate this fast (5,700 deg/s; a MEMS gyro's range is at most
+a few thousand deg/s, a DTG's tens): an increment that implies it is a corrupt value, not a rotation."""
+
+
+def extreme_findings(campaign: Campaign, findings: Findings) -> bool:
+    """Gyro increments no gyro can sense (`MAX_GYRO_RATE_RAD_S`): inside a maneuver a refusal naming
+    the line, the channel and the value (propagating them would only fail deep in the kinematics);
+    outside every maneuver, where nothing reads them, a warning naming them. Returns whether any
+    maneuver holds one."""
+    inc, time = campaign.increments(), campaign.gyro_time
+    with np.errstate(over="ignore"):  # an overflow is itself the finding
+        rate = np.abs(inc[1:]) / np.diff(time)[:, None]
+    bad_rows, bad_cols = np.nonzero(~(rate <= MAX_GYRO_RATE_RAD_S))
+    if not bad_rows.size:
+        return False
+    rows = bad_rows + 1
+    lines = campaign.lines["gyro.csv"][rows]
+    inside = np.zeros(rows.size, dtype=bool)
+    for m in campaign.maneuvers:
+        inside |= (time[rows] > m.t_start) & (time[rows - 1] < m.t_end)
+    def listed(mask):
+        shown = [f"line {lines[k]} ({campaign.channel_names[bad_cols[k]]} = {inc[rows[k], bad_cols[k]]:.6g} rad)"
+                 for k in np.flatnonzero(mask)[:5]]
+        return ", ".join(shown) + (f" and {int(mask.sum()) - 5} more" if mask.sum() > 5 else "")
+    if inside.any():
+        findings.refuse("sampling", f"gyro.csv: {listed(inside)}: an increment faster than any gyro senses "
+                        f"({MAX_GYRO_RATE_RAD_S:g} rad/s) inside a maneuver: a corrupt value. Correct or remove "
+                        "the row, or cut the maneuver before it")
+    if (~inside).any():
+        findings.warn("sampling", f"gyro.csv: {listed(~inside)}: an increment faster than any gyro senses, outside "
+                      "every maneuver (not used, but a sign of corrupt data)")
+    return bool(inside.any())
+
+
+MAX_GYRO_STEP_S = 1.0
+"""A gyro is read at least once a second (a DTG's or a MEMS triad's rate is tens to hundreds of Hz):
+a longer median step says the times are not in seconds."""
+
+
+def interval_findings(campaign: Campaign, findings: Findings) -> bool:
+    """The sample intervals make sense: the times are seconds (a median gyro step over
+    `MAX_GYRO_STEP_S`: milliseconds?), and the gyro is read at least as often as the reference,
+    since the error model integrates the gyro between reference samples (a sparser gyro would
+    interpolate the rotation, and its intervals would be too narrow). Returns whether it refused."""
+    gyro_step = float(np.median(np.diff(campaign.gyro_time)))
+    st_step = float(np.median(np.diff(campaign.st_time)))
+    if gyro_step > st_step * (1 + 1e-6):
+        findings.refuse("sampling", f"the gyro is read every {gyro_step:.4g} s (median), the star tracker every "
+                        f"{st_step:.4g} s: gyrocal integrates the gyro between reference samples and needs at least one "
+                        "gyro sample per reference interval. Thin the reference (gyrocal import --reference-interval) "
+                        "or give the gyro at its full rate", figure=gyro_step, threshold=st_step, unit="s")
+        return True
+    if gyro_step > MAX_GYRO_STEP_S:
+        thousandth = gyro_step * 1e-3 <= MAX_GYRO_STEP_S and st_step > 10 * MAX_GYRO_STEP_S
+        cause = (f"times in milliseconds? (x 1e-3: a {gyro_step * 1e-3:.4g} s step)" if thousandth
+                 else "too sparse to propagate an attitude")
+        findings.refuse("sampling", f"gyro.csv: the median step between gyro samples is {gyro_step:.6g} s: {cause}. The "
+                        "contract's times are seconds (docs/interface.md section 3)", figure=gyro_step,
+                        threshold=MAX_GYRO_STEP_S, unit="s")
+        return True
+    return False
 
 
 def gap_findings(campaign: Campaign, findings: Findings):
@@ -116,9 +190,12 @@ def clock_offset_s(sensed: Sensed) -> float:
 
 
 def clock_findings(sensed: Sensed, findings: Findings):
-    """A clock offset of more than two samples (of the slower sensor) is an error. A shorter
-    one whose error at the peak rate exceeds `DETECTION_SD` star-tracker sd is a warning:
-    a latency the criticism loop should find (effect ``st_latency``)."""
+    """A clock offset of more than two samples (of the slower sensor) is an error. A shorter one is
+    a warning where the error it leaves over the maneuver's turning samples (the offset times the
+    rate, on each) stands out of the reference's noise by `DETECTION_SD` standard errors and the
+    offset is at least half a gyro sample (finer, it is within the time tags' resolution): a
+    latency of one gyro sample shows over a long slew. The criticism loop should then find it (effect
+    ``st_latency``)."""
     data = sensed.data
     offset = clock_offset_s(sensed)
     limit = 2.0 * max(float(np.median(np.diff(data.st_time))), float(np.median(data.dt)))
@@ -128,12 +205,15 @@ def clock_findings(sensed: Sensed, findings: Findings):
             f"{where} {offset:+.3g} s (more than two samples, {limit:.3g} s): are the two clocks "
             "synchronised, and is each time the end of its sample?")
         return
-    d_st = sensed.d_st
     noise_rad = reference_noise_rad(sensed)
-    peak_rate = np.max(np.abs(d_st[:, AXIS_INDEX[data.axis]]) / sensed.dt)
-    if abs(offset) * peak_rate > DETECTION_SD * noise_rad:
+    rate = np.abs(sensed.d_st[:, AXIS_INDEX[data.axis]]) / sensed.dt
+    peak_rate = float(np.max(rate))
+    turning = int(np.sum(rate > 0.5 * peak_rate))
+    z = abs(offset) * peak_rate * np.sqrt(max(turning, 1)) / noise_rad
+    if z > DETECTION_SD and abs(offset) >= 0.5 * float(np.median(data.dt)):
         findings.warn("clock",
-            f"{where} {offset:+.3g} s, {rad_to_arcsec(abs(offset) * peak_rate):.0f} arcsec at the peak rate: "
-            "a latency or clock offset the baseline model lacks (the library effect st_latency has it)")
+            f"{where} {offset:+.3g} s, {rad_to_arcsec(abs(offset) * peak_rate):.0f} arcsec at the peak rate on "
+            f"{turning} turning samples ({z:.0f} sd of the reference's noise): a latency or clock offset the "
+            "baseline model lacks (the library effect st_latency has it)", figure=float(offset), unit="s")
 
 

@@ -47,19 +47,19 @@ def interval_rotations(st_quat) -> np.ndarray:
 
 
 def gyro_at_st(data, increments) -> np.ndarray:
-    """(M-1, 3) summed body increments of the first channel set between star-tracker samples."""
+    """(M-1, 3) summed body increments between star-tracker samples."""
     k, frac = data.st_interval()
     cumulative = cumulative_at_st(increments, k, frac)
     return np.diff(cumulative, axis=0)
 
 
-def nominal_body_increments(data, raw) -> np.ndarray:
-    """Body increments of the first channel set from raw channel increments (nominal model),
-    so a reinterpretation of the raw columns can be tried."""
-    first = data.sets[0]
+def nominal_body_increments(data, raw, set_index: int = 0) -> np.ndarray:
+    """Body increments of one channel set (the in-loop one by default) from raw channel increments
+    (nominal model), so a reinterpretation of the raw columns can be tried."""
+    channel_set = data.sets[set_index]
     index = {c.name: i for i, c in enumerate(data.channels)}
     zeros = ch.ChannelParams.zeros(data.channels)
-    return ch.solve_body(raw[:, [index[n] for n in first]], zeros.subset(first))
+    return ch.solve_body(raw[:, [index[n] for n in channel_set]], zeros.subset(channel_set))
 
 
 @dataclass
@@ -69,13 +69,22 @@ class Sensed:
     data: object
     """The maneuver (`preprocess.ManeuverData`)."""
     body: np.ndarray
-    """(K, 3) body increments of the first channel set at nominal parameters (rad)."""
+    """(K, 3) body increments of the channel set at nominal parameters (rad)."""
     d_gyro: np.ndarray
     """(M-1, 3) those increments summed between star-tracker samples (rad)."""
     d_st: np.ndarray
     """(M-1, 3) the star tracker's rotation between its samples, body axes (rad)."""
     dt: np.ndarray
     """(M-1,) star-tracker sample intervals (s)."""
+    set_index: int = 0
+    """Which channel set of ``data.sets`` the gyro side is (0: the in-loop one)."""
+
+    @property
+    def where(self) -> str:
+        """The maneuver, and the channel set where it is not the in-loop one, as findings name them."""
+        m = self.data
+        turn = f"both {m.axis}" if m.direction == "both" else f"{m.direction}{m.axis}"
+        return f"maneuver {m.id} ({turn})" + (f", channels {'+'.join(m.sets[self.set_index])}" if self.set_index else "")
 
     @cached_property
     def error(self) -> np.ndarray:
@@ -90,10 +99,12 @@ class Sensed:
         return neighbour_residual(self.error)
 
 
-def sense(data) -> Sensed:
-    """Both sensors' rotations of one maneuver, for every check of it."""
-    body = nominal_body_increments(data, data.increments)
-    return Sensed(data, body, gyro_at_st(data, body), interval_rotations(data.st_quat), np.diff(data.st_time))
+def sense(data, set_index: int = 0) -> Sensed:
+    """Both sensors' rotations of one maneuver, the gyros' through channel set ``set_index``, for
+    every check of it."""
+    body = nominal_body_increments(data, data.increments, set_index)
+    return Sensed(data, body, gyro_at_st(data, body), interval_rotations(data.st_quat), np.diff(data.st_time),
+                  set_index)
 
 
 def fit_rotation(d_gyro, d_st, dt, axis: int, bias=True) -> RotationFit:

@@ -117,7 +117,9 @@ def sampler_record(post, summary, sampler_cfg: dict, seed: int) -> dict:
 
 
 def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
-    """Pointwise leave-one-block-out log-likelihood, the fit table and predictive draws."""
+    """Pointwise leave-one-block-out log-likelihood, the fit table and predictive draws, maneuver by
+    maneuver; each maneuver's linearisation and noise are taken out of ``post`` on the way
+    (`posterior.Posterior.take_maneuvers`)."""
     p = post.n_params
     n_chain, n_draw = kept.shape[:2]
     flat = kept.reshape(-1, kept.shape[-1])
@@ -128,7 +130,7 @@ def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
     loglik, block_names, fit_tables = [], [], []
     pp_values, obs_values, sample_maneuver, sample_time = [], [], [], []
     zeros = ch.ChannelParams.zeros(maneuvers[0].channels)
-    for data, lin, nz in zip(maneuvers, post.lins, post.noises):
+    for data, (lin, nz) in zip(maneuvers, post.take_maneuvers(), strict=True):
         wm = predictive.WhitenedManeuver(nz, ratios)
         blocks = predictive.block_index(lin, data.st_time, sampler_cfg["block_s"])
         loglik.append(predictive.leave_block_out_loglik(lin, wm, dtheta, scale2, blocks))
@@ -176,6 +178,7 @@ def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
 def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
     """Everything the posterior step writes: ``(idata, summary, fit, sampler record)``.
 
+    ``post``'s linearisations and noise structures are used up (`_fit_and_predictive`).
     The summary and convergence use every draw; the InferenceData keeps
     ``loglik_draws`` evenly spaced draws per ensemble, with the pointwise
     log-likelihood per ``block_s`` block and ``predictive_draws`` predictive draws.

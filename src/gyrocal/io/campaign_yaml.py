@@ -1,6 +1,8 @@
 """``campaign.yaml`` (docs/interface.md section 3): its channels, maneuvers and noise knowledge,
-parsed and checked. Bad input is refused with a `TelemetryError` naming the file, the key and
-what is wrong."""
+parsed and checked. The file is read by `gyrocal.io.yamlfile` (no aliases, no duplicate keys, a
+bounded size) and checked against ``gyrocal/io/schemas/campaign.schema.json``, then by hand for
+what a schema cannot say. Bad input is refused with a `TelemetryError` naming the file, the key
+(and its line) and what is wrong."""
 
 import itertools
 import re
@@ -8,9 +10,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import yaml
 
-from gyrocal.errors import InputError
+from gyrocal.io.yamlfile import TelemetryError, check_schema, read_yaml
 from gyrocal.model.channels import Channel, channel_sets
 from gyrocal.model.units import AXES
 
@@ -19,6 +20,7 @@ __all__ = [
     "DIRECTIONS",
     "NAME_PATTERN",
     "NORM_REFUSE_TOL",
+    "RESERVED_NAMES",
     "Maneuver",
     "TelemetryError",
     "default_name",
@@ -29,14 +31,15 @@ __all__ = [
 NORM_REFUSE_TOL = 1e-3
 """Further than this from 1 a quaternion is refused: rounding to as few as three decimals stays
 inside, a wrong column does not."""
-NAME_PATTERN = re.compile(r"^[A-Za-z0-9_]+$")
-CHANNEL_PATTERN = re.compile(r"^dtg(\d+)_(roll|pitch|yaw)$")
+NAME_PATTERN = re.compile(r"\A[A-Za-z0-9_]+\Z")
+r"""A campaign name, maneuver id or channel name, matched whole (`re.fullmatch`; ``\Z``, unlike ``$``,
+does not match before a final newline, so ``.match`` is whole too): ``evil\n`` is refused."""
+CHANNEL_PATTERN = re.compile(r"\A(?:dtg(\d+)_(roll|pitch|yaw))\Z")
+RESERVED_NAMES = ("fleet", "plan", "study")
+"""Names no campaign may take: the folders ``results/fleet`` (a fleet's summary), ``results/plan``
+(``gyrocal plan``'s default) and ``results/study`` (the validation study's default)."""
 DIRECTIONS = ("+", "-", "both")
 """A maneuver turns one way, the other, or both (several turns each way, no inertial holds)."""
-
-
-class TelemetryError(InputError):
-    """Bad campaign input; the message names the file, the row or column and the fault."""
 
 
 @dataclass(frozen=True)
@@ -70,7 +73,7 @@ def _parse_channels(path, raw) -> tuple:
     channels = []
     for name, entry in raw.items():
         where = f"channels.{name}"
-        if not NAME_PATTERN.match(str(name)):
+        if not NAME_PATTERN.fullmatch(str(name)):
             fail(path, f"{where}: a channel name may hold only letters, digits and '_'")
         if not isinstance(entry, dict) or "axis" not in entry or set(entry) - {"dtg", "axis"}:
             fail(path, f"{where}: needs the key 'axis' (roll, pitch or yaw) and may have 'dtg' (the DTG's number)")
@@ -79,7 +82,7 @@ def _parse_channels(path, raw) -> tuple:
         dtg = entry.get("dtg")
         if dtg is not None and (not isinstance(dtg, int) or isinstance(dtg, bool)):
             fail(path, f"{where}.dtg: must be a whole number, got {dtg!r}")
-        match = CHANNEL_PATTERN.match(str(name))
+        match = CHANNEL_PATTERN.fullmatch(str(name))
         if match and (int(match.group(1)), match.group(2)) != (dtg, entry["axis"]):
             fail(path, f"{where}: a name dtg<N>_<axis> needs dtg: N and that axis; got dtg/axis "
                         f"({dtg}, {entry['axis']})")
@@ -87,7 +90,10 @@ def _parse_channels(path, raw) -> tuple:
     return tuple(channels)
 
 
-def _parse_maneuvers(path, raw, channel_names) -> tuple:
+def _parse_maneuvers(path, raw, channels) -> tuple:
+    """The maneuvers, with their in-loop channels (any names: each channel's axis is its ``axis:``)."""
+    axis_of = {c.name: c.axis for c in channels}
+    channel_names = list(axis_of)
     if not isinstance(raw, list) or not raw:
         fail(path, "'maneuvers' must be a non-empty list")
     allowed = {"id", "axis", "direction", "t_start", "t_end", "in_loop"}
@@ -104,7 +110,7 @@ def _parse_maneuvers(path, raw, channel_names) -> tuple:
             fail(path, f"{where}: unknown key(s) {sorted(set(m) - allowed)}")
         mid = str(m["id"])
         where = f"maneuvers[{i}] ({mid})"
-        if not NAME_PATTERN.match(mid):
+        if not NAME_PATTERN.fullmatch(mid):
             fail(path, f"{where}.id: only letters, digits and '_' are allowed")
         if mid in seen:
             fail(path, f"{where}.id: duplicate maneuver id")
@@ -124,9 +130,10 @@ def _parse_maneuvers(path, raw, channel_names) -> tuple:
             if name not in channel_names:
                 fail(path, f"{where}.in_loop: unknown channel {name!r} (channels: {channel_names})")
         if in_loop:
-            axes = sorted(name.split("_", 1)[1] for name in in_loop)
+            axes = sorted(axis_of[name] for name in in_loop)
             if axes != sorted(AXES):
-                fail(path, f"{where}.in_loop: needs one channel per axis roll, pitch, yaw; got {list(in_loop)}")
+                fail(path, f"{where}.in_loop: needs one channel per axis roll, pitch, yaw; got {list(in_loop)} "
+                           f"(axes {[axis_of[name] for name in in_loop]})")
         maneuvers.append(Maneuver(mid, m["axis"], str(m["direction"]), t0, t1, in_loop))
     ordered = sorted(maneuvers, key=lambda m: m.t_start)
     for first, second in itertools.pairwise(ordered):
@@ -142,15 +149,9 @@ def read_meta(directory) -> dict:
     if not directory.is_dir():
         raise TelemetryError(f"{directory}: campaign directory not found")
     cpath = directory / "campaign.yaml"
-    if not cpath.exists():
-        fail(cpath, "file not found")
-    try:
-        meta = yaml.safe_load(cpath.read_text())
-    except yaml.YAMLError as exc:
-        hint = ""
-        if "sequence entries are not allowed" in str(exc):
-            hint = ('. A bare - starts a YAML list: quote a direction, direction: "-"')
-        fail(cpath, f"not valid YAML: {exc}{hint}")
+    document = read_yaml(cpath)
+    check_schema(document, "campaign", label_ids=True)
+    meta = document.data
     if not isinstance(meta, dict):
         fail(cpath, "must be a mapping with 'channels' and 'maneuvers'")
     unknown = set(meta) - {"name", "channels", "star_tracker", "gyro", "maneuvers"}
@@ -160,7 +161,6 @@ def read_meta(directory) -> dict:
         if key not in meta:
             fail(cpath, f"missing key '{key}'")
     channels = _parse_channels(cpath, meta["channels"])
-    names = [c.name for c in channels]
     try:
         channel_sets(channels)
     except ValueError as exc:
@@ -170,16 +170,22 @@ def read_meta(directory) -> dict:
             fail(cpath, f"{key}: must be a mapping of its noise knowledge (e.g. {key}: "
                          f"{{{'arw_deg_sqrt_h' if key == 'gyro' else 'sigma_cross_arcsec'}: ...}}), got {meta[key]!r}")
     gyro = meta.get("gyro") or {}
-    if set(gyro) - {"arw_deg_sqrt_h"}:
-        fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - {'arw_deg_sqrt_h'})}")
-    if "arw_deg_sqrt_h" in gyro and not _positive_number(gyro["arw_deg_sqrt_h"]):
-        fail(cpath, "gyro.arw_deg_sqrt_h: must be a positive number")
+    if set(gyro) - {"arw_deg_sqrt_h", "range_deg_s"}:
+        fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - {'arw_deg_sqrt_h', 'range_deg_s'})}")
+    for key in ("arw_deg_sqrt_h", "range_deg_s"):
+        if key in gyro and not _positive_number(gyro[key]):
+            fail(cpath, f"gyro.{key}: must be a positive number")
     name = str(meta.get("name") or default_name(directory))
-    if not NAME_PATTERN.match(name):
-        fail(cpath, f"name: only letters, digits and '_' are allowed, got {name!r}")
+    where = f"name (line {document.line(['name'])})" if meta.get("name") else "name (from the directory's)"
+    if not NAME_PATTERN.fullmatch(name):
+        fail(cpath, f"only letters, digits and '_' are allowed, got {name!r}", where)
+    if name in RESERVED_NAMES:
+        fail(cpath, f"{name!r} is reserved: results/{name} is where gyrocal writes "
+                    + {"fleet": "a fleet's summary", "plan": "gyrocal plan's tables",
+                       "study": "the validation study"}[name], where, "give the campaign another name: name: ...")
     return {"name": name, "channels": channels,
-            "maneuvers": _parse_maneuvers(cpath, meta["maneuvers"], names),
-            "star_tracker": _parse_star_tracker(cpath, meta.get("star_tracker") or {}),
+            "maneuvers": _parse_maneuvers(cpath, meta["maneuvers"], channels),
+            "star_tracker": _parse_star_tracker(cpath, meta.get("star_tracker") or {}, document.line),
             "gyro": dict(gyro)}
 
 
@@ -197,7 +203,7 @@ def _positive_number(value) -> bool:
     return _is_number(value) and value > 0
 
 
-def _parse_star_tracker(path, raw) -> dict:
+def _parse_star_tracker(path, raw, line_of=lambda keys: "?") -> dict:
     allowed = {"sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "mounting"}
     if set(raw) - allowed:
         fail(path, f"star_tracker: unknown key(s) {sorted(set(raw) - allowed)}")
@@ -211,9 +217,13 @@ def _parse_star_tracker(path, raw) -> dict:
             fail(path, f"star_tracker.boresight_body: must be a non-zero 3-vector of numbers in body axes, "
                         f"e.g. [0, 0, 1]; got {b!r}")
         b = np.asarray(b, dtype=float)
-        if abs(np.linalg.norm(b) - 1.0) > 1e-12:
-            b = b / np.linalg.norm(b)
-        out["boresight_body"] = b.tolist()
+        norm = float(np.linalg.norm(b))
+        if abs(norm - 1.0) > NORM_REFUSE_TOL:
+            fail(path, f"must be a unit vector in body axes; {b.tolist()} has norm {norm:.6g}, off 1 by more than "
+                       f"{NORM_REFUSE_TOL:g} (a wrong entry, or a vector not yet normalised?)",
+                 f"star_tracker.boresight_body (line {line_of(['star_tracker', 'boresight_body'])})",
+                 "write the boresight's unit vector, e.g. [0, 0, 1]")
+        out["boresight_body"] = (b if abs(norm - 1.0) <= 1e-12 else b / norm).tolist()  # inside: rounding
     if "mounting" in raw:
         q = raw["mounting"]
         if q != "estimate" and (not isinstance(q, list) or len(q) != 4 or not all(_is_number(v) for v in q)

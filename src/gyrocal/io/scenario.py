@@ -2,14 +2,16 @@
 
 What a simulation or a plan flies, read without the simulator: the workflow reads a scenario's
 campaign name and maneuver ids when it builds its DAG, before any job runs, so this module
-imports only numpy and yaml (the simulator's scipy.signal alone takes 0.7 s).
+imports only numpy, yaml and jsonschema (the simulator's scipy.signal alone takes 0.7 s). Each
+file is read by `gyrocal.io.yamlfile` and checked against
+``gyrocal/io/schemas/scenario.schema.json`` on its own, before ``base:`` merges it; a refusal is
+a `TelemetryError` naming the file, the key and its line.
 """
 
 import copy
 from pathlib import Path
 
-import yaml
-
+from gyrocal.io.yamlfile import TelemetryError, check_schema, read_yaml
 from gyrocal.model import channels as ch
 
 __all__ = ["DEFAULTS", "EFFECT_DEFAULTS", "load_scenario", "peek"]
@@ -54,7 +56,7 @@ body axis, as the library effects of those names describe them with every coeffi
 def _merge(defaults: dict, given: dict, where: str) -> dict:
     unknown = set(given) - set(defaults)
     if unknown:
-        raise ValueError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(defaults)}")
+        raise TelemetryError(f"{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(defaults)}")
     out = copy.deepcopy(defaults)
     for key, value in given.items():
         if isinstance(defaults[key], dict) and key not in ("channels", "truth", "effects"):
@@ -64,13 +66,22 @@ def _merge(defaults: dict, given: dict, where: str) -> dict:
     return out
 
 
-def _read_given(path: Path) -> dict:
+def _read_given(path: Path, seen=()) -> dict:
     """A scenario file's keys; with ``base: OTHER.yaml`` (beside it), the other file's keys with
     this one's in their place, section by section."""
-    given = yaml.safe_load(path.read_text()) or {}
+    document = read_yaml(path)
+    check_schema(document, "scenario")
+    given = document.data or {}
     if "base" not in given:
         return given
-    base = _read_given(path.parent / given.pop("base"))
+    target = path.parent / given.pop("base")
+    where = f"base (line {document.line(['base'])})"
+    if target.resolve() in seen or target.resolve() == path.resolve():
+        raise TelemetryError.at(path, f"{target} is a base of itself (a loop of base: files)", where)
+    if not target.is_file():
+        raise TelemetryError.at(path, f"the base scenario {target} is not a file", where,
+                                "base: is a path relative to this file's folder")
+    base = _read_given(target, (*seen, path.resolve()))
     for key, value in given.items():
         both_dicts = isinstance(value, dict) and isinstance(base.get(key), dict)
         base[key] = {**base[key], **value} if both_dicts and key not in ("truth", "channels") else value
@@ -84,12 +95,12 @@ def load_scenario(path) -> dict:
     scenario = _merge(DEFAULTS, given, str(path))
     scenario["effects"] = _merge(EFFECT_DEFAULTS, scenario["effects"], f"{path}: effects")
     if not scenario["maneuvers"]:
-        raise ValueError(f"{path}: the scenario has no maneuvers")
+        raise TelemetryError.at(path, "the scenario has no maneuvers", todo="list them under maneuvers:")
     eff = scenario["effects"]
     if (eff["g_sensitivity_deg_s_per_g"] or eff["gravity_offset_arcsec_per_g"]) and not \
             scenario["accelerometer"]["gravity_m_s2"]:
-        raise ValueError(f"{path}: an effect per g needs accelerometer.gravity_m_s2 (a campaign in a lab); "
-                         "in orbit the accelerometers read no gravity")
+        raise TelemetryError(f"{path}: an effect per g needs accelerometer.gravity_m_s2 (a campaign in a lab); "
+                             "in orbit the accelerometers read no gravity")
     return scenario
 
 

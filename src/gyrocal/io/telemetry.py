@@ -96,11 +96,15 @@ def _read_csv(path, required) -> pd.DataFrame:
     the file (the header is line 1; blank lines, which pandas skips, still count)."""
     if not path.exists():
         fail(path, "file not found")
+    if not path.is_file():
+        fail(path, "is not a file (a directory?)", todo=f"put the {path.name} file itself at this path")
     try:
         text = path.read_text()
         frame = pd.read_csv(io.StringIO(text), **READ_CSV_EXACT)
     except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
         fail(path, f"cannot be read as CSV: {exc}")
+    header = text.splitlines()[0] if text.strip() else ""
+    _check_header(path, header)
     kept = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()][1:]
     frame.attrs["lines"] = np.array([i for i, _ in kept])[:len(frame)]
     frame.attrs["fields"] = np.array([line.count(",") + 1 for _, line in kept])[:len(frame)]
@@ -113,9 +117,24 @@ def _read_csv(path, required) -> pd.DataFrame:
         if not pd.api.types.is_numeric_dtype(frame[column]):
             bad = pd.to_numeric(frame[column], errors="coerce").isna() & frame[column].notna()
             row = int(np.flatnonzero(bad.to_numpy())[0])
-            fail(path, f"line {frame.attrs['lines'][row]}, column '{column}': not a number: "
-                        f"{frame[column].iloc[row]!r}")
+            line = frame.attrs["lines"][row]
+            if kept[row][1].strip() == header.strip():
+                fail(path, "repeats the header (two files joined?)", where=f"line {line}",
+                     todo="keep one header line, on line 1")
+            fail(path, f"line {line}, column '{column}': not a number: {frame[column].iloc[row]!r}")
     return frame
+
+
+def _check_header(path, header: str):
+    """Every column of the header named, once: a trailing comma or an empty name would shift the
+    columns pandas reads (the first becoming the index), and a repeated name would be renamed."""
+    names = [name.strip() for name in header.split(",")]
+    if "" in names:
+        fail(path, f"column {names.index('') + 1} of the header has no name (a trailing or doubled comma?): "
+                   f"{header!r}", where="line 1")
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        fail(path, f"the header names column(s) {repeated} more than once: {header!r}", where="line 1")
 
 
 def _check_finite(path, frame, columns, rows=None):
@@ -164,10 +183,14 @@ def read_campaign(directory) -> Campaign:
             row = int(np.flatnonzero(bad)[0])
             fail(spath, f"line {st.attrs['lines'][row]}, column 'valid': must be 0 or 1, got {raw_valid[row]:g}")
         valid = raw_valid.astype(int)
+    if not valid.any():
+        fail(spath, "no sample is valid (every row has valid = 0): there is no reference to calibrate against",
+             where="column 'valid'")
     _check_finite(spath, st, QUAT_COLUMNS, rows=valid == 1)
     st_time = _check_time(spath, st)
     quat = st[QUAT_COLUMNS].to_numpy(dtype=float)
-    norm = np.linalg.norm(quat, axis=1)
+    with np.errstate(over="ignore"):  # a huge component is refused below, by its norm
+        norm = np.linalg.norm(quat, axis=1)
     bad = (np.abs(norm - 1.0) > NORM_REFUSE_TOL) & (valid == 1)
     if bad.any():
         row = int(np.flatnonzero(bad)[0])

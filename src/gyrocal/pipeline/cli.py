@@ -2,11 +2,13 @@
 measure a gyro's noise at rest; check the linear model against the exact one."""
 
 import argparse
+import os
 import sys
 
 from gyrocal import __version__
+from gyrocal.errors import InputError
 
-__all__ = ["main"]
+__all__ = ["entry", "main"]
 
 
 def main(argv=None):
@@ -26,6 +28,9 @@ def main(argv=None):
                           "reference.sample_interval_s")
     val = sub.add_parser("validate", help="check a campaign directory against the contract")
     val.add_argument("directory")
+    val.add_argument("--config", default="config/config.yaml",
+                     help="gyrocal config whose sampler.block_s every maneuver must fit, as the posterior needs "
+                          "(default config/config.yaml; without it that check is left to the posterior step)")
     cmp_ = sub.add_parser("compare-campaigns", help="compare two calibration.csv parameter by parameter")
     cmp_.add_argument("first")
     cmp_.add_argument("second")
@@ -47,7 +52,6 @@ def main(argv=None):
     if args.command == "plan" and len(args.scenarios) > 2:
         parser.error("plan takes one scenario, or two to compare")
 
-    from gyrocal.io.telemetry import TelemetryError
     try:
         if args.command == "simulate":
             from gyrocal.simulation.simulate import run
@@ -59,7 +63,7 @@ def main(argv=None):
             print(report(*import_files(args.mapping, args.outdir, args.files, args.reference_interval), args.outdir))
         elif args.command == "validate":
             from gyrocal.checks import read_checked, summary
-            print(summary(*read_checked(args.directory)))
+            print(summary(*read_checked(args.directory, block_s=_block_s(args.config))))
         elif args.command == "compare-campaigns":
             from gyrocal.criticism.agreement import compare_files
             text, agree = compare_files(args.first, args.second, args.z_max)
@@ -78,11 +82,35 @@ def main(argv=None):
             matplotlib.use("Agg")
             from gyrocal.pipeline.steps.plan import DEFAULT_OUT, run
             print(run(args.scenarios, args.config, args.out or DEFAULT_OUT, args.model))
-    except (TelemetryError, ValueError, FileNotFoundError) as exc:
+    except BrokenPipeError:
+        raise  # the reader stopped early: `entry` ends quietly
+    except (InputError, ValueError, OSError) as exc:
         print(f"gyrocal {args.command}: error: {exc}", file=sys.stderr)
         return 2
     return 0
 
 
+def _block_s(config_path):
+    """The sampler's leave-one-block-out block of a gyrocal config, or None where there is no config."""
+    from pathlib import Path
+
+    from gyrocal.io.yamlfile import load_yaml
+    if not Path(config_path).is_file():
+        return None
+    return ((load_yaml(config_path) or {}).get("sampler") or {}).get("block_s")
+
+
+def entry():
+    """The console script: `main`, and a reader that stops early (``gyrocal validate DIR | head -1``)
+    ends the command quietly, as Unix tools do, not with a traceback."""
+    try:
+        code = main()
+        sys.stdout.flush()
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit
+        code = 0
+    return code
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(entry())

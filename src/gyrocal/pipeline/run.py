@@ -32,7 +32,7 @@ def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models, fi
     (``through="posterior"``: up to its posterior). Returns the maneuver ids, in the campaign's order."""
     paths.mkdirs(models)
     campaign = telemetry.read_campaign(campaign_dir)
-    validate.run(campaign_dir, paths, campaign)
+    validate.run(campaign_dir, paths, campaign, cfg["sampler"]["block_s"])
     ids = preprocess.run(campaign_dir, paths, figures, campaign=campaign)
     classic.run(paths, ids)
     for model in models:

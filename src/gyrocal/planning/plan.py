@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import yaml
 from scipy import stats as sps
 from scipy.optimize import brentq
 
@@ -25,6 +24,7 @@ from gyrocal.criticism.diagnostics import COLLINEAR_FRACTION
 from gyrocal.inference import errormodel, identification, noise, preprocess
 from gyrocal.inference.identification import CORRELATION_MAX, confounded_pairs
 from gyrocal.inference.likelihood import Stats, campaign_stats
+from gyrocal.io.yamlfile import load_yaml
 from gyrocal.model import effects
 from gyrocal.model.spec import ModelSpec
 from gyrocal.model.units import AXES
@@ -260,7 +260,9 @@ def read_config(path) -> dict:
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path}: no gyrocal config there; pass --config PATH/TO/config.yaml")
-    cfg = yaml.safe_load(path.read_text()) or {}
+    cfg = load_yaml(path) or {}
+    if not isinstance(cfg, dict):
+        raise ValueError(f"{path}: a gyrocal config is a mapping of sections {list(CONFIG_SECTIONS)} and more")
     missing = [s for s in CONFIG_SECTIONS if s not in cfg]
     if missing:
         raise ValueError(f"{path}: missing section(s) {missing}")

@@ -7,21 +7,27 @@ import sys
 import warnings
 from contextlib import contextmanager
 
-from gyrocal.checks.fit import EstimateError
+from gyrocal.errors import InputError
 from gyrocal.inference import preprocess
-from gyrocal.io.telemetry import TelemetryError
+from gyrocal.io.outputs import write_json
 from gyrocal.model import effects
 from gyrocal.pipeline.steps import REFUSED
 
-__all__ = ["finish", "known_effects", "load_maneuvers", "read_json", "refusal", "start"]
+__all__ = ["finish", "known_effects", "load_maneuvers", "peak_rss", "read_json", "refusal", "start"]
 
 log = logging.getLogger("gyrocal")
+
+
+_LOG_PATH = None
+"""The step's log, from `start`: `finish` writes the job's peak memory beside it."""
 
 
 def start(log_path):
     """Set up a workflow step's process: gyrocal's log and Python's warnings go to the step's
     log file, and figures render headless (Agg), also where the step's module has imported
     matplotlib already and a display is at hand."""
+    global _LOG_PATH
+    _LOG_PATH = str(log_path)
     os.environ["MPLBACKEND"] = "Agg"
     if "matplotlib" in sys.modules:
         sys.modules["matplotlib"].use("Agg")
@@ -38,20 +44,41 @@ def finish():
     The interpreter's teardown, which frees every module and object one by one, took 0.2-0.6 s
     per job (more than some steps' own work, and 2 s on the default run's critical path) with
     nothing left to do: every output is already written whole and closed (`gyrocal.io.outputs`).
-    A step that fails never gets here, and exits as Python does."""
+    A step that fails never gets here, and exits as Python does.
+
+    First it records the job's peak resident memory (`peak_rss`) in its log and in
+    ``<log without .log>.peak_rss.json`` beside it (and beside the rule's benchmark file):
+    Snakemake's benchmark samples memory every few seconds and misses a short peak."""
+    if _LOG_PATH is not None:
+        peak = peak_rss()
+        log.info("peak memory (RSS): %.0f MB this process, %.0f MB its largest child process",
+                 peak["self_mb"], peak["children_mb"])
+        base = _LOG_PATH[:-len(".log")] if _LOG_PATH.endswith(".log") else _LOG_PATH
+        write_json(peak, f"{base}.peak_rss.json")
     logging.shutdown()
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(0)
 
 
+def peak_rss() -> dict:
+    """The process's peak resident memory and that of its largest child process that has ended
+    (the figure pools' workers), in MB of 10^6 bytes, from ``getrusage``: exact, however short the
+    peak. A job's peak is at most ``self_mb`` plus ``children_mb`` times its concurrent children."""
+    import resource
+    unit = 1 if sys.platform == "darwin" else 1024  # ru_maxrss: bytes on macOS, KiB on Linux
+    return {"self_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * unit / 1e6, 1),
+            "children_mb": round(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * unit / 1e6, 1)}
+
+
 @contextmanager
 def refusal():
-    """Turn bad input (`telemetry.TelemetryError`, `gyrocal.checks.fit.EstimateError`) into its message on
-    stderr and in the step's log, and exit 1: a user reads what is wrong, not a traceback."""
+    """Turn refused input (`gyrocal.errors.InputError`: a campaign, a plugin, a point estimate no
+    sensor can give) into its message on stderr and in the step's log, and exit 1: a user reads
+    what is wrong, not a traceback."""
     try:
         yield
-    except (TelemetryError, EstimateError) as exc:
+    except InputError as exc:
         log.error("%s\n%s", REFUSED, exc)
         sys.exit(f"{REFUSED}\n{exc}")
 

@@ -14,11 +14,12 @@ __all__ = ["run"]
 log = logging.getLogger("gyrocal")
 
 
-def run(campaign_dir, paths: CampaignPaths, campaign=None):
+def run(campaign_dir, paths: CampaignPaths, campaign=None, block_s: float | None = None):
     """Read the campaign (unless given ``campaign``, as `telemetry.read_campaign` read it) and
-    check its format and physics (`gyrocal.checks`); record what was read, the warnings, the
-    star-tracker outliers to leave out, its noise knowledge and the files' checksums."""
-    campaign, findings = checks.read_checked(campaign_dir, campaign)
+    check its format and physics (`gyrocal.checks`; with the sampler's ``block_s``, also that every
+    maneuver is long enough for the leave-one-block-out predictive); record what was read, the
+    warnings, the star-tracker outliers to leave out, its noise knowledge and the files' checksums."""
+    campaign, findings = checks.read_checked(campaign_dir, campaign, block_s)
     log.info("%s", checks.summary(campaign, findings))
     write_json({
         "campaign": campaign.name,
