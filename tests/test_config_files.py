@@ -145,15 +145,20 @@ def test_a_campaign_schema_violation_names_the_key_path_and_line(tmp_path, meta_
     assert f"maneuvers[1] (yaw_neg): unknown key(s) ['rate_deg_s'] (line {line_of(text, 'rate_deg_s')})" in message
 
 
+def refusal_reading(read, path, text) -> str:
+    """What ``read`` refuses of ``text`` written to ``path``."""
+    path.write_text(text)
+    with pytest.raises(TelemetryError) as refused:
+        read(path)
+    return str(refused.value)
+
+
 def test_a_scenario_schema_violation_names_the_file_key_path_and_line(tmp_path):
     text = (DATA / "tiny.yaml").read_text().replace('{id: roll_pos,  axis: roll,  direction: "+"}',
                                                     '{id: roll_pos,  axis: roll,  direction: "+", rate_deg: 1}')
     path = tmp_path / "scenario.yaml"
-    path.write_text(text)
-    with pytest.raises(TelemetryError) as refused:
-        scenario.load_scenario(path)
-    assert str(refused.value).startswith(f"{path}: maneuvers[2]: unknown key(s) ['rate_deg'] "
-                                         f"(line {line_of(text, 'rate_deg: 1')})")
+    assert refusal_reading(scenario.load_scenario, path, text).startswith(
+        f"{path}: maneuvers[2]: unknown key(s) ['rate_deg'] (line {line_of(text, 'rate_deg: 1')})")
 
 
 def test_a_scenario_base_that_loops_is_refused(tmp_path):
@@ -166,11 +171,9 @@ def test_a_scenario_base_that_loops_is_refused(tmp_path):
 def test_a_mapping_schema_violation_names_the_file_key_path_and_line(tmp_path):
     text = (importer.mapping_path("repoimu")).read_text().replace("order: wxyz", "order: zyxw")
     path = tmp_path / "mine.yaml"
-    path.write_text(text)
-    with pytest.raises(TelemetryError) as refused:
-        importer.read_mapping(path)
-    assert str(refused.value).startswith(f"{path}: reference.order: must be xyzw (scalar last) or wxyz (scalar first), "
-                                         f"got 'zyxw' (line {line_of(text, 'zyxw')})")
+    assert refusal_reading(importer.read_mapping, path, text).startswith(
+        f"{path}: reference.order: must be xyzw (scalar last) or wxyz (scalar first), got 'zyxw' "
+        f"(line {line_of(text, 'zyxw')})")
 
 
 def test_a_mapping_with_a_gyro_column_without_an_axis_is_refused(tmp_path):
