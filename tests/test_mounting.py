@@ -103,6 +103,7 @@ LARGE = {  # 0.5 to 0.9 deg: as large as the small-angle model of eq. 3 carries,
 }
 
 
+@pytest.mark.full
 def test_large_misalignments_under_a_declared_mounting_are_estimated_not_absorbed(tmp_path, config):
     """The case that once ended in a GO with the misalignments near zero: a triad misaligned by
     0.5-0.9 deg, behind a reference mounted 2.7 deg off body axes and declared so."""
