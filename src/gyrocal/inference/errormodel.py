@@ -62,14 +62,20 @@ class Linearization:
     """(M, 3, 3) body-to-inertial matrices at the star-tracker times (first set)."""
     st_dt: np.ndarray
     """(M,) time since the previous star-tracker sample (the first: since t0)."""
-    shared_walk: np.ndarray
-    """(M, S, S, 3, 3) per-interval random-walk covariance of the sets per unit ARW^2."""
+    shared_walk: np.ndarray | None
+    """(M, S, S, 3, 3) per-interval random-walk covariance of the sets per unit ARW^2, or None:
+    then `random_walk` builds it from ``st_dt`` when asked (`_shared_walk`), as `linearize` and
+    `from_arrays` leave it, since it is ``S^2`` times ``st_dt``'s size and mostly zeros."""
     body_error: np.ndarray
     """(M, S, 3) the same error in body axes (rad), for plots and diagnostics."""
 
+    def random_walk(self) -> np.ndarray:
+        """`shared_walk`, built from ``st_dt`` where it was not given."""
+        return _shared_walk(len(self.sets), self.st_dt) if self.shared_walk is None else self.shared_walk
+
     def arrays(self, prefix: str) -> dict:
         """The fields as arrays named ``prefix + field`` (`numpy.savez`), less the random-walk
-        covariance, which `from_arrays` builds again from ``st_dt`` (`_shared_walk`)."""
+        covariance, which is built from ``st_dt`` when asked (`random_walk`)."""
         out = {prefix + f.name: getattr(self, f.name) for f in fields(self) if f.name not in _NOT_SAVED}
         out[prefix + "labels"] = np.asarray(json.dumps({"maneuver": self.maneuver, "sets": self.sets}))
         return out
@@ -80,7 +86,7 @@ class Linearization:
         labels = json.loads(str(arrays[prefix + "labels"]))
         sets = [tuple(s) for s in labels["sets"]]
         saved = {f.name: arrays[prefix + f.name] for f in fields(cls) if f.name not in _NOT_SAVED}
-        return cls(labels["maneuver"], sets, shared_walk=_shared_walk(len(sets), saved["st_dt"]), **saved)
+        return cls(labels["maneuver"], sets, shared_walk=None, **saved)
 
 
 _NOT_SAVED = ("maneuver", "sets", "shared_walk")
@@ -200,8 +206,7 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
             st_matrix = at_st.as_matrix()
     design[..., ~spec.free] = 0.0
     st_dt = np.diff(np.concatenate([[data.gyro_time[0]], data.st_time]))
-    shared = _shared_walk(len(sets), st_dt)
-    return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, shared, body)
+    return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, None, body)
 
 
 def smoothed_columns(per_interval: np.ndarray, dt_s: np.ndarray, st_time_s: np.ndarray) -> np.ndarray:

@@ -10,15 +10,23 @@ import json
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.linalg import norm
 from scipy import sparse
-from scipy.optimize import least_squares, minimize
+from scipy.linalg import qr
+from scipy.optimize import minimize
+from scipy.optimize._lsq import common as lsq  # least_squares's own helpers: `trust_region` takes its steps
+from scipy.optimize._lsq.least_squares import TERMINATION_MESSAGES
+from scipy.sparse.linalg import LinearOperator, lsmr
 
 from gyrocal.inference import errormodel, identification, noise
 from gyrocal.inference.likelihood import campaign_stats
 from gyrocal.inference.noise import variances
 from gyrocal.model.spec import ModelSpec
 
-__all__ = ["PointEstimate", "correlation_time", "estimate_noise", "linearize_all", "point_estimate", "profile_reml", "wls"]
+__all__ = [
+    "PointEstimate", "correlation_time", "estimate_noise", "linearize_all", "point_estimate", "profile_reml",
+    "trust_region", "wls"
+]
 
 
 @dataclass
@@ -103,9 +111,150 @@ def _unpack(x, theta0, free, n_man, n_ch):
     return theta, nuis[:, :3], nuis[:, 3:]
 
 
+class _Jacobian:
+    """The WLS's whitened Jacobian, written maneuver by maneuver into a CSR matrix's arrays: entry for
+    entry ``hstack([csr_array(vstack(shared)), block_diag(own)])`` (exact zeros left out, as there),
+    without their intermediate copies (0.7 GB at once on a campaign ten times the default)."""
+
+    def __init__(self, n_rows: int, n_par: int, n_man: int, n_own: int):
+        self.n_par, self.n_own, self.shape = n_par, n_own, (n_rows, n_par + n_man * n_own)
+        room = n_rows * (n_par + n_own)
+        index = np.int32 if max(room, self.shape[1]) < np.iinfo(np.int32).max else np.int64
+        self.data = np.empty(room)
+        self.indices = np.empty(room, dtype=index)
+        self.indptr = np.zeros(n_rows + 1, dtype=index)
+        self.row = self.nnz = 0
+
+    def add(self, m: int, white: np.ndarray):
+        """Maneuver ``m``'s whitened rows: the shared columns, then minus its own columns."""
+        n = white.shape[0]
+        rows = np.empty(white.shape)
+        rows[:, :self.n_par] = white[:, :self.n_par]
+        np.negative(white[:, self.n_par:], out=rows[:, self.n_par:])
+        kept = rows != 0
+        k = int(kept.sum())
+        cols = np.nonzero(kept)[1]
+        cols[cols >= self.n_par] += m * self.n_own
+        self.data[self.nnz:self.nnz + k] = rows[kept]
+        self.indices[self.nnz:self.nnz + k] = cols
+        self.indptr[self.row + 1:self.row + n + 1] = self.nnz + np.cumsum(kept.sum(axis=1))
+        self.row, self.nnz = self.row + n, self.nnz + k
+
+    def matrix(self) -> sparse.csr_array:
+        return sparse.csr_array((self.data[:self.nnz], self.indices[:self.nnz], self.indptr), shape=self.shape)
+
+
+class _Whitened:
+    """The WLS's residual and Jacobian at a point, whitened by the noise's banded factors, keeping
+    one point's linearisations (the last asked for: the estimate's at the end). Whitened apart, they
+    are the same to the bit as together: LAPACK's banded solve takes right-hand sides one by one."""
+
+    def __init__(self, maneuvers, spec: ModelSpec, theta0, free, chols, x0, lins0):
+        self.maneuvers, self.spec, self.theta0, self.free, self.chols = maneuvers, spec, theta0, free, chols
+        self.n_man, self.n_ch, self.n_par = len(maneuvers), len(spec.channels), int(free.sum())
+        self.n_rows = sum(chol.shape[1] for chol in chols)
+        self.point, self.lins = x0.tobytes(), lins0
+
+    def linearizations(self, x) -> list:
+        if x.tobytes() != self.point:
+            self.lins = None
+            theta, _, biases = _unpack(x, self.theta0, self.free, self.n_man, self.n_ch)
+            self.lins = [errormodel.linearize(d, self.spec, theta, biases[m]) for m, d in enumerate(self.maneuvers)]
+            self.point = x.tobytes()
+        return self.lins
+
+    def residual(self, x) -> np.ndarray:
+        _, chi0, _ = _unpack(x, self.theta0, self.free, self.n_man, self.n_ch)
+        out, row = np.empty(self.n_rows), 0
+        for m, (lin, chol) in enumerate(zip(self.linearizations(x), self.chols)):
+            n = chol.shape[1]
+            r = noise.difference(lin.z - chi0[m]).reshape(n, 1)
+            out[row:row + n] = noise.whiten(chol, np.asfortranarray(r))[:, 0]
+            row += n
+        return out
+
+    def jacobian(self, x) -> sparse.csr_array:
+        jac = _Jacobian(self.n_rows, self.n_par, self.n_man, 3 + self.n_ch)
+        for m, (lin, chol) in enumerate(zip(self.linearizations(x), self.chols)):
+            n = chol.shape[1]
+            nuis = noise.difference(noise.nuisance_design(lin)).reshape(n, -1)
+            j_theta = -noise.difference(lin.design[..., self.free]).reshape(n, -1)
+            jac.add(m, noise.whiten(chol, np.asfortranarray(np.concatenate([j_theta, nuis], axis=1))))
+        return jac.matrix()
+
+
+def _scaled(J, d) -> LinearOperator:
+    """``J diag(d)`` as scipy's ``right_multiplied_operator`` makes it, through the same sparse
+    products, but with ``J``'s transpose a view of it: scipy's adjoint copies the matrix."""
+    transposed = J.T
+    return LinearOperator(J.shape, dtype=J.dtype,
+                          matvec=lambda x: J.dot((np.ravel(x) * d).reshape(-1, 1)).reshape(-1),
+                          matmat=lambda X: J.dot(X * d[:, np.newaxis]),
+                          rmatvec=lambda x: d * transposed.dot(np.asarray(x).reshape(-1, 1)).reshape(-1))
+
+
+def trust_region(fun, jac, x0, ftol: float, xtol: float, gtol: float, max_nfev: int, lsmr_tol: float):
+    """Minimise ``|fun(x)|^2 / 2`` step for step and to the bit as `scipy.optimize.least_squares` with
+    ``method="trf", x_scale="jac", tr_solver="lsmr"``, no bounds, ``regularize: False`` and LSMR's
+    ``atol = btol = lsmr_tol`` (its ``trf_no_bounds``, with scipy's helpers), but holding one Jacobian,
+    asked for only where a step is taken. ``least_squares`` held up to six (1.2 GB at 10x).
+
+    Returns ``(x, cost, nfev, status, J)``: ``status`` as ``least_squares``'s, ``J`` at ``x``.
+    """
+    x = np.atleast_1d(x0).astype(float)
+    f = fun(x)
+    if not np.all(np.isfinite(f)):
+        raise ValueError("Residuals are not finite in the initial point.")
+    J, nfev, cost = jac(x), 1, 0.5 * np.dot(f, f)
+    g = J.T.dot(f)
+    scale, scale_inv = lsq.compute_jac_scale(J)
+    Delta, status = norm(x * scale_inv) or 1.0, None
+    while True:
+        if norm(g, ord=np.inf) < gtol:
+            status = 1
+        if status is not None or nfev == max_nfev:
+            break
+        d, g_h = scale, scale * g
+        J_h = _scaled(J, d)
+        gn_h = lsmr(J_h, f, damp=0.0, atol=lsmr_tol, btol=lsmr_tol)[0]
+        S, _ = qr(np.vstack((g_h, gn_h)).T, mode="economic")
+        JS = J_h.dot(S)
+        B_S = np.dot(JS.T, JS)
+        g_S = S.T.dot(g_h)
+        actual_reduction = -1
+        while actual_reduction <= 0 and nfev < max_nfev:
+            p_S, _ = lsq.solve_trust_region_2d(B_S, g_S, Delta)
+            step_h = S.dot(p_S)
+            predicted_reduction = -lsq.evaluate_quadratic(J_h, g_h, step_h)
+            step = d * step_h
+            x_new = x + step
+            f_new = fun(x_new)
+            nfev += 1
+            step_h_norm = norm(step_h)
+            if not np.all(np.isfinite(f_new)):
+                Delta = 0.25 * step_h_norm
+                continue
+            cost_new = 0.5 * np.dot(f_new, f_new)
+            actual_reduction = cost - cost_new
+            Delta_new, ratio = lsq.update_tr_radius(Delta, actual_reduction, predicted_reduction, step_h_norm,
+                                                    step_h_norm > 0.95 * Delta)
+            status = lsq.check_termination(actual_reduction, cost, norm(step), norm(x), ratio, ftol, xtol)
+            if status is not None:
+                break
+            Delta = Delta_new
+        if actual_reduction > 0:
+            x, f, cost = x_new, f_new, cost_new
+            J = J_h = None  # the last point's Jacobian goes before this one's is made
+            J = jac(x)
+            g = J.T.dot(f)
+            scale, scale_inv = lsq.compute_jac_scale(J, scale_inv)
+    return x, cost, nfev, 0 if status is None else status, J
+
+
 def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, biases0=None, chi00=None,
         correlation_time_s=0.0, lins0=None) -> PointEstimate:
-    """Weighted least squares over every maneuver with `scipy.optimize.least_squares`.
+    """Weighted least squares over every maneuver: `scipy.optimize.least_squares`'s trust region
+    (`trust_region`, its steps to the bit).
 
     Unknowns: the model's parameters, and per maneuver the initial attitude error and
     the bias of each channel. Each maneuver's unknowns touch only its own rows, so the
@@ -118,7 +267,9 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
     come from the banded noise covariance (star tracker across and about its
     boresight, gyro random walk). Prior-only parameters stay at ``theta0``; their rows of
     the covariance are NaN. ``lins0``, the maneuvers' linearisations at the start (a caller that
-    has them), is not computed again: the noise structure and the first step both use it.
+    has them), is not computed again: the noise structure and the first step both use it; a list is
+    taken over (emptied), so they go once the WLS moves on. Memory: one point's linearisations and
+    Jacobian, and the noise's banded factors (under 1 GB at 10x, where least_squares took 3.4 GB).
     """
     n_ch, n_man = len(spec.channels), len(maneuvers)
     free = spec.free
@@ -129,45 +280,24 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
     chi00 = np.zeros((n_man, 3)) if chi00 is None else chi00
     x0 = np.concatenate([theta0[free], np.column_stack([chi00, biases0]).ravel()])
     var = variances(log_sigma)
-    first = lins0 if lins0 is not None else [errormodel.linearize(d, spec, theta0, biases0[m])
-                                              for m, d in enumerate(maneuvers)]
-    noises = [noise.build(lin, boresight, correlation_time_s) for lin in first]
-    chols = [nz.factor(var) for nz in noises]
-    cache = {}
-    at_start = {x0.tobytes(): first}
-
-    def evaluate(x):
-        key = x.tobytes()
-        if key in cache:
-            return cache[key]
-        theta, chi0, biases = _unpack(x, theta0, free, n_man, n_ch)
-        lins = at_start.pop(key, None) or [errormodel.linearize(d, spec, theta, biases[m])
-                                           for m, d in enumerate(maneuvers)]
-        res, shared, own = [], [], []
-        for m, (lin, nz) in enumerate(zip(lins, noises)):
-            r = noise.difference(lin.z - chi0[m]).reshape(nz.n, 1)
-            nuis = noise.difference(noise.nuisance_design(lin)).reshape(nz.n, -1)
-            j_theta = -noise.difference(lin.design[..., free]).reshape(nz.n, -1)
-            white = nz.whiten(chols[m], np.asfortranarray(np.concatenate([r, j_theta, nuis], axis=1)))
-            res.append(white[:, 0])
-            shared.append(white[:, 1:1 + n_par])
-            own.append(-white[:, 1 + n_par:])
-        cache.clear()
-        cache[key] = (np.concatenate(res), sparse.hstack([sparse.csr_array(np.vstack(shared)),
-                                                          sparse.block_diag(own, format="csr")], format="csr"), lins)
-        return cache[key]
-
-    result = least_squares(lambda x: evaluate(x)[0], x0, jac=lambda x: evaluate(x)[1],
-                           method="trf", x_scale="jac", ftol=1e-8, xtol=1e-8, gtol=1e-10, max_nfev=30,
-                           tr_options={"regularize": False, "atol": 1e-12, "btol": 1e-12})
-    _, jac, at_estimate = evaluate(result.x)
+    if lins0 is None:
+        lins0 = [errormodel.linearize(d, spec, theta0, biases0[m]) for m, d in enumerate(maneuvers)]
+    # only the factors are kept of the noise: its right-hand sides are the REML's, not the WLS's
+    chols = [noise.build(lin, boresight, correlation_time_s).factor(var) for lin in lins0]
+    problem = _Whitened(maneuvers, spec, theta0, free, chols, x0, list(lins0))
+    if isinstance(lins0, list):
+        lins0.clear()  # taken over: freed once the WLS has moved on from the start
+    x, cost, nfev, status, jac = trust_region(problem.residual, problem.jacobian, x0, ftol=1e-8, xtol=1e-8,
+                                              gtol=1e-10, max_nfev=30, lsmr_tol=1e-12)
+    at_estimate = problem.linearizations(x)
+    del problem, chols  # the noise's factors go before the Jacobian's product, its largest step
     cov_free = np.linalg.inv((jac.T @ jac).toarray())[:n_par, :n_par]
     cov = np.full((len(spec), len(spec)), np.nan)
     cov[np.ix_(free, free)] = cov_free
-    theta, chi0, biases = _unpack(result.x, theta0, free, n_man, n_ch)
+    theta, chi0, biases = _unpack(x, theta0, free, n_man, n_ch)
     estimate = PointEstimate(spec, theta, cov, biases, chi0,
-                             np.asarray(log_sigma, dtype=float), float(2 * result.cost), int(result.nfev),
-                             str(result.message), float(correlation_time_s), dict(stated_noise))
+                             np.asarray(log_sigma, dtype=float), float(2 * cost), int(nfev),
+                             TERMINATION_MESSAGES[status], float(correlation_time_s), dict(stated_noise))
     estimate.at_estimate = tuple(at_estimate)
     estimate.at_estimate_keys = tuple(estimate.linearization_key(d, m) for m, d in enumerate(maneuvers))
     return estimate
@@ -263,5 +393,6 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
         noises = [noise.build(lin, start.boresight, tau) for lin in lins]
     if estimate_scales:
         log_sigma = estimate_noise(noises, log_sigma)
+    del noises  # the REML's right-hand sides: as large as the linearisations, and the WLS needs neither
     return wls(maneuvers, start.spec, stated_noise, log_sigma, start.theta, start.biases, start.chi0,
                correlation_time_s=tau, lins0=lins)

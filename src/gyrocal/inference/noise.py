@@ -22,7 +22,7 @@ from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 __all__ = [
     "COMPONENTS", "NOISE_LABELS", "NOISE_SCALES", "TAPER_CORRELATION_TIMES", "ManeuverNoise", "NoiseScale", "build",
     "correlation_depth", "difference", "log_sigma_of", "noise_knowledge", "nuisance_design", "scales_in_units",
-    "star_tracker_correlation", "stated_scales", "stated_si", "variances"
+    "star_tracker_correlation", "stated_scales", "stated_si", "variances", "whiten"
 ]
 
 COMPONENTS = ("cross", "about", "walk")
@@ -111,7 +111,8 @@ class ManeuverNoise:
 
     maneuver: str
     components: dict
-    """name -> (kd+1, n) lower band storage, per unit variance."""
+    """name -> (kd+1, n) lower band storage, per unit variance; the gyro's ``walk`` as its main
+    diagonal alone, (n,), where it has nothing off it (`build`): a third of the storage."""
     rhs: np.ndarray
     """(n, P + G + 1): differenced design, nuisance design and data, flattened; column-major,
     as LAPACK's banded solve takes it (a row-major copy costs it half as much again)."""
@@ -123,7 +124,14 @@ class ManeuverNoise:
         return self.rhs.shape[0]
 
     def covariance(self, variances: dict) -> np.ndarray:
-        return sum(variances[k] * self.components[k] for k in COMPONENTS)
+        """The banded covariance: ``sum(variances[k] * components[k])``, to the bit (the walk's
+        zeros off the diagonal added nothing: no entry of the first two's sum is -0.0)."""
+        out = sum(variances[k] * self.components[k] for k in COMPONENTS[:2])
+        walk = self.components["walk"]
+        if walk.ndim == 1:
+            out[0] += variances["walk"] * walk
+            return out
+        return out + variances["walk"] * walk
 
     def factor(self, variances: dict) -> np.ndarray:
         return cholesky_banded(self.covariance(variances), lower=True)
@@ -135,12 +143,17 @@ class ManeuverNoise:
         return white.T @ white, 2.0 * np.sum(np.log(chol[0]))
 
     def whiten(self, chol: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """``L^-1 x`` for the banded Cholesky factor ``L``."""
-        x2 = x.reshape(len(x), -1)
-        out, info = dtbtrs(chol, x2, uplo="L")
-        if info != 0:
-            raise np.linalg.LinAlgError(f"banded triangular solve failed (info={info})")
-        return out.reshape(x.shape)
+        """``L^-1 x`` for the banded Cholesky factor ``L`` (`whiten`)."""
+        return whiten(chol, x)
+
+
+def whiten(chol: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``L^-1 x`` for a banded Cholesky factor ``L`` (`ManeuverNoise.factor`), column by column."""
+    x2 = x.reshape(len(x), -1)
+    out, info = dtbtrs(chol, x2, uplo="L")
+    if info != 0:
+        raise np.linalg.LinAlgError(f"banded triangular solve failed (info={info})")
+    return out.reshape(x.shape)
 
 
 def nuisance_design(lin: Linearization) -> np.ndarray:
@@ -221,10 +234,14 @@ def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -
             k = np.arange(m_samples - d)
             lowers.append(get(d, k) - get(d + 1, k - 1) - get(d - 1, k) + get(d, k - 1))
         diag[name], lower[name] = d0, lowers
-    walk = lin.shared_walk.transpose(0, 1, 3, 2, 4).reshape(m_samples, block, block)
-    diag["walk"] = walk
-    lower["walk"] = [np.zeros((max(m_samples - d, 0), block, block)) for d in range(1, depth + 1)]
-    components = {k: _banded_lower(diag[k], lower[k], depth) for k in COMPONENTS}
+    walk = lin.random_walk().transpose(0, 1, 3, 2, 4).reshape(m_samples, block, block)
+    components = {k: _banded_lower(diag[k], lower[k], depth) for k in COMPONENTS[:2]}
+    on_diagonal = np.einsum("jaa->ja", walk)
+    if np.count_nonzero(walk) == np.count_nonzero(on_diagonal):  # each set's walk is isotropic: dt I
+        components["walk"] = on_diagonal.ravel()
+    else:
+        components["walk"] = _banded_lower(walk, [np.zeros((max(m_samples - d, 0), block, block))
+                                                  for d in range(1, depth + 1)], depth)
     nuis = difference(nuisance_design(lin))
     n = m_samples * block
     rhs = np.asfortranarray(np.concatenate([
