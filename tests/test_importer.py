@@ -42,6 +42,7 @@ def test_import_writes_a_campaign_per_the_contract(tmp_path):
     again = telemetry.read_campaign(out)
     assert [m.id for m in again.maneuvers] == ["Trial_A", "Trial_B"]
     assert [m.direction for m in again.maneuvers] == ["both", "both"]
+    assert [m.noise_group for m in again.maneuvers] == ["Trial_A", "Trial_B"]  # one noise level per recording
     assert again.maneuvers[0].axis == "roll"
     assert again.channel_names == ["gyro_x", "gyro_y", "gyro_z"]
     assert all(c.dtg is None for c in again.channels)

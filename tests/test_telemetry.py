@@ -158,3 +158,29 @@ def test_unpaired_channel_is_refused_with_the_reason(campaign_copy):
     edit_yaml(campaign_copy / "campaign.yaml", lambda m: m["channels"].pop("dtg3_roll"))
     edit_csv(campaign_copy / "gyro.csv", lambda f: f.drop(columns=["dtg3_roll"]))
     expect(campaign_copy, r"campaign\.yaml: channels: every body axis needs the same number of gyro channels")
+
+
+def test_noise_groups_default_to_one_for_the_campaign_and_round_trip(campaign_copy, tmp_path):
+    from gyrocal.inference import preprocess
+
+    assert {m.noise_group for m in telemetry.read_campaign(campaign_copy).maneuvers} == {"all"}
+    assert "noise_group" not in (campaign_copy / "campaign.yaml").read_text()
+    edit_yaml(campaign_copy / "campaign.yaml",
+              lambda meta: [m.update(noise_group="quiet" if i % 2 else "loud") for i, m in enumerate(meta["maneuvers"])])
+    campaign = telemetry.read_campaign(campaign_copy)
+    telemetry.write_campaign(campaign, tmp_path / "again")
+    again = telemetry.read_campaign(tmp_path / "again")
+    assert again.maneuvers == campaign.maneuvers
+    names, index = preprocess.noise_groups(again.maneuvers)
+    assert names == ["loud", "quiet"]
+    assert index.tolist() == [0, 1, 0, 1, 0, 1]
+    data = preprocess.slice_maneuver(again, again.maneuvers[1].id)
+    data.save(tmp_path / "m.npz")
+    assert preprocess.ManeuverData.load(tmp_path / "m.npz").noise_group == "quiet"
+
+
+def test_a_bad_noise_group_is_refused_naming_the_file_and_maneuver(campaign_copy, capsys):
+    edit_yaml(campaign_copy / "campaign.yaml", lambda m: m["maneuvers"][1].update(noise_group="trial 1"))
+    expect(campaign_copy, r"campaign\.yaml.*maneuvers\[1\] \(yaw_neg\)\.noise_group")
+    assert cli.main(["validate", str(campaign_copy)]) != 0
+    assert "noise_group" in capsys.readouterr().err

@@ -7,14 +7,15 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation, Slerp
 
+from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP
 from gyrocal.io.telemetry import Campaign, TelemetryError
 from gyrocal.model import channels as ch
 from gyrocal.model import kinematics
 from gyrocal.model.units import AXES, rad_to_arcsec
 
 __all__ = [
-    "ManeuverData", "body_increments", "end_of_rotation_error", "error_angles", "error_table", "propagate_set",
-    "slice_maneuver"
+    "ManeuverData", "body_increments", "end_of_rotation_error", "error_angles", "error_table", "noise_groups",
+    "propagate_set", "slice_maneuver"
 ]
 
 
@@ -36,6 +37,8 @@ class ManeuverData:
     attitude0_quat: np.ndarray
     extras: dict = field(default_factory=dict)
     counts: dict = field(default_factory=dict)
+    noise_group: str = DEFAULT_NOISE_GROUP
+    """The maneuvers sharing one noise level (campaign.yaml's ``noise_group``)."""
 
     @property
     def dt(self) -> np.ndarray:
@@ -63,7 +66,8 @@ class ManeuverData:
             st_quat=self.st_quat, attitude0_quat=self.attitude0_quat,
             extra_names=list(self.extras),
             extra_values=np.array(list(self.extras.values())).reshape(len(self.extras), len(self.increments)),
-            count_names=list(self.counts), count_values=np.array(list(self.counts.values()), dtype=int))
+            count_names=list(self.counts), count_values=np.array(list(self.counts.values()), dtype=int),
+            noise_group=self.noise_group)
 
     @classmethod
     def load(cls, path):
@@ -74,7 +78,8 @@ class ManeuverData:
                    tuple(str(n) for n in z["in_loop"]), z["gyro_time"], z["increments"], z["st_time"],
                    z["st_quat"], z["attitude0_quat"],
                    {str(n): v for n, v in zip(z["extra_names"], z["extra_values"])},
-                   {str(n): int(v) for n, v in zip(z["count_names"], z["count_values"])})
+                   {str(n): int(v) for n, v in zip(z["count_names"], z["count_values"])},
+                   str(z["noise_group"]) if "noise_group" in z.files else DEFAULT_NOISE_GROUP)
 
 
 def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=()) -> ManeuverData:
@@ -110,7 +115,14 @@ def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=()) -> 
               "st_used": int(usable.sum()), "gyro_read": int(i1 - i0 + 1), "gyro_used": int(i1 - i0)}
     return ManeuverData(m.id, m.axis, m.direction, campaign.channels, m.in_loop, g[i0:i1 + 1].copy(),
                         campaign.increments(slice(i0 + 1, i1 + 1)), st_time, quat, attitude0.as_quat(),
-                        extras, counts)
+                        extras, counts, m.noise_group)
+
+
+def noise_groups(maneuvers) -> tuple:
+    """The noise groups of ``maneuvers`` (anything with a ``noise_group``), in order of first
+    appearance, and each maneuver's index into them: ``(names, index)``."""
+    names = list(dict.fromkeys(m.noise_group for m in maneuvers))
+    return names, np.array([names.index(m.noise_group) for m in maneuvers], dtype=int)
 
 
 def body_increments(data: ManeuverData, channel_set, params: ch.ChannelParams) -> np.ndarray:

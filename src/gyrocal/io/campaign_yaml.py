@@ -17,6 +17,7 @@ from gyrocal.model.units import AXES
 
 __all__ = [
     "CHANNEL_PATTERN",
+    "DEFAULT_NOISE_GROUP",
     "DIRECTIONS",
     "NAME_PATTERN",
     "NORM_REFUSE_TOL",
@@ -40,6 +41,8 @@ RESERVED_NAMES = ("fleet", "plan", "study")
 (``gyrocal plan``'s default) and ``results/study`` (the validation study's default)."""
 DIRECTIONS = ("+", "-", "both")
 """A maneuver turns one way, the other, or both (several turns each way, no inertial holds)."""
+DEFAULT_NOISE_GROUP = "all"
+"""The noise group of a maneuver that names none: one group, one noise level, for the campaign."""
 
 
 @dataclass(frozen=True)
@@ -50,6 +53,8 @@ class Maneuver:
     t_start: float
     t_end: float
     in_loop: tuple = ()
+    noise_group: str = DEFAULT_NOISE_GROUP
+    """The maneuvers sharing one noise level (a trial, a recording, a segment): a name."""
 
     @property
     def turn(self) -> str:
@@ -96,7 +101,7 @@ def _parse_maneuvers(path, raw, channels) -> tuple:
     channel_names = list(axis_of)
     if not isinstance(raw, list) or not raw:
         fail(path, "'maneuvers' must be a non-empty list")
-    allowed = {"id", "axis", "direction", "t_start", "t_end", "in_loop"}
+    allowed = {"id", "axis", "direction", "t_start", "t_end", "in_loop", "noise_group"}
     seen = set()
     maneuvers = []
     for i, m in enumerate(raw):
@@ -134,7 +139,11 @@ def _parse_maneuvers(path, raw, channels) -> tuple:
             if axes != sorted(AXES):
                 fail(path, f"{where}.in_loop: needs one channel per axis roll, pitch, yaw; got {list(in_loop)} "
                            f"(axes {[axis_of[name] for name in in_loop]})")
-        maneuvers.append(Maneuver(mid, m["axis"], str(m["direction"]), t0, t1, in_loop))
+        group = m.get("noise_group", DEFAULT_NOISE_GROUP)
+        if not isinstance(group, str) or not NAME_PATTERN.fullmatch(group):
+            fail(path, f"{where}.noise_group: a group's name holds only letters, digits and '_', got {group!r}",
+                 todo="name the maneuvers that share a noise level alike, e.g. noise_group: trial_1")
+        maneuvers.append(Maneuver(mid, m["axis"], str(m["direction"]), t0, t1, in_loop, group))
     ordered = sorted(maneuvers, key=lambda m: m.t_start)
     for first, second in itertools.pairwise(ordered):
         if second.t_start < first.t_end:

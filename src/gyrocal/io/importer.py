@@ -279,7 +279,8 @@ def reference_rows(time, interval_s) -> np.ndarray:
 
 
 def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tuple:
-    """The campaign of ``files`` (one maneuver each, end to end) and what was counted per file."""
+    """The campaign of ``files`` (one maneuver and one noise group each, end to end) and what was
+    counted per file."""
     gyro = mapping["gyro"]
     names = list(gyro["columns"])
     axes = [gyro["axes"][n] for n in names]
@@ -300,7 +301,8 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
         time = imp.time + shift
         keep = reference_rows(time, interval)
         parts.append((time, imp, keep))
-        maneuvers.append(Maneuver(imp.stem, maneuver_axis(imp, axes), direction, float(time[0]), float(time[-1])))
+        maneuvers.append(Maneuver(imp.stem, maneuver_axis(imp, axes), direction, float(time[0]), float(time[-1]),
+                                  noise_group=imp.stem))  # one noise level per recording
         counts[imp.stem] = {"rows": len(time), "reference_dropouts": int((~imp.valid[keep] & ~imp.refused[keep]).sum()),
                             "reference_kept": int(keep.sum()), "reference_interval_s": float(interval or 0.0),
                             "time_shift_s": float(shift), **_norm_counts(imp, keep, mapping["reference"]["columns"]),

@@ -18,6 +18,7 @@ import yaml
 
 from gyrocal.io.campaign_yaml import (
     CHANNEL_PATTERN,
+    DEFAULT_NOISE_GROUP,
     NAME_PATTERN,
     NORM_REFUSE_TOL,
     Maneuver,
@@ -86,7 +87,8 @@ class Campaign:
             "gyro": dict(self.gyro),
             "maneuvers": [{"id": m.id, "axis": m.axis, "direction": m.direction,
                            "t_start": float(m.t_start), "t_end": float(m.t_end),
-                           **({"in_loop": list(m.in_loop)} if m.in_loop else {})}
+                           **({"in_loop": list(m.in_loop)} if m.in_loop else {}),
+                           **({"noise_group": m.noise_group} if m.noise_group != DEFAULT_NOISE_GROUP else {})}
                           for m in self.maneuvers],
         }
 

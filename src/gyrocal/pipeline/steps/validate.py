@@ -27,6 +27,7 @@ def run(campaign_dir, paths: CampaignPaths, campaign=None, block_s: float | None
         "channels": campaign.channel_names,
         "extras": list(campaign.extras()),
         "maneuvers": [m.id for m in campaign.maneuvers],
+        "noise_groups": {m.id: m.noise_group for m in campaign.maneuvers},
         "rows": {"gyro": len(campaign.gyro_time), "star_tracker": len(campaign.st_time),
                  "star_tracker_invalid": int((campaign.st_valid == 0).sum()),
                  "star_tracker_outliers": len(findings.outliers),
