@@ -14,7 +14,7 @@ from pathlib import Path
 from gyrocal.io.yamlfile import TelemetryError, check_schema, read_yaml
 from gyrocal.model import channels as ch
 
-__all__ = ["DEFAULTS", "EFFECT_DEFAULTS", "load_scenario", "peek"]
+__all__ = ["DEFAULTS", "EFFECT_DEFAULTS", "STAR_TRACKER_GM", "load_scenario", "peek"]
 
 DEFAULTS = {
     "name": "simulated",
@@ -28,13 +28,18 @@ DEFAULTS = {
     "truth": {},
     "gyro": {"arw_deg_sqrt_h": 0.003, "pulse_arcsec": 0.05, "bias_sd_deg_h": 0.01},
     "star_tracker": {"sigma_cross_arcsec": 10.0, "sigma_about_arcsec": 40.0,
-                     "boresight_body": [0.0, 0.0, 1.0], "invalid_fraction": 0.0},
+                     "boresight_body": [0.0, 0.0, 1.0], "invalid_fraction": 0.0,
+                     "gm_sigma_cross_arcsec": 0.0, "gm_sigma_about_arcsec": 0.0, "gm_tau_s": 0.0},
     "maneuver_defaults": {"angle_deg": 90.0, "rate_deg_s": 0.15, "accel_deg_s2": 0.005,
                           "hold_s": 400.0, "gap_s": 120.0, "uncontrolled_rate_deg_s": 3e-4},
     "maneuvers": [],
     "effects": {},
     "accelerometer": {"gravity_m_s2": 0.0, "noise_m_s2": 0.002},
 }
+
+STAR_TRACKER_GM = ("gm_sigma_cross_arcsec", "gm_sigma_about_arcsec", "gm_tau_s")
+"""The star tracker's first-order Gauss-Markov part, added to its white noise: its stationary sd
+across and about the boresight and its correlation time (off while a sigma or tau is 0)."""
 
 EFFECT_DEFAULTS = {
     "bias_drift_deg_h_per_h": 0.0,

@@ -4,7 +4,9 @@ Every setting comes from a scenario YAML (``config/scenarios/*.yaml``). The true
 rate is piecewise constant on a fine grid, so the true attitude is propagated exactly;
 the gyros integrate that rate through the channel model (docs/interface.md section 2) plus
 angle random walk and pulse quantisation, and the star tracker samples the true
-attitude with anisotropic, optionally time-correlated noise.
+attitude with anisotropic white noise, plus, where the scenario declares one, a first-order
+Gauss-Markov part of its own sd and correlation time. A maneuver's ``noise_scale`` multiplies
+the white noise and the angle random walk inside its window.
 """
 
 import json
@@ -14,6 +16,7 @@ from pathlib import Path
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP
 from gyrocal.io.scenario import load_scenario
 from gyrocal.io.telemetry import Campaign, Maneuver, write_campaign
 from gyrocal.model import channels as ch
@@ -29,7 +32,8 @@ from gyrocal.model.units import (
     rad_s_to_deg_h,
 )
 
-__all__ = ["ManeuverProfile", "build_profiles", "run", "scenario_channels", "simulate", "star_tracker_noise", "truth_parameters"]
+__all__ = ["ManeuverProfile", "build_profiles", "gauss_markov", "maneuver_scale", "run", "scenario_channels", "simulate",
+           "star_tracker_noise", "truth_parameters"]
 
 
 @dataclass
@@ -44,6 +48,8 @@ class ManeuverProfile:
     accel_rad_s2: float
     hold_s: float
     coast_s: float
+    noise_scale: float = 1.0
+    noise_group: str = DEFAULT_NOISE_GROUP
 
     @property
     def ramp_s(self):
@@ -75,7 +81,8 @@ def build_profiles(scenario) -> list:
         if coast < 0:
             raise ValueError(f"maneuver {m['id']}: angle too small to reach the rate; lower rate_deg_s")
         p = ManeuverProfile(m["id"], m["axis"], 1.0 if m["direction"] == "+" else -1.0, t,
-                            rate, accel, m["hold_s"], coast)
+                            rate, accel, m["hold_s"], coast, float(m.get("noise_scale", 1.0)),
+                            m.get("noise_group", DEFAULT_NOISE_GROUP))
         profiles.append(p)
         t = p.t_end + m["gap_s"]
     return profiles
@@ -168,20 +175,21 @@ def simulate(scenario: dict, seed=None):
         fine += (g_rad_s * force_fine.sum(axis=1) * dt_sub)[:, None]
     continuous = fine.reshape(n_gyro, n_sub, len(channels)).sum(axis=1)
     arw = arw_to_rad_sqrt_s(gyro_cfg["arw_deg_sqrt_h"])
-    continuous += rng.normal(0.0, arw * np.sqrt(dt_g), continuous.shape)
+    t_gyro = t0 + dt_g * np.arange(1, n_gyro + 1)
+    continuous += rng.normal(0.0, arw * np.sqrt(dt_g), continuous.shape) * maneuver_scale(profiles, t_gyro, True)[:, None]
     pulse = arcsec_to_rad(gyro_cfg["pulse_arcsec"])
     if pulse > 0:
         counts = np.floor(np.cumsum(continuous, axis=0) / pulse)
         gyro_increments = pulse * np.diff(np.vstack([np.zeros(len(channels)), counts]), axis=0)
     else:
         gyro_increments = continuous
-    t_gyro = t0 + dt_g * np.arange(1, n_gyro + 1)
 
     # Star tracker: true attitude at its (possibly late) sample times, times its noise.
     dt_st = 1.0 / scenario["star_tracker_hz"]
     t_st = t0 + eff["st_latency_s"] + dt_st * np.arange(int((t_final - t0 - eff["st_latency_s"]) / dt_st))
     true_st = kinematics.attitude_at(t_fine, attitudes_fine, increments_fine, t_st - eff["st_latency_s"])
-    noise = star_tracker_noise(len(t_st), dt_st, st_cfg, eff["st_correlation_time_s"], rng)
+    noise = star_tracker_noise(len(t_st), dt_st, st_cfg, eff["st_correlation_time_s"], rng,
+                               maneuver_scale(profiles, t_st, False))
     measured = true_st * Rotation.from_rotvec(noise)
     if eff["gravity_offset_arcsec_per_g"]:
         force_st = true_st.inv().apply([0.0, 0.0, gravity]) / STANDARD_GRAVITY_M_S2
@@ -209,7 +217,7 @@ def simulate(scenario: dict, seed=None):
         star_tracker={k: st_cfg[k] for k in ("sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body")},
         gyro={"arw_deg_sqrt_h": gyro_cfg["arw_deg_sqrt_h"]},
         maneuvers=tuple(Maneuver(p.id, p.axis, "+" if p.sign > 0 else "-", p.t_start, p.t_end,
-                                 tuple(scenario["in_loop"])) for p in profiles),
+                                 tuple(scenario["in_loop"]), p.noise_group) for p in profiles),
         st_time=t_st, st_quat=quat, st_valid=valid,
         gyro_time=t_gyro, gyro_columns=gyro_columns,
     )
@@ -221,27 +229,63 @@ def simulate(scenario: dict, seed=None):
                   "arw_deg_sqrt_h": gyro_cfg["arw_deg_sqrt_h"]},
         "effects": {k: v for k, v in eff.items() if v},
     }
+    if st_cfg["gm_tau_s"] and (st_cfg["gm_sigma_cross_arcsec"] or st_cfg["gm_sigma_about_arcsec"]):
+        truth_out["noise"].update({k: st_cfg[k] for k in ("gm_sigma_cross_arcsec", "gm_sigma_about_arcsec", "gm_tau_s")})
+    if any(p.noise_scale != 1.0 or p.noise_group != DEFAULT_NOISE_GROUP for p in profiles):
+        truth_out["maneuver_noise"] = {p.id: {"noise_scale": p.noise_scale, "noise_group": p.noise_group}
+                                       for p in profiles}
     return campaign, truth_out
 
 
-def star_tracker_noise(n, dt_s, st_cfg, correlation_time_s, rng):
-    """Body-frame attitude noise (rad): sigma across and about a boresight, optionally AR(1)."""
+def maneuver_scale(profiles, times, closed_start: bool) -> np.ndarray:
+    """Each time's noise scale: its maneuver's ``noise_scale`` inside ``[t_start, t_end]`` (a gyro
+    interval, ``closed_start`` false, from just after ``t_start``: it ends at its time), else 1."""
+    scale = np.ones(len(times))
+    for p in profiles:
+        if p.noise_scale != 1.0:
+            start = (times > p.t_start) if closed_start else (times >= p.t_start)
+            scale[start & (times <= p.t_end)] = p.noise_scale
+    return scale
+
+
+def gauss_markov(white, dt_s, tau_s) -> np.ndarray:
+    """Unit-variance first-order Gauss-Markov samples every ``dt_s`` from unit white ``white``
+    (rows in time): the exact AR(1) of the continuous process, x[k] = phi x[k-1] +
+    sqrt(1 - phi^2) w[k] with phi = exp(-dt/tau), started from its stationary distribution, so
+    every sample has variance 1 and lag-k correlation phi^k."""
+    from scipy.signal import lfilter  # 0.7 s to import, for this case alone
+
+    phi = np.exp(-dt_s / tau_s)
+    white = white.copy()
+    white[0] /= np.sqrt(1 - phi**2)
+    return lfilter([np.sqrt(1 - phi**2)], [1.0, -phi], white, axis=0)
+
+
+def star_tracker_noise(n, dt_s, st_cfg, correlation_time_s, rng, scale=None):
+    """Body-frame attitude noise (rad), anisotropic about a boresight: white noise of sigma across
+    and about it (AR(1) as a whole with the hidden effect ``st_correlation_time_s``), times
+    ``scale`` per sample, plus the Gauss-Markov part that ``gm_*`` declares, unscaled."""
     boresight = np.asarray(st_cfg["boresight_body"], dtype=float)
     boresight /= np.linalg.norm(boresight)
     helper = np.eye(3)[np.argmin(np.abs(boresight))]
     e1 = np.cross(boresight, helper)
     e1 /= np.linalg.norm(e1)
     e2 = np.cross(boresight, e1)
+
+    def frame(unit, cross_arcsec, about_arcsec):
+        cross, about = arcsec_to_rad(cross_arcsec), arcsec_to_rad(about_arcsec)
+        return cross * (unit[:, :1] * e1 + unit[:, 1:2] * e2) + about * unit[:, 2:] * boresight
+
     white = rng.normal(size=(n, 3))
     if correlation_time_s > 0:
-        from scipy.signal import lfilter  # 0.7 s to import, for this case alone
-
-        phi = np.exp(-dt_s / correlation_time_s)
-        white[0] /= np.sqrt(1 - phi**2)
-        white = lfilter([np.sqrt(1 - phi**2)], [1.0, -phi], white, axis=0)
-    cross = arcsec_to_rad(st_cfg["sigma_cross_arcsec"])
-    about = arcsec_to_rad(st_cfg["sigma_about_arcsec"])
-    return cross * (white[:, :1] * e1 + white[:, 1:2] * e2) + about * white[:, 2:] * boresight
+        white = gauss_markov(white, dt_s, correlation_time_s)
+    noise = frame(white, st_cfg["sigma_cross_arcsec"], st_cfg["sigma_about_arcsec"])
+    if scale is not None:
+        noise = noise * scale[:, None]
+    gm_cross, gm_about, tau = (st_cfg.get(k, 0.0) for k in ("gm_sigma_cross_arcsec", "gm_sigma_about_arcsec", "gm_tau_s"))
+    if tau > 0 and (gm_cross or gm_about):
+        noise = noise + frame(gauss_markov(rng.normal(size=(n, 3)), dt_s, tau), gm_cross, gm_about)
+    return noise
 
 
 def run(scenario_path, outdir, seed=None):
