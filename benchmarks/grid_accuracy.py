@@ -3,7 +3,7 @@
     python benchmarks/grid_accuracy.py
 
 On the default MOM-like campaign (simulated, preprocessed, WLS for the baseline model), the
-posterior's log-likelihood from the grid's cubic interpolation (`posterior.RatioGrid`) is
+posterior's log-likelihood from the grid's cubic interpolation (`noisegrid.RatioGrid`) is
 compared with the exact one (`likelihood.campaign_stats` at that point) at 40 noise ratios
 within 2 of their sd, at the point estimate and at a parameter offset drawn from twice the
 posterior's spread. Printed per grid (nodes per side, half width in sd): its build time,
@@ -23,7 +23,7 @@ GRIDS = [(11, 7.0), (9, 7.0), (7, 8.0), (5, 8.0)]
 
 
 def main():
-    from gyrocal.inference import posterior
+    from gyrocal.inference import noisegrid
     from gyrocal.inference.estimate import linearize_all
     from gyrocal.inference.likelihood import campaign_stats
     from gyrocal.inference.noise import variances
@@ -33,7 +33,7 @@ def main():
     maneuvers, est, priors, spec = fitted.maneuvers, fitted.estimate, fitted.priors, fitted.estimate.spec
     _, noises = linearize_all(maneuvers, est)
     ratios = est.log_sigma[1:] - est.log_sigma[0]
-    ratio_sd = posterior.ratio_curvature(noises, ratios, np.sqrt(2.0) * priors.log_sigma_sd[0])
+    ratio_sd = noisegrid.ratio_curvature(noises, ratios, np.sqrt(2.0) * priors.log_sigma_sd[0])
     scale = np.exp(2 * est.log_sigma[0])
     rng = np.random.default_rng(0)
     points = ratios + ratio_sd * rng.uniform(-2, 2, (40, 2))
@@ -42,7 +42,7 @@ def main():
     print(f"noise ratios {ratios.round(3)}, their sd {ratio_sd.round(4)}; errors in log-likelihood units")
     for nodes, half_width in GRIDS:
         start = time.perf_counter()
-        grid = posterior.RatioGrid(noises, ratios, ratio_sd, nodes, half_width)
+        grid = noisegrid.RatioGrid(noises, ratios, ratio_sd, nodes, half_width)
         build_s = time.perf_counter() - start
         A, b, c, logdet, inside = grid.stats(points)
         errors = [abs(0.5 * ((x @ A[k] @ x - 2 * b[k] @ x + c[k]) - (x @ s.A @ x - 2 * s.b @ x + s.c)) / scale

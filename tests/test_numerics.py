@@ -14,7 +14,7 @@ from gyrocal.criticism import diagnostics
 from gyrocal.inference import errormodel, noise, predictive, selectedinverse
 from gyrocal.inference.likelihood import Stats, campaign_stats
 from gyrocal.inference.noise import variances
-from gyrocal.inference.posterior import RatioGrid
+from gyrocal.inference.noisegrid import RatioGrid
 
 M, SETS, P, CHANNELS = 30, 2, 4, 3
 BORESIGHT = [0.3, 0.0, 0.954]
@@ -32,27 +32,41 @@ def tiny_linearization(seed=0, m=M):
         shared_walk=errormodel._shared_walk(SETS, st_dt), body_error=rng.normal(0, 1e-4, (m, SETS, 3)))
 
 
-def tapered(gap, tau):
-    return np.exp(-gap / tau) * np.clip(1 - gap / (noise.TAPER_CORRELATION_TIMES * tau), 0, None)
-
-
 def dense_covariance(lin, var, tau=0.0):
     """Undifferenced covariance of the stacked inertial errors, from the definitions: one
     star-tracker error shared by the sets (anisotropic about the boresight, rotated to
-    inertial, correlated in time when tau > 0) plus each set's own cumulative gyro walk."""
+    inertial; with tau > 0 plus a Gauss-Markov part, ``g_j = phi_j g_(j-1) + R_j eta_j``) plus
+    each set's own cumulative gyro walk."""
     m, s = lin.z.shape[:2]
     b = np.asarray(BORESIGHT) / np.linalg.norm(BORESIGHT)
     body = var["cross"] * (np.eye(3) - np.outer(b, b)) + var["about"] * np.outer(b, b)
+    gm = var.get("gm_cross", 0.0) * (np.eye(3) - np.outer(b, b)) + var.get("gm_about", 0.0) * np.outer(b, b)
+    phi = np.exp(-lin.st_dt / tau) if tau > 0 else np.zeros(m)
+    phi[0] = 0.0
     t = np.cumsum(lin.st_dt)
     cov = np.zeros((m, s, 3, m, s, 3))
     for j in range(m):
         for k in range(m):
-            c = 1.0 if j == k else (tapered(abs(t[j] - t[k]), tau) if tau > 0 else 0.0)
-            block = c * lin.st_matrix[j] @ body @ lin.st_matrix[k].T
+            block = (j == k) * lin.st_matrix[j] @ body @ lin.st_matrix[j].T
+            for i in range(min(j, k) + 1 if tau > 0 else 0):
+                reach = np.prod(phi[i + 1:j + 1]) * np.prod(phi[i + 1:k + 1]) * (1 - phi[i] ** 2)
+                block = block + reach * lin.st_matrix[i] @ gm @ lin.st_matrix[i].T
             cov[j, :, :, k, :, :] += block[None, :, None, :]
             for u in range(s):
-                cov[j, u, :, k, u, :] += var["walk"] * np.sum(lin.st_dt[:min(j, k) + 1]) * np.eye(3)
+                cov[j, u, :, k, u, :] += var["walk"] * t[min(j, k)] * np.eye(3)
     return cov.reshape(m * s * 3, m * s * 3)
+
+
+def transform_matrix(nz, m, width):
+    """The noise's transform T as a dense matrix: first differences, or its Gauss-Markov filter."""
+    if nz.filter is None:
+        return difference_matrix(m, width)
+    t = np.eye(m * width)
+    t1, t2 = nz.filter.row_coefficients(width)
+    idx = np.arange(m * width)
+    t[idx[width:], idx[:-width]] = t1[:-width]
+    t[idx[2 * width:], idx[:-2 * width]] = t2[:-2 * width]
+    return t
 
 
 def difference_matrix(m, width):
@@ -72,14 +86,14 @@ def band_to_dense(ab):
     return out
 
 
-VAR = {"cross": 2.0e-10, "about": 3.5e-9, "walk": 4.0e-12}
+VAR = {"cross": 2.0e-10, "about": 3.5e-9, "walk": 4.0e-12, "gm_cross": 6.0e-10, "gm_about": 1.05e-8}
 
 
 @pytest.mark.parametrize("tau", [0.0, 2.5])
 def test_banded_covariance_equals_the_dense_differenced_covariance(tau):
     lin = tiny_linearization()
     nz = noise.build(lin, BORESIGHT, tau)
-    t = difference_matrix(M, 3 * SETS)
+    t = transform_matrix(nz, M, 3 * SETS)
     expected = t @ dense_covariance(lin, VAR, tau) @ t.T
     got = band_to_dense(nz.covariance(VAR))
     assert np.abs(got - expected).max() < 1e-12 * np.abs(expected).max()
@@ -90,7 +104,7 @@ def test_banded_cholesky_gram_and_logdet_equal_dense_solves(tau):
     lin = tiny_linearization(1)
     nz = noise.build(lin, BORESIGHT, tau)
     gram, logdet = nz.gram(VAR)
-    t = difference_matrix(M, 3 * SETS)
+    t = transform_matrix(nz, M, 3 * SETS)
     c = t @ dense_covariance(lin, VAR, tau) @ t.T
     assert gram == pytest.approx(nz.rhs.T @ np.linalg.solve(c, nz.rhs), rel=1e-8, abs=1e-12 * np.abs(gram).max())
     assert logdet == pytest.approx(np.linalg.slogdet(c)[1], rel=1e-12)
@@ -106,20 +120,20 @@ def integrated_loglik(r, cov, g):
             - 0.5 * np.linalg.slogdet(gram)[1] - 0.5 * quad)
 
 
-@pytest.mark.parametrize("tau, block_s", [(0.0, 8.0), (2.5, 8.0), (0.0, 1.0), (2.5, 1.5), (0.5, 2.0)])
+@pytest.mark.parametrize("tau, block_s", [(0.0, 8.0), (2.5, 8.0), (0.0, 1.0), (2.5, 1.5), (0.5, 2.0), (40.0, 3.0)])
 def test_leave_block_out_loglik_equals_brute_force_conditional_densities(tau, block_s):
     """log p(block | rest) = log p(all) - log p(rest), each with the nuisance integrated out;
-    with correlated star-tracker noise (a wider band), and with blocks shorter than the band."""
+    with Gauss-Markov star-tracker noise (its filter), and with blocks shorter than the band."""
     lin = tiny_linearization(2)
     nz = noise.build(lin, BORESIGHT, tau)
-    ratios = np.array([0.9, -1.8])
+    ratios = np.array([0.9, -1.8]) if tau == 0 else np.array([0.9, -1.8, 0.6, np.log(tau)])
     wm = predictive.WhitenedManeuver(nz, ratios)
     rng = np.random.default_rng(3)
     dtheta = rng.normal(0, 0.02, (3, P))
     scale = rng.uniform(0.5, 2.0, 3) * 1e-8
     blocks = predictive.block_index(lin, np.cumsum(lin.st_dt), block_s)
     got = predictive.leave_block_out_loglik(lin, wm, dtheta, scale, blocks)
-    unit = dense_covariance(lin, variances([0.0, ratios[0], ratios[1]]), tau)
+    unit = dense_covariance(lin, noise.unit_variances(ratios), tau)
     g = noise.nuisance_design(lin).reshape(len(unit), -1)
     for d in range(len(dtheta)):
         r = lin.z.reshape(-1) - lin.design.reshape(len(unit), P) @ dtheta[d]
@@ -173,7 +187,7 @@ def test_smoothed_columns_equal_a_centred_moving_average_over_five_reference_int
 
 def test_ratio_grid_reproduces_cubic_polynomials_exactly():
     grid = RatioGrid.__new__(RatioGrid)
-    grid.nodes, grid.start, grid.step = 9, np.array([-1.0, 2.0]), np.array([0.25, 0.5])
+    grid.nodes, grid.dims, grid.start, grid.step = 9, 2, np.array([-1.0, 2.0]), np.array([0.25, 0.5])
     i, j = np.meshgrid(np.arange(9), np.arange(9), indexing="ij")
     x, y = grid.start[0] + grid.step[0] * i, grid.start[1] + grid.step[1] * j
 
@@ -186,6 +200,23 @@ def test_ratio_grid_reproduces_cubic_polynomials_exactly():
     assert inside.all()
     assert weights @ values == pytest.approx(cubic(points[:, 0], points[:, 1]), rel=1e-12)
     assert not grid.weights(np.array([[-1.0, 2.0], [5.0, 3.0]]))[1].any()
+
+
+def test_four_dimensional_ratio_grid_reproduces_cubic_polynomials_exactly():
+    """The grid of correlated noise (four ratios, tau among them) interpolates a cubic exactly."""
+    grid = RatioGrid.__new__(RatioGrid)
+    grid.nodes, grid.dims = 6, 4
+    grid.start, grid.step = np.array([-1.0, 2.0, 0.0, 1.0]), np.array([0.25, 0.5, 0.4, 0.3])
+    nodes = grid.start + grid.step * np.stack(np.meshgrid(*[np.arange(6)] * 4, indexing="ij"), axis=-1)
+
+    def cubic(r):
+        u, v, w, x = np.moveaxis(r, -1, 0)
+        return 1 + u * v * w - w**3 + 0.5 * x**3 - u * x**2 + v * w * x
+
+    points = grid.start + grid.step * np.array([[1.3, 2.7, 3.5, 1.1], [2.0, 1.0, 3.9, 3.6]])
+    weights, inside = grid.weights(points)
+    assert inside.all()
+    assert weights @ cubic(nodes).reshape(-1) == pytest.approx(cubic(points), rel=1e-12)
 
 
 def test_ratio_grid_over_a_flat_profile_stays_where_the_covariance_can_be_factored():

@@ -5,7 +5,7 @@ raises `EstimateError` with the parameter and the maneuver it concerns."""
 import numpy as np
 
 from gyrocal.errors import InputError
-from gyrocal.inference import identification, noise
+from gyrocal.inference import identification, noise, noisefit
 from gyrocal.inference.estimate import PointEstimate, linearize_all
 from gyrocal.inference.likelihood import maneuver_stats
 from gyrocal.inference.noise import variances
@@ -27,10 +27,10 @@ the sensors can have: the residuals are structure the model lacks."""
 def check_noise(maneuvers, est: PointEstimate):
     """Stop before sampling when REML puts a noise scale `NOISE_PLAUSIBLE` times off the stated one;
     the message gives each maneuver's residual RMS about roll, pitch and yaw."""
-    ratio = np.exp(est.log_sigma - noise.log_sigma_of(est.stated_noise))
+    ratio = np.exp(est.log_sigma[:3] - noise.log_sigma_of(est.stated_noise))
     off = (ratio > NOISE_PLAUSIBLE) | (ratio < 1.0 / NOISE_PLAUSIBLE)
     if off.any():
-        fitted, stated = noise.stated_scales(est.log_sigma), noise.stated_scales(noise.log_sigma_of(est.stated_noise))
+        fitted, stated = noise.stated_scales(est.log_sigma[:3]), noise.stated_scales(noise.log_sigma_of(est.stated_noise))
         listed = "; ".join(f"{k} {fitted[k]:.3g} (stated {stated[k]:.3g})" for k, bad in zip(fitted, off) if bad)
         lins, _ = linearize_all(maneuvers, est)
         rms = [np.sqrt(np.mean((lin.body_error[:, 0] - lin.body_error[:, 0].mean(axis=0)) ** 2, axis=0))
@@ -39,8 +39,22 @@ def check_noise(maneuvers, est: PointEstimate):
         raise EstimateError(
             f"point estimate of model {est.spec.model}: the fitted noise is not a noise these sensors can have: "
             f"{listed}. The residuals hold structure far above the noise that the model lacks (RMS about roll, "
-            f"pitch, yaw, arcsec: {residuals}); validate the campaign (gyrocal validate) and read its warnings, "
-            "or add the effect they point to")
+            f"pitch, yaw, arcsec: {residuals}){_correlation_advice(lins, est)}; validate the campaign (gyrocal "
+            "validate) and read its warnings, or add the effect they point to")
+
+
+def _correlation_advice(lins, est: PointEstimate) -> str:
+    """Where the residuals' differences are correlated in time and the model's reference noise is
+    white, say so: a reference sampled faster than its noise is white (a star tracker's slow
+    errors, motion capture at 100 Hz) collapses a white-noise fit."""
+    if est.spec.correlated_noise:
+        return ""
+    tau = noisefit.correlation_time(lins)
+    if tau <= 0:
+        return ""
+    return (f". They are correlated in time (correlation time about {tau:.3g} s from their differences): add "
+            "st_correlated_noise to the model (white plus Gauss-Markov reference noise), or import the reference at "
+            "an interval longer than that (gyrocal import --reference-interval)")
 
 
 def check_physical(maneuvers, est: PointEstimate, bound_si):

@@ -12,7 +12,6 @@ import pandas as pd
 
 from gyrocal.criticism.modelchoice import classify, paired_se, reviewed_model, stacking_weights
 from gyrocal.inference.inferencedata import PARETO_K_MAX
-from gyrocal.inference.noise import NOISE_LABELS
 
 __all__ = ["compare", "loo_totals", "moved"]
 
@@ -30,7 +29,7 @@ def moved(reference: pd.DataFrame, current: pd.DataFrame) -> list:
     posterior summaries indexed by label; the noise scales are not channel parameters."""
     out = []
     for label in reference.index.intersection(current.index):
-        if label in NOISE_LABELS:
+        if label.startswith("noise."):
             continue
         sd = max(reference.loc[label, "sd"], current.loc[label, "sd"])
         if abs(current.loc[label, "mean"] - reference.loc[label, "mean"]) > 2 * sd:

@@ -17,7 +17,7 @@ from gyrocal.checks.finding import Finding
 from gyrocal.inference import errormodel, noise
 from gyrocal.inference.estimate import PointEstimate, linearize_all
 from gyrocal.inference.likelihood import campaign_stats
-from gyrocal.inference.noise import NOISE_SCALES, variances
+from gyrocal.inference.noise import CORRELATED_SCALES, NOISE_SCALES, ratios_of, variances
 from gyrocal.inference.predictive import WhitenedManeuver
 from gyrocal.model import effects
 from gyrocal.model.units import AXES, rad_to_arcsec
@@ -214,7 +214,7 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
 def whiteness(maneuvers, lins, noises, estimate: PointEstimate):
     """Lag-1 autocorrelation of the standardised innovations at the fitted model, per
     maneuver and overall, with its z-score (``rho sqrt(n)``, N(0, 1) under the model)."""
-    ratios = estimate.log_sigma[1:] - estimate.log_sigma[0]
+    ratios = ratios_of(estimate.log_sigma)
     scale = np.exp(2 * estimate.log_sigma[0])
     per, pooled_num, pooled_den = {}, 0.0, 0.0
     for data, lin, nz in zip(maneuvers, lins, noises):
@@ -301,7 +301,8 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
     white = whiteness(maneuvers, lins, noises, estimate)
     ranking, detail = rank(maneuvers, estimate, list(maneuvers[0].extras), plugin_effects, white)
     keys = [s.key for s in NOISE_SCALES]
-    noise_post = {k: float(summary.loc[f"noise.{k}", "mean"]) for k in keys}
+    noise_post = {s.key: float(summary.loc[f"noise.{s.key}", "mean"]) for s in CORRELATED_SCALES
+                  if f"noise.{s.key}" in summary.index}
     checks = misfit_checks(residual_rms, noise_rms, white, ranking, noise_post, estimate.stated_noise, thresholds)
     per_maneuver = {}
     for (m, s), group in fit.groupby(["maneuver", "set"], sort=False):

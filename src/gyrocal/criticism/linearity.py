@@ -69,7 +69,7 @@ class _Block:
     """`columns` with the nuisance's span projected out."""
 
     def white(self, z) -> np.ndarray:
-        return self.nz.whiten(self.chol, np.asfortranarray(noise.difference(z).reshape(-1, 1)))[:, 0]
+        return self.nz.whiten(self.chol, np.asfortranarray(self.nz.transform(z).reshape(-1, 1)))[:, 0]
 
 
 def _blocks(maneuvers, estimate) -> list:

@@ -13,19 +13,18 @@ import numpy as np
 from numpy.linalg import norm
 from scipy import sparse
 from scipy.linalg import qr
-from scipy.optimize import minimize
 from scipy.optimize._lsq import common as lsq  # least_squares's own helpers: `trust_region` takes its steps
 from scipy.optimize._lsq.least_squares import TERMINATION_MESSAGES
 from scipy.sparse.linalg import LinearOperator, lsmr
 
-from gyrocal.inference import errormodel, identification, noise
+from gyrocal.inference import errormodel, identification, noise, noisefit
 from gyrocal.inference.likelihood import campaign_stats
 from gyrocal.inference.noise import variances
+from gyrocal.inference.preprocess import noise_groups
 from gyrocal.model.spec import ModelSpec
 
 __all__ = [
-    "PointEstimate", "correlation_time", "estimate_noise", "linearize_all", "point_estimate", "profile_reml",
-    "trust_region", "wls"
+    "PointEstimate", "linearize_all", "point_estimate", "trust_region", "wls"
 ]
 
 
@@ -55,6 +54,19 @@ class PointEstimate:
     took 0.6 s in each of their jobs (empty: computed when asked)."""
     at_estimate_keys: tuple = ()
     """`linearization_key` of each saved linearisation: what it was computed from."""
+    noise_groups: tuple = ()
+    """The campaign's noise groups (`preprocess.noise_groups`) where it has more than one."""
+    group_offsets: np.ndarray | None = None
+    """Each noise group's ``log sigma_cross`` less the campaign's (``log_sigma[0]``); None: one group."""
+
+    def maneuver_variances(self, m: int, group: int = 0) -> dict:
+        """The noise variances of a maneuver in noise group ``group``: the campaign's, times its
+        group's level squared (every component: the group's noise is a multiple of the campaign's)."""
+        var = variances(self.log_sigma)
+        if self.group_offsets is None:
+            return var
+        factor = np.exp(2.0 * self.group_offsets[group])
+        return {k: v * factor for k, v in var.items()}
 
     @property
     def boresight(self):
@@ -84,6 +96,8 @@ class PointEstimate:
     def save(self, handle):
         lins = {k: v for m, lin in enumerate(self.at_estimate) for k, v in lin.arrays(f"lin{m}_").items()}
         lins.update({f"lin{m}_key": np.asarray(key) for m, key in enumerate(self.at_estimate_keys)})
+        if self.group_offsets is not None:
+            lins.update(noise_groups=json.dumps(list(self.noise_groups)), group_offsets=self.group_offsets)
         np.savez(handle, theta=self.theta, cov=self.cov, biases=self.biases, chi0=self.chi0,
                  log_sigma=self.log_sigma, cost=self.cost, nfev=self.nfev, message=self.message,
                  correlation_time_s=self.correlation_time_s, spec=self.spec.to_json(),
@@ -99,7 +113,9 @@ class PointEstimate:
                    z["chi0"], z["log_sigma"], float(z["cost"]), int(z["nfev"]), str(z["message"]),
                    float(z["correlation_time_s"]), json.loads(str(z["stated_noise"])),
                    tuple(errormodel.Linearization.from_arrays(z, f"lin{m}_") for m in range(n_lin)),
-                   tuple(str(z[f"lin{m}_key"]) for m in range(n_lin)))
+                   tuple(str(z[f"lin{m}_key"]) for m in range(n_lin)),
+                   tuple(json.loads(str(z["noise_groups"]))) if "group_offsets" in z.files else (),
+                   z["group_offsets"] if "group_offsets" in z.files else None)
 
 
 def _unpack(x, theta0, free, n_man, n_ch):
@@ -149,8 +165,9 @@ class _Whitened:
     one point's linearisations (the last asked for: the estimate's at the end). Whitened apart, they
     are the same to the bit as together: LAPACK's banded solve takes right-hand sides one by one."""
 
-    def __init__(self, maneuvers, spec: ModelSpec, theta0, free, chols, x0, lins0):
+    def __init__(self, maneuvers, spec: ModelSpec, theta0, free, chols, x0, lins0, filters):
         self.maneuvers, self.spec, self.theta0, self.free, self.chols = maneuvers, spec, theta0, free, chols
+        self.filters = filters
         self.n_man, self.n_ch, self.n_par = len(maneuvers), len(spec.channels), int(free.sum())
         self.n_rows = sum(chol.shape[1] for chol in chols)
         self.point, self.lins = x0.tobytes(), lins0
@@ -168,7 +185,7 @@ class _Whitened:
         out, row = np.empty(self.n_rows), 0
         for m, (lin, chol) in enumerate(zip(self.linearizations(x), self.chols)):
             n = chol.shape[1]
-            r = noise.difference(lin.z - chi0[m]).reshape(n, 1)
+            r = noise.transformed(lin.z - chi0[m], self.filters[m]).reshape(n, 1)
             out[row:row + n] = noise.whiten(chol, np.asfortranarray(r))[:, 0]
             row += n
         return out
@@ -177,8 +194,8 @@ class _Whitened:
         jac = _Jacobian(self.n_rows, self.n_par, self.n_man, 3 + self.n_ch)
         for m, (lin, chol) in enumerate(zip(self.linearizations(x), self.chols)):
             n = chol.shape[1]
-            nuis = noise.difference(noise.nuisance_design(lin)).reshape(n, -1)
-            j_theta = -noise.difference(lin.design[..., self.free]).reshape(n, -1)
+            nuis = noise.transformed(noise.nuisance_design(lin), self.filters[m]).reshape(n, -1)
+            j_theta = -noise.transformed(lin.design[..., self.free], self.filters[m]).reshape(n, -1)
             jac.add(m, noise.whiten(chol, np.asfortranarray(np.concatenate([j_theta, nuis], axis=1))))
         return jac.matrix()
 
@@ -252,7 +269,7 @@ def trust_region(fun, jac, x0, ftol: float, xtol: float, gtol: float, max_nfev: 
 
 
 def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, biases0=None, chi00=None,
-        correlation_time_s=0.0, lins0=None) -> PointEstimate:
+        correlation_time_s=0.0, lins0=None, groups=None) -> PointEstimate:
     """Weighted least squares over every maneuver: `scipy.optimize.least_squares`'s trust region
     (`trust_region`, its steps to the bit).
 
@@ -279,12 +296,20 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
     biases0 = np.zeros((n_man, n_ch)) if biases0 is None else biases0
     chi00 = np.zeros((n_man, 3)) if chi00 is None else chi00
     x0 = np.concatenate([theta0[free], np.column_stack([chi00, biases0]).ravel()])
-    var = variances(log_sigma)
+    levels = PointEstimate(spec, None, None, None, None, np.asarray(log_sigma, dtype=float), 0.0, 0, "", 0.0, {},
+                           noise_groups=() if groups is None else tuple(groups[0]),
+                           group_offsets=None if groups is None else groups[2])
+    index = np.zeros(n_man, dtype=int) if groups is None else groups[1]
     if lins0 is None:
         lins0 = [errormodel.linearize(d, spec, theta0, biases0[m]) for m, d in enumerate(maneuvers)]
     # only the factors are kept of the noise: its right-hand sides are the REML's, not the WLS's
-    chols = [noise.build(lin, boresight, correlation_time_s).factor(var) for lin in lins0]
-    problem = _Whitened(maneuvers, spec, theta0, free, chols, x0, list(lins0))
+    chols, filters = [], []
+    for lin in lins0:
+        nz = noise.build(lin, boresight, correlation_time_s)
+        chols.append(nz.factor(levels.maneuver_variances(len(chols), index[len(chols)])))
+        filters.append(nz.filter)
+        del nz
+    problem = _Whitened(maneuvers, spec, theta0, free, chols, x0, list(lins0), filters)
     if isinstance(lins0, list):
         lins0.clear()  # taken over: freed once the WLS has moved on from the start
     x, cost, nfev, status, jac = trust_region(problem.residual, problem.jacobian, x0, ftol=1e-8, xtol=1e-8,
@@ -297,7 +322,8 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
     theta, chi0, biases = _unpack(x, theta0, free, n_man, n_ch)
     estimate = PointEstimate(spec, theta, cov, biases, chi0,
                              np.asarray(log_sigma, dtype=float), float(2 * cost), int(nfev),
-                             TERMINATION_MESSAGES[status], float(correlation_time_s), dict(stated_noise))
+                             TERMINATION_MESSAGES[status], float(correlation_time_s), dict(stated_noise),
+                             noise_groups=levels.noise_groups, group_offsets=levels.group_offsets)
     estimate.at_estimate = tuple(at_estimate)
     estimate.at_estimate_keys = tuple(estimate.linearization_key(d, m) for m, d in enumerate(maneuvers))
     return estimate
@@ -309,57 +335,6 @@ def linearize_all(maneuvers, estimate: PointEstimate):
     return lins, [noise.build(lin, estimate.boresight, estimate.correlation_time_s) for lin in lins]
 
 
-def correlation_time(lins) -> float:
-    """Correlation time of the star-tracker noise from the residuals (s; 0 if white).
-
-    For first-order Gauss-Markov noise with coefficient phi per sample, the first
-    differences have lag-1 autocorrelation -(1 - phi)/2, and -1/2 when white; the slow
-    signal and the gyro walk barely touch the differences.
-    """
-    num = den = 0.0
-    steps = []
-    for lin in lins:
-        x = np.diff(lin.body_error[:, 0, :], axis=0)
-        num += float(np.sum(x[1:] * x[:-1]))
-        den += float(np.sum(x * x))
-        steps.append(np.median(lin.st_dt[1:]))
-    phi = 1.0 + 2.0 * num / den
-    if phi <= 0.05:
-        return 0.0
-    return float(-np.median(steps) / np.log(min(phi, 0.999)))
-
-
-def profile_reml(noises, ratios):
-    """REML of the noise with the cross-boresight variance profiled out in closed form.
-
-    ``ratios`` are ``log(sigma_about / sigma_cross)`` and ``log(arw / sigma_cross)``
-    (arw per sqrt(s)); the covariance is ``sigma_cross^2`` times one built from them.
-    Returns the negative log-likelihood (up to a constant) and ``log sigma_cross``.
-    Prior-only parameters have no column, so they are left out.
-    """
-    stats = campaign_stats(noises, variances([0.0, ratios[0], ratios[1]]))
-    informed = np.diag(stats.A) > 0
-    factor = np.linalg.cholesky(stats.A[np.ix_(informed, informed)])
-    explained = np.linalg.solve(factor, stats.b[informed])
-    n = stats.n - int(informed.sum())
-    scale = (stats.c - explained @ explained) / n
-    negative = 0.5 * (n * np.log(scale) + stats.logdet + 2 * np.sum(np.log(np.diag(factor))))
-    return negative, 0.5 * np.log(scale)
-
-
-def estimate_noise(noises, log_sigma0) -> np.ndarray:
-    """Type-II maximum likelihood (REML) of ``log [sigma_cross, sigma_about, arw]``.
-
-    The channel parameters and the nuisance are integrated out under flat priors.
-    """
-    log_sigma0 = np.asarray(log_sigma0, dtype=float)
-    start = log_sigma0[1:] - log_sigma0[0]
-    opt = minimize(lambda r: profile_reml(noises, r)[0], start, method="Nelder-Mead",
-                   options={"xatol": 1e-3, "fatol": 1e-3})
-    log_cross = profile_reml(noises, opt.x)[1]
-    return np.array([log_cross, log_cross + opt.x[0], log_cross + opt.x[1]])
-
-
 def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estimate_scales=True) -> PointEstimate:
     """REML noise scales about a starting point (the classic estimate), then WLS from it.
 
@@ -368,7 +343,8 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     both ways, or have no holds), a WLS with the stated noise gives the start. The classic
     estimate is within a few tens of ppm of the optimum, so the model is linear enough about
     it for the noise scales; the WLS then needs a few steps. A model with correlated
-    star-tracker noise first estimates its correlation time there.
+    star-tracker noise estimates its Gauss-Markov part there too (always: its sd and correlation
+    time are what the model is for), from the residuals' correlation time as a start.
     """
     spec = spec.with_prior_only(identification.unflown(maneuvers, spec))
     log_sigma = noise.log_sigma_of(stated_noise)
@@ -387,12 +363,17 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     if weak:
         start = start_at(spec.with_prior_only(weak))
         lins, noises = linearize_all(maneuvers, start)
-    tau = 0.0
+    tau, offsets = 0.0, None
+    names, index = noise_groups(maneuvers)
+    index = index if len(names) > 1 else None
     if spec.correlated_noise:
-        tau = correlation_time(lins)
-        noises = [noise.build(lin, start.boresight, tau) for lin in lins]
-    if estimate_scales:
-        log_sigma = estimate_noise(noises, log_sigma)
+        noises = None
+        tau0 = noisefit.correlation_time(lins) or noisefit.TAU_START_INTERVALS * noisefit.st_step(lins)
+        log_sigma, offsets = noisefit.estimate_correlated_noise(lins, start.boresight, log_sigma, tau0, index)
+        tau = float(np.exp(log_sigma[4]))
+    elif estimate_scales:
+        log_sigma, offsets = noisefit.estimate_noise(noises, log_sigma, index)
     del noises  # the REML's right-hand sides: as large as the linearisations, and the WLS needs neither
+    groups = None if offsets is None else (names, index, offsets)
     return wls(maneuvers, start.spec, stated_noise, log_sigma, start.theta, start.biases, start.chi0,
-               correlation_time_s=tau, lins0=lins)
+               correlation_time_s=tau, lins0=lins, groups=groups)

@@ -18,7 +18,7 @@ from arviz.stats.stats_utils import logsumexp
 
 from gyrocal import __version__
 from gyrocal.inference import predictive, preprocess
-from gyrocal.inference.noise import NOISE_LABELS, NOISE_SCALES, scales_in_units, stated_scales
+from gyrocal.inference.noise import CORRELATED_SCALES, build, noise_scales, scales_in_units, stated_scales
 from gyrocal.model import channels as ch
 from gyrocal.model.units import AXES, rad_to_arcsec
 
@@ -60,12 +60,14 @@ def loo_blocks(idata, model: str) -> pd.DataFrame:
 
 
 def posterior_dataset(draws, theta_hat, spec) -> az.InferenceData:
-    """(chains, draws, P + 3) sampled offsets and log noise scales, in the parameters' units."""
+    """(chains, draws, P + 3) sampled offsets and log noise scales (P + 5 with correlated noise), in
+    the parameters' units."""
     p = len(spec)
     values = spec.to_unit(theta_hat + draws[..., :p])
     noise = scales_in_units(draws[..., p:])
+    scales = noise_scales(draws.shape[-1] - p > 3)
     return az.from_dict(
-        posterior={"channel_param": values, **{s.key: noise[..., i] for i, s in enumerate(NOISE_SCALES)}},
+        posterior={"channel_param": values, **{s.key: noise[..., i] for i, s in enumerate(scales)}},
         coords={"parameter": spec.labels}, dims={"channel_param": ["parameter"]})
 
 
@@ -85,8 +87,9 @@ def summarize(idata, per_walker, labels, convergence: dict) -> pd.DataFrame:
     tail = (1 - CI_PROB) / 2
     low, high = (draws.quantile(q, dim=("chain", "draw")) for q in (tail, 1 - tail))
     rows = []
-    for label in list(labels) + NOISE_LABELS:
-        if label in NOISE_LABELS:
+    noise_labels = [f"noise.{s.key}" for s in CORRELATED_SCALES if s.key in draws]
+    for label in list(labels) + noise_labels:
+        if label in noise_labels:
             name, sel = label.removeprefix("noise."), {}
         else:
             name, sel = "channel_param", {"parameter": label}
@@ -131,12 +134,14 @@ def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
     pp_values, obs_values, sample_maneuver, sample_time = [], [], [], []
     zeros = ch.ChannelParams.zeros(maneuvers[0].channels)
     for data, (lin, nz) in zip(maneuvers, post.take_maneuvers(), strict=True):
+        if nz.filter is not None:  # Gauss-Markov noise: filtered at the draws' mean correlation time
+            nz = build(lin, post.estimate.boresight, float(np.exp(ratios[-1])))
         wm = predictive.WhitenedManeuver(nz, ratios)
         blocks = predictive.block_index(lin, data.st_time, sampler_cfg["block_s"])
         loglik.append(predictive.leave_block_out_loglik(lin, wm, dtheta, scale2, blocks))
         block_names += [f"{data.id}:{b}" for b in range(blocks.max() + 1)]
         resid = predictive.residuals_body(lin, dtheta[pred_rows], wm.nuisance(dtheta[pred_rows]))
-        noise_rep = predictive.undifference_body(lin, wm.noise_draws(scale2[pred_rows], rng))
+        noise_rep = predictive.undifference_body(lin, wm.noise_draws(scale2[pred_rows], rng), nz)
         for s, channel_set in enumerate(lin.sets):
             observed = preprocess.error_angles(data, channel_set, zeros)
             mean_pred = observed[None] - resid[:, :, s]

@@ -7,7 +7,8 @@ propagated attitude. Taking first differences in time (the first sample kept) tu
 the walk into white noise and the star-tracker noise into an MA(1) process, so the
 covariance of the differenced, set-stacked series is block tridiagonal: O(N) to
 factor with LAPACK's banded Cholesky. Its three components are linear in
-``sigma_cross^2``, ``sigma_about^2`` and ``ARW^2``.
+``sigma_cross^2``, ``sigma_about^2`` and ``ARW^2``. Star-tracker noise with a Gauss-Markov
+part is filtered instead (`markov`): two samples deep, two more components.
 """
 
 from dataclasses import dataclass
@@ -15,14 +16,16 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import cholesky_banded
 from scipy.linalg.lapack import dtbtrs
+from scipy.special import expit
 
+from gyrocal.inference import markov
 from gyrocal.inference.errormodel import Linearization
 from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
 __all__ = [
-    "COMPONENTS", "NOISE_LABELS", "NOISE_SCALES", "TAPER_CORRELATION_TIMES", "ManeuverNoise", "NoiseScale", "build",
-    "correlation_depth", "difference", "log_sigma_of", "noise_knowledge", "nuisance_design", "scales_in_units",
-    "star_tracker_correlation", "stated_scales", "stated_si", "variances", "whiten"
+    "COMPONENTS", "CORRELATED_SCALES", "NOISE_LABELS", "NOISE_SCALES", "ManeuverNoise", "NoiseScale", "build",
+    "difference", "log_sigma_of", "noise_knowledge", "noise_labels", "noise_scales", "nuisance_design", "ratios_of",
+    "scales_in_units", "stated_scales", "stated_si", "transformed", "unit_variances", "variances", "whiten"
 ]
 
 COMPONENTS = ("cross", "about", "walk")
@@ -30,10 +33,12 @@ COMPONENTS = ("cross", "about", "walk")
 
 @dataclass(frozen=True)
 class NoiseScale:
-    """One noise scale: its name in the contract's unit, and that unit in SI."""
+    """One noise scale: its name in the contract's unit, and that unit in SI; sampled as its log,
+    or as its logit where it is a fraction."""
 
     key: str
     si_per_unit: float
+    logit: bool = False
 
 
 NOISE_SCALES = (NoiseScale("sigma_cross_arcsec", ARCSEC_RAD), NoiseScale("sigma_about_arcsec", ARCSEC_RAD),
@@ -41,8 +46,28 @@ NOISE_SCALES = (NoiseScale("sigma_cross_arcsec", ARCSEC_RAD), NoiseScale("sigma_
 """The three sampled scales, in the order of ``log_sigma``: star tracker across and about its
 boresight (rad), gyro angle random walk (rad/sqrt(s))."""
 
+CORRELATED_SCALES = NOISE_SCALES + (NoiseScale("st_gm_fraction", 1.0, logit=True), NoiseScale("st_gm_tau_s", 1.0))
+"""With correlated star-tracker noise (`markov`), two more: the share of the star tracker's
+variance that is Gauss-Markov (the same share across and about the boresight, so
+``sigma_cross`` and ``sigma_about`` stay its total sd, as data sheets state it), and its
+correlation time (s)."""
+
 NOISE_LABELS = [f"noise.{s.key}" for s in NOISE_SCALES]
 """The noise scales' labels in ``posterior_summary.csv`` (beside the channel parameters')."""
+
+
+def noise_scales(correlated: bool) -> tuple:
+    """The scales a model samples: three, or five with correlated star-tracker noise."""
+    return CORRELATED_SCALES if correlated else NOISE_SCALES
+
+
+def noise_labels(correlated: bool) -> list:
+    """`NOISE_LABELS` of a model: with correlated noise, its two scales too."""
+    return [f"noise.{s.key}" for s in noise_scales(correlated)]
+
+
+def _scales_of(log_sigma) -> tuple:
+    return NOISE_SCALES if np.shape(log_sigma)[-1] == len(NOISE_SCALES) else CORRELATED_SCALES
 
 
 def stated_si(stated: dict) -> np.ndarray:
@@ -56,13 +81,17 @@ def log_sigma_of(stated: dict) -> np.ndarray:
 
 
 def scales_in_units(log_sigma) -> np.ndarray:
-    """The noise scales of ``log_sigma`` (last axis) in the contract's units."""
-    return np.exp(np.asarray(log_sigma, dtype=float)) / np.array([s.si_per_unit for s in NOISE_SCALES])
+    """The noise scales of ``log_sigma`` (last axis) in the contract's units (a fraction from its logit)."""
+    log_sigma = np.asarray(log_sigma, dtype=float)
+    scales = _scales_of(log_sigma)
+    logit = np.array([s.logit for s in scales])
+    values = np.where(logit, expit(log_sigma), np.exp(np.where(logit, 0.0, log_sigma)))
+    return values / np.array([s.si_per_unit for s in scales])
 
 
 def stated_scales(log_sigma) -> dict:
     """``{key: value}`` of one ``log_sigma`` in the contract's units, for JSON files."""
-    return {s.key: float(v) for s, v in zip(NOISE_SCALES, scales_in_units(log_sigma))}
+    return {s.key: float(v) for s, v in zip(_scales_of(log_sigma), scales_in_units(log_sigma))}
 
 
 def noise_knowledge(info: dict, defaults: dict) -> dict:
@@ -74,29 +103,48 @@ def noise_knowledge(info: dict, defaults: dict) -> dict:
 
 
 def variances(log_sigma) -> dict:
-    """Noise variances from ``log [sigma_cross_rad, sigma_about_rad, arw_rad_sqrt_s]``."""
-    s = np.exp(2.0 * np.asarray(log_sigma, dtype=float))
-    return {"cross": s[0], "about": s[1], "walk": s[2]}
+    """Noise variances from ``log [sigma_cross_rad, sigma_about_rad, arw_rad_sqrt_s]``; with
+    correlated noise ``logit st_gm_fraction, log tau_s`` follow, and the star tracker's variance
+    splits into its white and Gauss-Markov shares (tau is not a variance)."""
+    log_sigma = np.asarray(log_sigma, dtype=float)
+    s = np.exp(2.0 * log_sigma[:3])
+    if len(log_sigma) == 3:
+        return {"cross": s[0], "about": s[1], "walk": s[2]}
+    white, gm = expit(-log_sigma[3]), expit(log_sigma[3])
+    return {"cross": s[0] * white, "about": s[1] * white, "walk": s[2], "gm_cross": s[0] * gm, "gm_about": s[1] * gm}
+
+
+def ratios_of(log_sigma) -> np.ndarray:
+    """What the covariance's shape depends on (last axis): the log ratios of ``sigma_about`` and the
+    ARW to ``sigma_cross``, and with correlated noise ``logit st_gm_fraction`` and ``log tau_s``;
+    ``sigma_cross^2`` enters in closed form."""
+    log_sigma = np.asarray(log_sigma, dtype=float)
+    return np.concatenate([log_sigma[..., 1:3] - log_sigma[..., :1], log_sigma[..., 3:]], axis=-1)
+
+
+def unit_variances(ratios) -> dict:
+    """`variances` at unit ``sigma_cross`` from `ratios_of`'s ratios."""
+    ratios = np.asarray(ratios, dtype=float)
+    return variances(np.concatenate([[0.0], ratios]))
 
 
 def _banded_lower(diag_blocks, lower_blocks, depth=1):
     """LAPACK lower band storage of a symmetric block-banded matrix.
 
-    ``lower_blocks[d - 1]`` holds the blocks d steps below the diagonal (d <= depth).
+    ``lower_blocks[d - 1]`` holds the blocks d steps below the diagonal (d <= depth). Band row k
+    of column ``j m + b`` is entry ``((b + k) mod m, b)`` of the block ``(b + k) // m`` steps below
+    sample j's diagonal: one strided copy per (k, b), no scatter.
     """
     n_blocks, m, _ = diag_blocks.shape
     kd = (depth + 1) * m - 1
     ab = np.zeros((kd + 1, n_blocks * m))
-    a, b = np.tril_indices(m)
-    starts = m * np.arange(n_blocks)
-    rows = (starts[:, None] + a[None]).ravel()
-    cols = (starts[:, None] + b[None]).ravel()
-    ab[rows - cols, cols] = diag_blocks[:, a, b].ravel()
-    a, b = np.indices((m, m)).reshape(2, -1)
-    for d in range(1, min(depth, n_blocks - 1) + 1):
-        rows = (starts[d:, None] + a[None]).ravel()
-        cols = (starts[:-d, None] + b[None]).ravel()
-        ab[rows - cols, cols] = lower_blocks[d - 1][:, a, b].ravel()
+    for k in range(kd + 1):
+        for b in range(m):
+            lag, a = divmod(b + k, m)
+            if lag == 0:
+                ab[k, b::m] = diag_blocks[:, a, b]
+            elif lag <= min(depth, n_blocks - 1):
+                ab[k, b:(n_blocks - lag) * m:m] = lower_blocks[lag - 1][:, a, b]
     return ab
 
 
@@ -105,9 +153,16 @@ def difference(series: np.ndarray) -> np.ndarray:
     return np.concatenate([series[:1], np.diff(series, axis=0)])
 
 
+def transformed(series: np.ndarray, filt) -> np.ndarray:
+    """A series (M, ...) as the noise's right-hand sides hold it: first-differenced (``filt`` None),
+    or through a Gauss-Markov `markov.Filter`."""
+    return difference(series) if filt is None else filt.apply(series)
+
+
 @dataclass
 class ManeuverNoise:
-    """Banded covariance components and the differenced right-hand sides of one maneuver."""
+    """Banded covariance components and the transformed (differenced, or Gauss-Markov filtered)
+    right-hand sides of one maneuver."""
 
     maneuver: str
     components: dict
@@ -118,6 +173,8 @@ class ManeuverNoise:
     as LAPACK's banded solve takes it (a row-major copy costs it half as much again)."""
     n_params: int
     n_nuisance: int
+    filter: markov.Filter | None = None
+    """The Gauss-Markov filter of correlated noise; None: first differences."""
 
     @property
     def n(self) -> int:
@@ -126,12 +183,20 @@ class ManeuverNoise:
     def covariance(self, variances: dict) -> np.ndarray:
         """The banded covariance: ``sum(variances[k] * components[k])``, to the bit (the walk's
         zeros off the diagonal added nothing: no entry of the first two's sum is -0.0)."""
-        out = sum(variances[k] * self.components[k] for k in COMPONENTS[:2])
+        out = sum(variances[k] * c for k, c in self.components.items() if k != "walk")
         walk = self.components["walk"]
         if walk.ndim == 1:
             out[0] += variances["walk"] * walk
             return out
         return out + variances["walk"] * walk
+
+    def transform(self, series: np.ndarray) -> np.ndarray:
+        """The series (M, ...) as ``rhs`` holds it: first-differenced, or Gauss-Markov filtered."""
+        return transformed(series, self.filter)
+
+    def untransform(self, transformed: np.ndarray) -> np.ndarray:
+        """`transform`'s inverse along the first axis."""
+        return np.cumsum(transformed, axis=0) if self.filter is None else self.filter.invert(transformed)
 
     def factor(self, variances: dict) -> np.ndarray:
         return cholesky_banded(self.covariance(variances), lower=True)
@@ -164,89 +229,47 @@ def nuisance_design(lin: Linearization) -> np.ndarray:
     return np.concatenate([chi0, lin.bias_design], axis=3)
 
 
-TAPER_CORRELATION_TIMES = 6.0
-"""Correlated star-tracker noise: the AR(1) correlation is tapered (Bartlett) to zero at
-this many correlation times, which keeps the covariance banded and positive definite."""
-
-
-def star_tracker_correlation(st_time, lag, correlation_time_s):
-    """Correlation of the star-tracker noise between samples ``lag`` apart (tapered AR(1))."""
-    if lag == 0:
-        return np.ones(len(st_time))
-    if correlation_time_s <= 0:
-        return np.zeros(len(st_time) - lag)
-    gap = st_time[lag:] - st_time[:-lag]
-    cutoff = TAPER_CORRELATION_TIMES * correlation_time_s
-    return np.exp(-gap / correlation_time_s) * np.clip(1 - gap / cutoff, 0, None)
-
-
-def correlation_depth(st_time, correlation_time_s) -> int:
-    """How many samples apart the tapered correlation reaches."""
-    if correlation_time_s <= 0:
-        return 0
-    step = np.median(np.diff(st_time))
-    return int(np.ceil(TAPER_CORRELATION_TIMES * correlation_time_s / step))
-
-
 def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -> ManeuverNoise:
-    """Covariance components and differenced right-hand sides of a linearised maneuver.
+    """Covariance components and transformed right-hand sides of a linearised maneuver.
 
-    With ``correlation_time_s`` > 0 the star-tracker noise is first-order Gauss-Markov
-    (a filtered attitude) instead of white; the band widens to cover its reach.
+    White star-tracker noise: first differences, the covariance one sample deep. With
+    ``correlation_time_s`` > 0 the star-tracker noise has a first-order Gauss-Markov part too
+    (`markov`): its exact filter, two samples deep, and two more components.
     """
     m_samples, n_sets = lin.z.shape[:2]
     block = 3 * n_sets
     b = np.asarray(boresight_body, dtype=float)
     b = b / np.linalg.norm(b)
-    about_body = np.outer(b, b)
-    ones = np.ones((n_sets, n_sets))
+    shapes = {"cross": np.eye(3) - np.outer(b, b), "about": np.outer(b, b)}
+    nuis = nuisance_design(lin)
+    n = m_samples * block
+    if correlation_time_s > 0:
+        blocks, filt = markov.covariance_blocks(lin.st_matrix, shapes, lin.random_walk(), lin.st_dt,
+                                                correlation_time_s, n_sets)
+        components = {k: _banded_lower(v[0], [v[1][1:], v[2][2:]], 2) for k, v in blocks.items()}
+        rhs = np.asfortranarray(np.concatenate([filt.apply(lin.design).reshape(n, -1), filt.apply(nuis).reshape(n, -1),
+                                                filt.apply(lin.z).reshape(n, 1)], axis=1))
+        return ManeuverNoise(lin.maneuver, components, rhs, lin.design.shape[-1], nuis.shape[-1], filt)
     R = lin.st_matrix
-    st_time = np.cumsum(lin.st_dt)
-    reach = min(correlation_depth(st_time, correlation_time_s), max(m_samples - 1, 0))
-    depth = reach + 1
+    ones = np.ones((n_sets, n_sets))
     diag, lower = {}, {}
-    for name, body_cov in (("cross", np.eye(3) - about_body), ("about", about_body)):
-        rs = np.einsum("jab,bc->jac", R, body_cov)
-
-        def cov(lag, rs=rs):
-            """Undifferenced covariance blocks between samples j + lag and j (zero-padded)."""
-            if lag > reach or lag >= m_samples:
-                return np.zeros((max(m_samples - lag, 0), block, block))
-            c = star_tracker_correlation(st_time, lag, correlation_time_s)
-            u = c[:, None, None] * np.einsum("jab,jcb->jac", rs[lag:], R[:m_samples - lag])
-            return np.einsum("st,jab->jsatb", ones, u).reshape(m_samples - lag, block, block)
-
-        # Cov(Z_{k+lag}, Z_k) for lag = 0 .. depth + 1; D_j = Z_j - Z_{j-1}, D_0 = Z_0, so
-        # Cov(D_{k+d}, D_k) = K(d, k) - K(d+1, k-1) - K(d-1, k) + K(d, k-1), K(., -1) = 0
-        blocks = [cov(lag) for lag in range(depth + 2)]
-
-        def get(lag, idx, blocks=blocks):
-            out = np.zeros((len(idx), block, block))
-            ok = (idx >= 0) & (idx < len(blocks[lag]))
-            out[ok] = blocks[lag][idx[ok]]
-            return out
-
-        j = np.arange(m_samples)
-        up = get(1, j - 1)
-        d0 = get(0, j) - up - np.transpose(up, (0, 2, 1)) + get(0, j - 1)
-        lowers = []
-        for d in range(1, depth + 1):
-            k = np.arange(m_samples - d)
-            lowers.append(get(d, k) - get(d + 1, k - 1) - get(d - 1, k) + get(d, k - 1))
-        diag[name], lower[name] = d0, lowers
+    for name, body_cov in shapes.items():
+        u = np.einsum("jab,jcb->jac", np.einsum("jab,bc->jac", R, body_cov), R)
+        u = np.einsum("st,jab->jsatb", ones, u).reshape(m_samples, block, block)
+        # D_j = Z_j - Z_(j-1), D_0 = Z_0: Var D_j = U_j + U_(j-1), Cov(D_(k+1), D_k) = -U_k
+        d0 = u.copy()
+        d0[1:] += u[:-1]
+        diag[name], lower[name] = d0, [-u[:-1]]
     walk = lin.random_walk().transpose(0, 1, 3, 2, 4).reshape(m_samples, block, block)
-    components = {k: _banded_lower(diag[k], lower[k], depth) for k in COMPONENTS[:2]}
+    components = {k: _banded_lower(diag[k], lower[k]) for k in COMPONENTS[:2]}
     on_diagonal = np.einsum("jaa->ja", walk)
     if np.count_nonzero(walk) == np.count_nonzero(on_diagonal):  # each set's walk is isotropic: dt I
         components["walk"] = on_diagonal.ravel()
     else:
-        components["walk"] = _banded_lower(walk, [np.zeros((max(m_samples - d, 0), block, block))
-                                                  for d in range(1, depth + 1)], depth)
-    nuis = difference(nuisance_design(lin))
-    n = m_samples * block
+        components["walk"] = _banded_lower(walk, [np.zeros((max(m_samples - 1, 0), block, block))])
     rhs = np.asfortranarray(np.concatenate([
         difference(lin.design).reshape(n, -1),
-        nuis.reshape(n, -1),
+        difference(nuis).reshape(n, -1),
         difference(lin.z).reshape(n, 1),
     ], axis=1))
     return ManeuverNoise(lin.maneuver, components, rhs, lin.design.shape[-1], nuis.shape[-1])

@@ -9,31 +9,40 @@ and the likelihood's sufficient statistics are tabulated on a grid over the rati
 spanning many posterior standard deviations, and interpolated (cubic Lagrange).
 """
 
-import logging
 from dataclasses import dataclass
 
 import arviz as az
 import emcee
 import numpy as np
 
-from gyrocal.inference.estimate import linearize_all, profile_reml
+from gyrocal.inference.estimate import linearize_all
 from gyrocal.inference.likelihood import (
     LOG_2PI,
-    campaign_stats,
     conditional_posterior,
     leave_one_out_log_evidence,
     maneuver_stats,
     total,
 )
-from gyrocal.inference.noise import log_sigma_of, variances
+from gyrocal.inference.noise import log_sigma_of, ratios_of, variances
+from gyrocal.inference.noisegrid import NoiseShapes, RatioGrid, ratio_curvature
 
 __all__ = [
-    "AUTOCORR_WINDOW_C", "DE_SHARE", "MAX_HALF_WIDTH_LOG_RATIO", "NOISE_NAMES", "START_REDRAWS", "LogPosterior",
-    "Posterior", "Priors", "RatioGrid", "SamplerResult", "SamplingError", "StudentProposal", "fitted_proposal",
-    "leave_one_maneuver_out", "ratio_curvature", "run_ensembles", "sample", "start_covariance"
+    "AUTOCORR_WINDOW_C", "DE_SHARE", "GM_FRACTION_LOGIT_SD", "NOISE_NAMES", "START_REDRAWS", "TAU_PRIOR_CENTER_S",
+    "TAU_PRIOR_LOG_SD",
+    "LogPosterior", "Posterior", "Priors", "SamplerResult", "SamplingError", "StudentProposal", "fitted_proposal",
+    "leave_one_maneuver_out", "run_ensembles", "sample", "start_covariance"
 ]
 
 NOISE_NAMES = ("sigma_cross", "sigma_about", "arw")
+
+GM_FRACTION_LOGIT_SD = 2.0
+"""Correlated star-tracker noise: sd of the logit of its Gauss-Markov share (12 % to 88 % within one sd)."""
+
+TAU_PRIOR_CENTER_S = 30.0
+"""Correlated star-tracker noise: the prior's median correlation time (s)."""
+
+TAU_PRIOR_LOG_SD = 2.0
+"""... and its log-normal sd: 4 s to 220 s within one sd, 0.5 s to 1 600 s within two."""
 
 
 @dataclass
@@ -49,63 +58,14 @@ class Priors:
     @classmethod
     def from_spec(cls, spec, stated_noise: dict, noise_log_sd: float) -> "Priors":
         """The spec's priors (as declared, or overridden by `ModelSpec.with_priors`); the noise
-        scales' priors are centred on the stated noise."""
-        return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, log_sigma_of(stated_noise),
-                   np.full(3, float(noise_log_sd)))
-
-
-MAX_HALF_WIDTH_LOG_RATIO = 8.0
-"""The grid spans at most this either way of each ratio's estimate (a factor e^8 = 3 000 in the
-noise): where the ratios' profile is flat and the grid falls back on their prior (sd 2.1 with
-``noise_log_sd`` 1.5), +-8 sd would reach e^17, where the covariance is numerically singular
-(a 30-sample maneuver's banded Cholesky fails from e^10; a RepoIMU trial's posterior crashed)."""
-
-
-class RatioGrid:
-    """Unit-scale sufficient statistics on a grid over the two noise ratios.
-
-    Ratios are ``log(sigma_about/sigma_cross)`` and ``log(arw/sigma_cross)``; at each
-    node the statistics are computed with ``sigma_cross = 1``. The grid spans ``half_width_sd``
-    sd either way, at most `MAX_HALF_WIDTH_LOG_RATIO`.
-    """
-
-    def __init__(self, noises, center, sd, nodes: int, half_width_sd: float):
-        self.nodes = nodes
-        half_width = np.minimum(half_width_sd * np.asarray(sd, dtype=float), MAX_HALF_WIDTH_LOG_RATIO)
-        self.start = center - half_width
-        self.step = 2 * half_width / (nodes - 1)
-        n_par = noises[0].n_params
-        self.n_params = n_par
-        values = []
-        for i in range(nodes):
-            for j in range(nodes):
-                r = self.start + self.step * np.array([i, j])
-                s = campaign_stats(noises, variances([0.0, r[0], r[1]]))
-                values.append(np.concatenate([s.A.ravel(), s.b, [s.c, s.logdet]]))
-                self.n = s.n
-        self.values = np.array(values)
-
-    def weights(self, ratios: np.ndarray):
-        """(W, nodes^2) cubic Lagrange weights, and a mask of points inside the grid."""
-        t = (ratios - self.start) / self.step
-        inside = np.all((t >= 1) & (t <= self.nodes - 2), axis=1)
-        i = np.clip(np.floor(t), 1, self.nodes - 3).astype(int)
-        f = t - i
-        w1 = np.stack([-f * (f - 1) * (f - 2) / 6, (f + 1) * (f - 1) * (f - 2) / 2,
-                       -(f + 1) * f * (f - 2) / 2, (f + 1) * f * (f - 1) / 6], axis=-1)
-        weights = np.zeros((len(ratios), self.nodes, self.nodes))
-        offsets = np.arange(-1, 3)
-        rows = np.arange(len(ratios))[:, None, None]
-        weights[rows, (i[:, 0, None] + offsets)[:, :, None], (i[:, 1, None] + offsets)[:, None, :]] = (
-            w1[:, 0, :, None] * w1[:, 1, None, :])
-        return weights.reshape(len(ratios), self.nodes**2), inside
-
-    def stats(self, ratios: np.ndarray):
-        """Interpolated unit-scale ``A, b, c, logdet`` per row of ``ratios``."""
-        weights, inside = self.weights(np.atleast_2d(ratios))
-        v = weights @ self.values
-        p = self.n_params
-        return v[:, :p * p].reshape(-1, p, p), v[:, p * p:p * p + p], v[:, -2], v[:, -1], inside
+        scales' priors are centred on the stated noise. With correlated noise, the star tracker's
+        Gauss-Markov share has a logit-normal prior about one half (`GM_FRACTION_LOGIT_SD`), its
+        correlation time a log-normal one about `TAU_PRIOR_CENTER_S`."""
+        center, sd = log_sigma_of(stated_noise), np.full(3, float(noise_log_sd))
+        if spec.correlated_noise:
+            center = np.concatenate([center, [0.0, np.log(TAU_PRIOR_CENTER_S)]])
+            sd = np.concatenate([sd, [GM_FRACTION_LOGIT_SD, TAU_PRIOR_LOG_SD]])
+        return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, center, sd)
 
 
 class LogPosterior:
@@ -121,7 +81,7 @@ class LogPosterior:
         x = np.atleast_2d(x)
         p = self.n_params
         d, log_sigma = x[:, :p], x[:, p:]
-        A, b, c, logdet, inside = self.grid.stats(log_sigma[:, 1:] - log_sigma[:, :1])
+        A, b, c, logdet, inside = self.grid.stats(ratios_of(log_sigma))
         scale = np.exp(2 * log_sigma[:, 0])
         quad = (d[:, None, :] @ A @ d[:, :, None])[:, 0, 0] - 2 * np.sum(b * d, axis=1) + c
         loglik = -0.5 * (quad / scale + logdet + self.grid.n * (np.log(scale) + LOG_2PI))
@@ -132,26 +92,6 @@ class LogPosterior:
         ok = inside & np.all(np.abs(theta) <= pr.bound, axis=1)
         value = loglik + logprior
         return np.where(ok & np.isfinite(value), value, -np.inf)
-
-
-def ratio_curvature(noises, ratios, fallback_sd, step=0.02):
-    """Standard deviations of the two ratios from the REML profile's Hessian; where the profile is
-    flat or not convex there (a noise scale the data cannot tell, as when the model misses
-    structure far above the noise), ``fallback_sd`` (their prior's), with a warning."""
-    f = lambda r: profile_reml(noises, r)[0]
-    h = np.zeros((2, 2))
-    f0 = f(ratios)
-    e = np.eye(2) * step
-    for i in range(2):
-        h[i, i] = (f(ratios + e[i]) - 2 * f0 + f(ratios - e[i])) / step**2
-    h[0, 1] = h[1, 0] = (f(ratios + e[0] + e[1]) - f(ratios + e[0] - e[1])
-                         - f(ratios - e[0] + e[1]) + f(ratios - e[0] - e[1])) / (4 * step**2)
-    if not np.all(np.isfinite(h)) or np.any(np.linalg.eigvalsh(h) <= 0):
-        logging.getLogger("gyrocal").warning(
-            "the REML profile of the noise ratios is not convex at %s: the grid spans their prior instead", ratios)
-        return np.full(2, float(fallback_sd))
-    cov = np.linalg.inv(h)
-    return np.sqrt(np.clip(np.diag(cov), 1e-10, None))
 
 
 class SamplingError(RuntimeError):
@@ -281,7 +221,7 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
     n_ens, burn = int(cfg["ensembles"]), int(cfg["burn_steps"])
     chunk, multiple, max_steps = int(cfg["chunk_steps"]), float(cfg["min_tau_multiple"]), int(cfg["max_steps"])
     laplace = StudentProposal(proposal_mean, proposal_cov)
-    theta_cov = proposal_cov[:dim - len(NOISE_NAMES), :dim - len(NOISE_NAMES)]
+    theta_cov = proposal_cov[:logpost.n_params, :logpost.n_params]
     start = StudentProposal(proposal_mean, proposal_cov, dof=5.0, inflate=2.0)
     samplers = []
     for e in range(n_ens):
@@ -319,15 +259,17 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
 
 
 def start_covariance(cond_cov, n_obs, ratio_sd):
-    """Laplace covariance of ``[dtheta, log sigma_cross, log sigma_about, log arw]``.
+    """Laplace covariance of ``[dtheta, log sigma_cross, log sigma_about, log arw]`` (and
+    ``logit st_gm_fraction, log tau`` with correlated noise).
 
-    ``log sigma_cross`` is known to about ``1/sqrt(2n)``; the other two are it plus
-    the ratios, whose spread comes from the REML Hessian.
+    ``log sigma_cross`` is known to about ``1/sqrt(2n)``; the other two are it plus the
+    ratios, whose spread comes from the REML Hessian, as does the Gauss-Markov part's.
     """
-    p = len(cond_cov)
-    lift = np.array([[1.0, 0, 0], [1, 1, 0], [1, 0, 1]])
-    hyper = lift @ np.diag([1.0 / (2 * n_obs), ratio_sd[0] ** 2, ratio_sd[1] ** 2]) @ lift.T
-    cov = np.zeros((p + 3, p + 3))
+    p, k = len(cond_cov), len(ratio_sd) + 1
+    lift = np.eye(k)
+    lift[1:3, 0] = 1.0
+    hyper = lift @ np.diag(np.concatenate([[1.0 / (2 * n_obs)], np.asarray(ratio_sd) ** 2])) @ lift.T
+    cov = np.zeros((p + k, p + k))
     cov[:p, :p] = cond_cov
     cov[p:, p:] = hyper
     return cov
@@ -387,9 +329,14 @@ def leave_one_maneuver_out(post: Posterior, priors: Priors) -> np.ndarray:
 def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dict, seed: int) -> Posterior:
     """Linearise about the point estimate, tabulate the noise ratios and run the ensembles."""
     lins, noises = linearize_all(maneuvers, estimate)
-    ratios = estimate.log_sigma[1:] - estimate.log_sigma[0]
-    ratio_sd = ratio_curvature(noises, ratios, np.sqrt(2.0) * priors.log_sigma_sd[0])
-    grid = RatioGrid(noises, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"])
+    ratios = ratios_of(estimate.log_sigma)
+    fallback = np.sqrt(2.0) * priors.log_sigma_sd[0]
+    shapes = NoiseShapes(noises)
+    if estimate.spec.correlated_noise:
+        shapes = NoiseShapes(noises, lins, estimate.boresight)
+        fallback = np.concatenate([[fallback, fallback], priors.log_sigma_sd[3:]])
+    ratio_sd = ratio_curvature(shapes, ratios, fallback)
+    grid = RatioGrid(shapes, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"])
     logpost = LogPosterior(grid, estimate.theta, priors)
     parts = [maneuver_stats(nz, variances(estimate.log_sigma)) for nz in noises]
     stats = total(parts)

@@ -12,7 +12,7 @@ import numpy as np
 from scipy.linalg import cho_solve_banded, solve_triangular
 
 from gyrocal.inference.errormodel import Linearization
-from gyrocal.inference.noise import ManeuverNoise, nuisance_design, variances
+from gyrocal.inference.noise import ManeuverNoise, nuisance_design, ratios_of, unit_variances
 from gyrocal.inference.selectedinverse import inverse_windows, recursion_bounds
 
 __all__ = [
@@ -26,7 +26,7 @@ class WhitenedManeuver:
 
     def __init__(self, noise: ManeuverNoise, ratios):
         self.noise = noise
-        self.chol = noise.factor(variances([0.0, ratios[0], ratios[1]]))
+        self.chol = noise.factor(unit_variances(ratios))
         self.white = noise.whiten(self.chol, noise.rhs)
         p, g = noise.n_params, noise.n_nuisance
         self.wx, self.wg, self.wd = self.white[:, :p], self.white[:, p:p + g], self.white[:, -1]
@@ -55,10 +55,15 @@ def residuals_body(lin: Linearization, dtheta: np.ndarray, beta: np.ndarray) -> 
     return resid @ lin.st_matrix[None]  # row vectors times R: R^T r, inertial to body
 
 
-def undifference_body(lin: Linearization, differenced: np.ndarray) -> np.ndarray:
-    """(D, M, S, 3) body-axis series from differenced inertial series (D, n)."""
+def undifference_body(lin: Linearization, differenced: np.ndarray, nz: ManeuverNoise | None = None) -> np.ndarray:
+    """(D, M, S, 3) body-axis series from transformed inertial series (D, n): first differences,
+    or the Gauss-Markov filter of ``nz``."""
     m, s = lin.z.shape[:2]
-    inertial = np.cumsum(differenced.reshape(len(differenced), m, s, 3), axis=1)
+    series = differenced.reshape(len(differenced), m, s, 3)
+    if nz is None or nz.filter is None:
+        inertial = np.cumsum(series, axis=1)
+    else:
+        inertial = np.moveaxis(nz.untransform(np.moveaxis(series, 1, 0)), 0, 1)
     return inertial @ lin.st_matrix[None]
 
 
@@ -79,7 +84,7 @@ def split_draws(flat: np.ndarray, n_params: int):
     repeat the banded inversion per draw), while ``scale = sigma_cross^2`` is each draw's own (it
     enters in closed form)."""
     dtheta, log_sigma = flat[:, :n_params], flat[:, n_params:]
-    ratios = np.mean(log_sigma[:, 1:] - log_sigma[:, :1], axis=0)
+    ratios = np.mean(ratios_of(log_sigma), axis=0)
     return dtheta, ratios, np.exp(2 * log_sigma[:, 0])
 
 
@@ -130,8 +135,12 @@ def block_conditionals(lin: Linearization, whitened: WhitenedManeuver, block_of_
     n, p, g = noise.n, noise.n_params, noise.n_nuisance
 
     def q_apply(differenced):
-        return _undifference_transpose(cho_solve_banded((chol, True), differenced), width)
+        solved = cho_solve_banded((chol, True), differenced)
+        if noise.filter is None:
+            return _undifference_transpose(solved, width)
+        return noise.filter.transpose(solved.reshape(-1, width, solved.shape[1])).reshape(solved.shape)
 
+    filter_rows = None if noise.filter is None else noise.filter.row_coefficients(width)
     q_all = q_apply(noise.rhs)
     q_g = q_all[:, p:p + g]
     g_und = nuisance_design(lin).reshape(n, g)
@@ -145,7 +154,11 @@ def block_conditionals(lin: Linearization, whitened: WhitenedManeuver, block_of_
     for start, z in inverse_windows(chol, edges):
         for b in np.flatnonzero((edges[home] == start) & (first_row[1:] > first_row[:-1])):
             rows = slice(first_row[b], first_row[b + 1])
-            q_bb = _undifferenced_block(z, rows.start - start, rows.stop - start, width, n - start)
+            if noise.filter is None:
+                q_bb = _undifferenced_block(z, rows.start - start, rows.stop - start, width, n - start)
+            else:
+                q_bb = _filtered_block(z, rows.start - start, rows.stop - start, width, n - start,
+                                       [c[start:] for c in filter_rows])
             p_bb = q_bb - q_g[rows] @ gqg_inv @ q_g[rows].T
             factor = np.linalg.cholesky(p_bb)
             logdet = 2 * np.sum(np.log(np.diag(factor)))
@@ -170,4 +183,20 @@ def _undifferenced_block(z, i0, i1, width, n_local):
     q[:v] -= z[i0 + width:i0 + width + v, i0:i1]
     q[:, :v] -= z[i0:i1, i0 + width:i0 + width + v]
     q[:v, :v] += z[i0 + width:i0 + width + v, i0 + width:i0 + width + v]
+    return q
+
+
+def _filtered_block(z, i0, i1, width, n_local, rows):
+    """``(T' Z T)[i0:i1, i0:i1]`` for a Gauss-Markov filter T (`markov.Filter.row_coefficients`:
+    ``T[r + width, r] = rows[0][r]``, ``T[r + 2 width, r] = rows[1][r]``, local to the window ``z``,
+    which reaches two samples past ``i1`` or the series' end ``n_local``)."""
+    size = i1 - i0
+    coef = [np.ones(size), rows[0][i0:i1], rows[1][i0:i1]]
+    q = np.zeros((size, size))
+    for a in range(3):
+        va = int(np.clip(n_local - i0 - a * width, 0, size))
+        for b in range(3):
+            vb = int(np.clip(n_local - i0 - b * width, 0, size))
+            block = z[i0 + a * width:i0 + a * width + va, i0 + b * width:i0 + b * width + vb]
+            q[:va, :vb] += coef[a][:va, None] * coef[b][None, :vb] * block
     return q

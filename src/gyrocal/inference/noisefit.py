@@ -1,0 +1,163 @@
+"""The noise scales' restricted maximum likelihood (REML), the point estimate's first step.
+
+With the channel parameters and the nuisance integrated out under flat priors, the
+likelihood of the noise depends on ``sigma_cross^2`` in closed form and on the shape of
+the covariance (`noise.ratios_of`) through the banded statistics; the shape is found by
+Nelder-Mead on the profile. Correlated star-tracker noise (`markov`) adds the Gauss-Markov
+part's sd and correlation time, its filter rebuilt at each tau tried.
+"""
+
+import numpy as np
+from scipy.optimize import minimize
+
+from gyrocal.inference import noise
+from gyrocal.inference.likelihood import campaign_stats, maneuver_stats, total
+
+__all__ = [
+    "GM_LOGIT_BOUND", "GROUP_ITERATIONS", "TAU_START_INTERVALS", "campaign_level", "correlation_time",
+    "estimate_correlated_noise", "estimate_noise", "profile_group_levels", "profile_reml", "st_step"
+]
+
+
+def correlation_time(lins) -> float:
+    """Correlation time of the star-tracker noise from the residuals (s; 0 if white).
+
+    For first-order Gauss-Markov noise with coefficient phi per sample, the first
+    differences have lag-1 autocorrelation -(1 - phi)/2, and -1/2 when white; the slow
+    signal and the gyro walk barely touch the differences.
+    """
+    num = den = 0.0
+    steps = []
+    for lin in lins:
+        x = np.diff(lin.body_error[:, 0, :], axis=0)
+        num += float(np.sum(x[1:] * x[:-1]))
+        den += float(np.sum(x * x))
+        steps.append(np.median(lin.st_dt[1:]))
+    phi = 1.0 + 2.0 * num / den
+    if phi <= 0.05:
+        return 0.0
+    return float(-np.median(steps) / np.log(min(phi, 0.999)))
+
+
+def profile_reml(noises, ratios, groups=None):
+    """REML of the noise with the cross-boresight variance profiled out in closed form.
+
+    ``ratios`` are ``log(sigma_about / sigma_cross)`` and ``log(arw / sigma_cross)``
+    (arw per sqrt(s)), and with correlated noise ``logit st_gm_fraction`` and
+    ``log tau`` (`noise.ratios_of`); the covariance is ``sigma_cross^2`` times one built from them.
+    Returns the negative log-likelihood (up to a constant) and ``log sigma_cross``.
+    Prior-only parameters have no column, so they are left out. With ``groups`` (each maneuver's
+    noise group, `preprocess.noise_groups`) of more than one group, each group's level is
+    profiled (`profile_group_levels`), and ``log sigma_cross`` is one per group.
+    """
+    var = noise.unit_variances(ratios)
+    if groups is not None and np.max(groups) > 0:
+        parts = [maneuver_stats(nz, var) for nz in noises]
+        return profile_group_levels([total([s for s, g in zip(parts, groups) if g == k])
+                                     for k in range(int(np.max(groups)) + 1)])
+    stats = campaign_stats(noises, var)
+    informed = np.diag(stats.A) > 0
+    factor = np.linalg.cholesky(stats.A[np.ix_(informed, informed)])
+    explained = np.linalg.solve(factor, stats.b[informed])
+    n = stats.n - int(informed.sum())
+    scale = (stats.c - explained @ explained) / n
+    negative = 0.5 * (n * np.log(scale) + stats.logdet + 2 * np.sum(np.log(np.diag(factor))))
+    return negative, 0.5 * np.log(scale)
+
+
+GROUP_ITERATIONS = 100
+"""Fixed-point iterations of the groups' levels at most (they settle to 1e-10 in a few tens)."""
+
+
+def profile_group_levels(parts):
+    """REML with one noise level per group: the groups' unit-scale `likelihood.Stats` share the
+    channel parameters, each group its own ``sigma_cross^2``. The levels are a fixed point (each the
+    weighted residual of its group, over its share of the degrees of freedom, at the parameters'
+    generalised least squares under the others); returns the negative restricted log-likelihood and
+    each group's ``log sigma_cross``."""
+    informed = np.diag(sum(s.A for s in parts)) > 0
+    A = [s.A[np.ix_(informed, informed)] for s in parts]
+    b = [s.b[informed] for s in parts]
+    n = np.array([s.n for s in parts], dtype=float)
+    dof = n - informed.sum() * n / n.sum()
+    log_scale = np.zeros(len(parts))
+    for _ in range(GROUP_ITERATIONS):
+        w = np.exp(-log_scale)
+        theta = np.linalg.solve(sum(wk * a for wk, a in zip(w, A)), sum(wk * bk for wk, bk in zip(w, b)))
+        rss = np.array([s.c - 2 * bk @ theta + theta @ a @ theta for s, a, bk in zip(parts, A, b)])
+        new = np.log(rss / dof)
+        done = np.max(np.abs(new - log_scale)) < 1e-10
+        log_scale = new
+        if done:
+            break
+    w = np.exp(-log_scale)
+    factor = np.linalg.cholesky(sum(wk * a for wk, a in zip(w, A)))
+    negative = 0.5 * (np.sum(n * log_scale + rss * w) + sum(s.logdet for s in parts)
+                      + 2 * np.sum(np.log(np.diag(factor))))
+    return negative, 0.5 * log_scale
+
+
+TAU_START_INTERVALS = 10.0
+"""Where the residuals' differences show no correlation, the REML of correlated noise starts its
+correlation time at this many star-tracker intervals."""
+
+
+def st_step(lins) -> float:
+    """The star tracker's median sampling interval over the maneuvers (s)."""
+    return float(np.median(np.concatenate([lin.st_dt[1:] for lin in lins])))
+
+
+def campaign_level(log_cross, noises, groups):
+    """The campaign's ``log sigma_cross`` and each group's offset from it (None for one group): the
+    groups' levels averaged with their sample counts as weights."""
+    log_cross = np.atleast_1d(log_cross)
+    if len(log_cross) == 1:
+        return float(log_cross[0]), None
+    counts = np.bincount(groups, weights=[nz.n for nz in noises], minlength=len(log_cross))
+    level = float(np.sum(counts * log_cross) / counts.sum())
+    return level, log_cross - level
+
+
+def estimate_noise(noises, log_sigma0, groups=None):
+    """Type-II maximum likelihood (REML) of ``log [sigma_cross, sigma_about, arw]``, and each noise
+    group's offset of ``log sigma_cross`` (None for one group; `campaign_level`).
+
+    The channel parameters and the nuisance are integrated out under flat priors.
+    """
+    log_sigma0 = np.asarray(log_sigma0, dtype=float)
+    start = log_sigma0[1:] - log_sigma0[0]
+    opt = minimize(lambda r: profile_reml(noises, r, groups)[0], start, method="Nelder-Mead",
+                   options={"xatol": 1e-3, "fatol": 1e-3})
+    log_cross, offsets = campaign_level(profile_reml(noises, opt.x, groups)[1], noises, groups)
+    return np.array([log_cross, log_cross + opt.x[0], log_cross + opt.x[1]]), offsets
+
+
+GM_LOGIT_BOUND = 8.0
+"""The REML of correlated noise keeps ``|logit st_gm_fraction|`` within this (a share between
+0.03 % and 99.97 %): beyond it either part is negligible, and the profile is flat."""
+
+
+def estimate_correlated_noise(lins, boresight, log_sigma0, tau0_s, groups=None):
+    """REML of ``[log sigma_cross, log sigma_about, log arw, logit st_gm_fraction, log tau_s]``:
+    star-tracker noise white plus first-order Gauss-Markov (`markov`), the filter rebuilt at each
+    tau tried, from an even split; the simplex starts wide (a factor 1.35 in the ratios, 2 in tau)
+    and stops at 1 % (the posterior's grid refines it). Tau is kept between half the star
+    tracker's interval and ten times the longest maneuver. Returns them and the groups' offsets
+    (`estimate_noise`)."""
+    log_sigma0 = np.asarray(log_sigma0, dtype=float)
+    step = st_step(lins)
+    longest = max(float(np.sum(lin.st_dt)) for lin in lins)
+    log_tau_bounds = np.log([0.5 * step, 10.0 * longest])
+    start = np.concatenate([log_sigma0[1:3] - log_sigma0[0], [0.0, np.clip(np.log(tau0_s), *log_tau_bounds)]])
+
+    def negative(r):
+        if abs(r[2]) > GM_LOGIT_BOUND or not log_tau_bounds[0] <= r[3] <= log_tau_bounds[1]:
+            return np.inf
+        return profile_reml([noise.build(lin, boresight, float(np.exp(r[3]))) for lin in lins], r, groups)[0]
+
+    simplex = start + np.vstack([np.zeros(4), np.diag([0.3, 0.3, 1.0, 0.7])])
+    opt = minimize(negative, start, method="Nelder-Mead",
+                   options={"xatol": 1e-2, "fatol": 1e-2, "initial_simplex": simplex})
+    noises = [noise.build(lin, boresight, float(np.exp(opt.x[3]))) for lin in lins]
+    log_cross, offsets = campaign_level(profile_reml(noises, opt.x, groups)[1], noises, groups)
+    return np.array([log_cross, log_cross + opt.x[0], log_cross + opt.x[1], opt.x[2], opt.x[3]]), offsets

@@ -1,0 +1,134 @@
+"""The likelihood's sufficient statistics tabulated over the noise's shape, and interpolated.
+
+The noise covariance is ``sigma_cross^2`` times a matrix fixed by the log ratios of the other
+scales to it (`noise.ratios_of`): two for white star-tracker noise, and with a Gauss-Markov
+part (`markov`) its ratio and ``log tau`` too. The scale enters in closed form; the statistics
+at unit scale are tabulated on a grid over the ratios, spanning many posterior standard
+deviations, and interpolated (tensor-product cubic Lagrange), so a posterior draw costs a
+weighted sum instead of a factorisation.
+"""
+
+import logging
+
+import numpy as np
+
+from gyrocal.inference import noise
+from gyrocal.inference.likelihood import campaign_stats
+from gyrocal.inference.noisefit import profile_reml
+
+__all__ = ["MAX_HALF_WIDTH_LOG_RATIO", "NoiseShapes", "RatioGrid", "ratio_curvature"]
+
+MAX_HALF_WIDTH_LOG_RATIO = 8.0
+"""The grid spans at most this either way of each ratio's estimate (a factor e^8 = 3 000 in the
+noise): where the ratios' profile is flat and the grid falls back on their prior (sd 2.1 with
+``noise_log_sd`` 1.5), +-8 sd would reach e^17, where the covariance is numerically singular
+(a 30-sample maneuver's banded Cholesky fails from e^10; a RepoIMU trial's posterior crashed)."""
+
+
+class NoiseShapes:
+    """Each maneuver's noise structure at a noise shape: fixed for white noise, rebuilt at each
+    correlation time for Gauss-Markov noise (its filter depends on tau)."""
+
+    def __init__(self, noises, lins=None, boresight=None):
+        self.noises, self.lins, self.boresight = noises, lins, boresight
+
+    @property
+    def correlated(self) -> bool:
+        return self.lins is not None
+
+    def at(self, ratios) -> list:
+        """The maneuvers' `noise.ManeuverNoise` for ``ratios`` (only ``log tau``, the last, matters)."""
+        if not self.correlated:
+            return self.noises
+        return [noise.build(lin, self.boresight, float(np.exp(ratios[-1]))) for lin in self.lins]
+
+    def profile(self, ratios) -> float:
+        """The REML profile's negative log-likelihood at ``ratios`` (`noisefit.profile_reml`)."""
+        return profile_reml(self.at(ratios), ratios)[0]
+
+
+def _lagrange(f):
+    """Cubic Lagrange weights of the four nodes around a point at fraction ``f`` past the second."""
+    return np.stack([-f * (f - 1) * (f - 2) / 6, (f + 1) * (f - 1) * (f - 2) / 2,
+                     -(f + 1) * f * (f - 2) / 2, (f + 1) * f * (f - 1) / 6], axis=-1)
+
+
+class RatioGrid:
+    """Unit-scale sufficient statistics on a grid over the noise ratios (`noise.ratios_of`).
+
+    At each node the statistics are computed with ``sigma_cross = 1``. The grid spans
+    ``half_width_sd`` sd either way, at most `MAX_HALF_WIDTH_LOG_RATIO`. ``noises`` is the
+    maneuvers' noise structures, or a `NoiseShapes` where they change with the ratios.
+    """
+
+    def __init__(self, noises, center, sd, nodes: int, half_width_sd: float):
+        shapes = noises if isinstance(noises, NoiseShapes) else NoiseShapes(noises)
+        center = np.asarray(center, dtype=float)
+        self.nodes, self.dims = nodes, len(center)
+        half_width = np.minimum(half_width_sd * np.asarray(sd, dtype=float), MAX_HALF_WIDTH_LOG_RATIO)
+        self.start = center - half_width
+        self.step = 2 * half_width / (nodes - 1)
+        self.values = None
+        inner = (nodes,) * (self.dims - 1) if shapes.correlated else (nodes,) * self.dims
+        outer = range(nodes) if shapes.correlated else [None]
+        for last in outer:  # Gauss-Markov: tau (the last ratio) outermost, each filter built once
+            current = shapes.at(self.start + self.step * last) if shapes.correlated else shapes.noises
+            for index in np.ndindex(*inner):
+                index = index + (last,) if shapes.correlated else index
+                r = self.start + self.step * np.array(index)
+                s = campaign_stats(current, noise.unit_variances(r))
+                row = np.concatenate([s.A.ravel(), s.b, [s.c, s.logdet]])
+                if self.values is None:
+                    self.values = np.empty((nodes**self.dims, len(row)))
+                self.values[np.ravel_multi_index(index, (nodes,) * self.dims)] = row
+                self.n, self.n_params = s.n, len(s.b)
+
+    def weights(self, ratios: np.ndarray):
+        """(W, nodes^dims) cubic Lagrange weights, and a mask of points inside the grid."""
+        t = (ratios - self.start) / self.step
+        inside = np.all((t >= 1) & (t <= self.nodes - 2), axis=1)
+        i = np.clip(np.floor(t), 1, self.nodes - 3).astype(int)
+        w1 = _lagrange(t - i)
+        offsets = np.indices((4,) * self.dims).reshape(self.dims, -1)
+        flat = np.zeros((len(ratios), offsets.shape[1]), dtype=int)
+        product = w1[:, 0, offsets[0]]
+        for d in range(self.dims):
+            flat = flat * self.nodes + (i[:, d, None] + offsets[d] - 1)
+            if d:
+                product = product * w1[:, d, offsets[d]]
+        weights = np.zeros((len(ratios), self.nodes**self.dims))
+        np.put_along_axis(weights, flat, product, axis=1)
+        return weights, inside
+
+    def stats(self, ratios: np.ndarray):
+        """Interpolated unit-scale ``A, b, c, logdet`` per row of ``ratios``."""
+        weights, inside = self.weights(np.atleast_2d(ratios))
+        v = weights @ self.values
+        p = self.n_params
+        return v[:, :p * p].reshape(-1, p, p), v[:, p * p:p * p + p], v[:, -2], v[:, -1], inside
+
+
+def ratio_curvature(noises, ratios, fallback_sd, step=0.02):
+    """Standard deviations of the ratios from the REML profile's Hessian; where the profile is
+    flat or not convex there (a noise scale the data cannot tell, as when the model misses
+    structure far above the noise), ``fallback_sd`` (their prior's), with a warning."""
+    shapes = noises if isinstance(noises, NoiseShapes) else NoiseShapes(noises)
+    ratios = np.asarray(ratios, dtype=float)
+    k = len(ratios)
+    f = shapes.profile
+    h = np.zeros((k, k))
+    f0 = f(ratios)
+    e = np.eye(k) * step
+    for i in range(k):
+        h[i, i] = (f(ratios + e[i]) - 2 * f0 + f(ratios - e[i])) / step**2
+    for i in range(k):
+        for j in range(i + 1, k):
+            h[i, j] = h[j, i] = (f(ratios + e[i] + e[j]) - f(ratios + e[i] - e[j])
+                                 - f(ratios - e[i] + e[j]) + f(ratios - e[i] - e[j])) / (4 * step**2)
+    fallback = np.broadcast_to(np.asarray(fallback_sd, dtype=float), (k,)).copy()
+    if not np.all(np.isfinite(h)) or np.any(np.linalg.eigvalsh(h) <= 0):
+        logging.getLogger("gyrocal").warning(
+            "the REML profile of the noise ratios is not convex at %s: the grid spans their prior instead", ratios)
+        return fallback
+    cov = np.linalg.inv(h)
+    return np.sqrt(np.clip(np.diag(cov), 1e-10, None))

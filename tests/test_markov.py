@@ -1,0 +1,166 @@
+"""The Gauss-Markov star-tracker noise (`gyrocal.inference.markov`) against dense references."""
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+from gyrocal.inference import likelihood, markov, noise
+from gyrocal.inference.errormodel import Linearization
+
+
+def _tiny(m=7, n_sets=2, n_par=2, seed=3):
+    rng = np.random.default_rng(seed)
+    st_dt = rng.uniform(0.5, 2.0, m)
+    R = Rotation.random(m, random_state=seed).as_matrix()
+    z = rng.normal(size=(m, n_sets, 3))
+    design = rng.normal(size=(m, n_sets, 3, n_par))
+    bias = rng.normal(size=(m, n_sets, 3, 2 * n_sets))
+    return Linearization("tiny", [("a",)] * n_sets, z, design, bias, R, st_dt, None, z.copy())
+
+
+def _dense_covariance(lin, boresight, var, tau):
+    """The undifferenced noise covariance, term by term from its definition."""
+    m, s = lin.z.shape[:2]
+    b = np.asarray(boresight, float) / np.linalg.norm(boresight)
+    body = var["cross"] * (np.eye(3) - np.outer(b, b)) + var["about"] * np.outer(b, b)
+    gm_body = var.get("gm_cross", 0.0) * (np.eye(3) - np.outer(b, b)) + var.get("gm_about", 0.0) * np.outer(b, b)
+    phi = np.exp(-lin.st_dt / tau) if tau > 0 else np.zeros(m)
+    phi[0] = 0.0
+    t = np.cumsum(lin.st_dt)
+    C = np.zeros((m, s, 3, m, s, 3))
+    for j in range(m):
+        for k in range(m):
+            shared = (j == k) * lin.st_matrix[j] @ body @ lin.st_matrix[j].T
+            for i in range(min(j, k) + 1):
+                v = (1 - phi[i] ** 2) * lin.st_matrix[i] @ gm_body @ lin.st_matrix[i].T
+                shared = shared + np.prod(phi[i + 1:j + 1]) * np.prod(phi[i + 1:k + 1]) * v
+            walk = var["walk"] * t[min(j, k)] * np.eye(3)
+            for a in range(s):
+                for c in range(s):
+                    C[j, a, :, k, c, :] = shared + (a == c) * walk
+    n = m * s * 3
+    return C.reshape(n, n)
+
+
+def _banded_to_dense(ab):
+    n = ab.shape[1]
+    out = np.zeros((n, n))
+    for d in range(ab.shape[0]):
+        idx = np.arange(n - d)
+        out[idx + d, idx] = ab[d, :n - d]
+        out[idx, idx + d] = ab[d, :n - d]
+    return out
+
+
+VAR = {"cross": 1.0, "about": 4.0, "walk": 0.3, "gm_cross": 2.5, "gm_about": 10.0}
+
+
+@pytest.mark.parametrize("tau", [0.7, 5.0, 300.0])
+def test_filtered_covariance_is_the_filter_applied_to_the_dense_covariance(tau):
+    lin = _tiny()
+    nz = noise.build(lin, [0.2, -0.5, 0.8], tau)
+    m, s = lin.z.shape[:2]
+    width = 3 * s
+    t_dense = np.eye(m * width)
+    t1, t2 = nz.filter.row_coefficients(width)
+    idx = np.arange(m * width)
+    t_dense[idx[width:], idx[:-width]] = t1[:-width]
+    t_dense[idx[2 * width:], idx[:-2 * width]] = t2[:-2 * width]
+    expected = t_dense @ _dense_covariance(lin, [0.2, -0.5, 0.8], VAR, tau) @ t_dense.T
+    np.testing.assert_allclose(_banded_to_dense(nz.covariance(VAR)), expected, rtol=1e-10, atol=1e-10)
+
+
+def test_filter_ends_the_memory_of_walk_and_gauss_markov_for_irregular_sampling():
+    rng = np.random.default_rng(0)
+    dt = rng.uniform(0.2, 3.0, 12)
+    alpha, beta, phi = markov.coefficients(dt, 4.0)
+    # the walk: 1 + alpha + beta = 0; the GM: (phi_j + alpha_j) phi_(j-1) + beta_j = 0, from the third sample
+    np.testing.assert_allclose((1 + alpha + beta)[2:], 0, atol=1e-14)
+    np.testing.assert_allclose(((phi[2:] + alpha[2:]) * phi[1:-1] + beta[2:]), 0, atol=1e-14)
+
+
+def test_filter_inverse_and_transpose_match_dense():
+    alpha, beta, _ = markov.coefficients(np.array([1.0, 0.5, 2.0, 1.0, 0.1]), 3.0)
+    filt = markov.Filter(alpha, beta)
+    x = np.random.default_rng(1).normal(size=(5, 4))
+    t = np.eye(5) + np.diag(alpha[1:], -1) + np.diag(beta[2:], -2)
+    np.testing.assert_allclose(filt.apply(x), t @ x, atol=1e-14)
+    np.testing.assert_allclose(filt.transpose(x), t.T @ x, atol=1e-14)
+    np.testing.assert_allclose(filt.invert(t @ x), x, atol=1e-12)
+
+
+def test_likelihood_statistics_equal_the_dense_generalised_least_squares():
+    """The gram of the filtered series is the undifferenced series' under its dense covariance
+    (the filter has determinant one), nuisance integrated out the same way."""
+    lin = _tiny(m=9)
+    tau = 6.0
+    nz = noise.build(lin, [0.0, 0.0, 1.0], tau)
+    stats = likelihood.maneuver_stats(nz, VAR)
+    C = _dense_covariance(lin, [0.0, 0.0, 1.0], VAR, tau)
+    n = C.shape[0]
+    X = lin.design.reshape(n, -1)
+    G = noise.nuisance_design(lin).reshape(n, -1)
+    y = lin.z.reshape(n)
+    Ci = np.linalg.inv(C)
+    P = Ci - Ci @ G @ np.linalg.solve(G.T @ Ci @ G, G.T @ Ci)
+    np.testing.assert_allclose(stats.A, X.T @ P @ X, rtol=1e-8)
+    np.testing.assert_allclose(stats.b, X.T @ P @ y, rtol=1e-8)
+    np.testing.assert_allclose(stats.c, y @ P @ y, rtol=1e-8)
+    logdet = np.linalg.slogdet(C)[1] + np.linalg.slogdet(G.T @ Ci @ G)[1]
+    np.testing.assert_allclose(stats.logdet, logdet, rtol=1e-9)
+
+
+def test_vanishing_gauss_markov_part_gives_the_white_likelihood():
+    lin = _tiny(m=8)
+    white = likelihood.maneuver_stats(noise.build(lin, [0, 0, 1]), VAR)
+    var = {**VAR, "gm_cross": 1e-14, "gm_about": 4e-14}
+    for tau in (0.3, 30.0):
+        gm = likelihood.maneuver_stats(noise.build(lin, [0, 0, 1], tau), var)
+        np.testing.assert_allclose(gm.A, white.A, rtol=1e-7)
+        np.testing.assert_allclose(gm.logdet, white.logdet, rtol=1e-9)
+
+
+def _simulated(tau_s, gm_arcsec, m=1200, n_man=4, seed=0):
+    """Maneuvers whose errors are drawn process by process: white tracker noise (10/40 arcsec),
+    a Gauss-Markov part in the inertial frame, and each set's own gyro walk; a slow turn."""
+    from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
+
+    rng = np.random.default_rng(seed)
+    b = np.array([0.0, -0.5, np.sqrt(0.75)])
+    shape = lambda c, a: c**2 * (np.eye(3) - np.outer(b, b)) + a**2 * np.outer(b, b)
+    white_chol = np.linalg.cholesky(shape(10 * ARCSEC_RAD, 40 * ARCSEC_RAD))
+    gm_chol = np.linalg.cholesky(shape(gm_arcsec * ARCSEC_RAD, 4 * gm_arcsec * ARCSEC_RAD))
+    arw = 0.003 * DEG_SQRT_H_RAD_SQRT_S
+    lins = []
+    for k in range(n_man):
+        st_dt = np.ones(m)
+        R = Rotation.from_rotvec(np.outer(np.linspace(0, 1.5, m), np.eye(3)[k % 3])).as_matrix()
+        phi = np.exp(-st_dt / tau_s)
+        g = np.zeros((m, 3))
+        g[0] = R[0] @ gm_chol @ rng.normal(size=3)
+        for j in range(1, m):
+            g[j] = phi[j] * g[j - 1] + np.sqrt(1 - phi[j] ** 2) * R[j] @ gm_chol @ rng.normal(size=3)
+        st = np.einsum("jab,jb->ja", R, rng.normal(size=(m, 3)) @ white_chol.T) + g
+        walk = np.cumsum(arw * rng.normal(size=(m, 2, 3)), axis=0)
+        z = st[:, None, :] + walk
+        design = np.zeros((m, 2, 3, 1))
+        design[:, :, :, 0] = np.linspace(0, 1e-3, m)[:, None, None]
+        bias = np.zeros((m, 2, 3, 6))
+        for s in range(2):
+            bias[:, s, :, 3 * s:3 * s + 3] = np.cumsum(st_dt)[:, None, None] * np.eye(3)
+        lins.append(Linearization(f"m{k}", [("a",), ("b",)], z, design, bias, R, st_dt, None, z.copy()))
+    return lins, b
+
+
+@pytest.mark.parametrize("tau_s, gm_arcsec", [(3.0, 15.0), (30.0, 8.0)])
+def test_reml_recovers_the_gauss_markov_sd_and_correlation_time(tau_s, gm_arcsec):
+    from gyrocal.inference import noisefit
+    from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
+
+    lins, b = _simulated(tau_s, gm_arcsec)
+    start = np.log([10 * ARCSEC_RAD, 40 * ARCSEC_RAD, 0.003 * DEG_SQRT_H_RAD_SQRT_S])
+    log_sigma = noisefit.estimate_correlated_noise(lins, b, start, 10.0)
+    fitted = noise.scales_in_units(log_sigma)
+    assert fitted[0] == pytest.approx(np.hypot(10.0, gm_arcsec), rel=0.1)  # the tracker's total sd
+    assert fitted[3] == pytest.approx(gm_arcsec**2 / (100 + gm_arcsec**2), abs=0.08)  # its Gauss-Markov share
+    assert fitted[4] == pytest.approx(tau_s, rel=0.4)
