@@ -14,6 +14,7 @@ import pandas as pd
 from scipy.special import chdtr, chdtrc, gammaln
 
 from gyrocal.checks.finding import Finding
+from gyrocal.criticism.bands import band_findings
 from gyrocal.inference import errormodel, noise
 from gyrocal.inference.estimate import PointEstimate, linearize_all
 from gyrocal.inference.likelihood import campaign_stats
@@ -304,6 +305,8 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
     noise_post = {s.key: float(summary.loc[f"noise.{s.key}", "mean"]) for s in CORRELATED_SCALES
                   if f"noise.{s.key}" in summary.index}
     checks = misfit_checks(residual_rms, noise_rms, white, ranking, noise_post, estimate.stated_noise, thresholds)
+    groups = {d.id: d.noise_group for d in maneuvers}
+    checks += [f.as_check() for f in band_findings(fit, groups, thresholds["band_outside_max"])]
     per_maneuver = {}
     for (m, s), group in fit.groupby(["maneuver", "set"], sort=False):
         per_maneuver.setdefault(m, {})[f"set{s}"] = {

@@ -59,16 +59,24 @@ def loo_blocks(idata, model: str) -> pd.DataFrame:
                          "lppd": lppd, "p_loo": lppd - elpd, "pareto_k": result.pareto_k.values})
 
 
-def posterior_dataset(draws, theta_hat, spec) -> az.InferenceData:
+def posterior_dataset(draws, theta_hat, spec, noise_groups=()) -> az.InferenceData:
     """(chains, draws, P + 3) sampled offsets and log noise scales (P + 5 with correlated noise), in
-    the parameters' units."""
+    the parameters' units; with ``noise_groups`` (more than one), each group's level (its
+    ``sigma_cross`` over the campaign's) and their log sd follow, as ``noise_group_level`` and
+    ``noise_group_sd``."""
     p = len(spec)
+    scales = noise_scales(spec.correlated_noise)
+    k = len(scales)
     values = spec.to_unit(theta_hat + draws[..., :p])
-    noise = scales_in_units(draws[..., p:])
-    scales = noise_scales(draws.shape[-1] - p > 3)
-    return az.from_dict(
-        posterior={"channel_param": values, **{s.key: noise[..., i] for i, s in enumerate(scales)}},
-        coords={"parameter": spec.labels}, dims={"channel_param": ["parameter"]})
+    noise = scales_in_units(draws[..., p:p + k])
+    posterior = {"channel_param": values, **{s.key: noise[..., i] for i, s in enumerate(scales)}}
+    coords, dims = {"parameter": spec.labels}, {"channel_param": ["parameter"]}
+    if len(noise_groups) > 1:
+        posterior["noise_group_level"] = np.exp(draws[..., p + k:-1])
+        posterior["noise_group_sd"] = np.exp(draws[..., -1])
+        coords["noise_group"] = list(noise_groups)
+        dims["noise_group_level"] = ["noise_group"]
+    return az.from_dict(posterior=posterior, coords=coords, dims=dims)
 
 
 CI_PROB = 0.95
@@ -88,9 +96,16 @@ def summarize(idata, per_walker, labels, convergence: dict) -> pd.DataFrame:
     low, high = (draws.quantile(q, dim=("chain", "draw")) for q in (tail, 1 - tail))
     rows = []
     noise_labels = [f"noise.{s.key}" for s in CORRELATED_SCALES if s.key in draws]
-    for label in list(labels) + noise_labels:
+    group_labels = {}
+    if "noise_group_level" in draws:
+        group_labels = {f"noise.level.{g}": ("noise_group_level", {"noise_group": g})
+                        for g in draws.coords["noise_group"].values}
+        group_labels["noise.group_sd"] = ("noise_group_sd", {})
+    for label in list(labels) + noise_labels + list(group_labels):
         if label in noise_labels:
             name, sel = label.removeprefix("noise."), {}
+        elif label in group_labels:
+            name, sel = group_labels[label]
         else:
             name, sel = "channel_param", {"parameter": label}
         value = {k: float(v[name].sel(sel)) for k, v in (("mean", mean), ("sd", sd), ("ci95_low", low),
@@ -126,22 +141,25 @@ def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
     p = post.n_params
     n_chain, n_draw = kept.shape[:2]
     flat = kept.reshape(-1, kept.shape[-1])
-    dtheta, ratios, scale2 = predictive.split_draws(flat, p)
+    k = len(post.estimate.log_sigma)
+    dtheta, ratios, scale2 = predictive.split_draws(flat, p, k)
+    offsets = flat[:, p + k:-1] if post.group_index is not None else None
     n_pred = min(sampler_cfg["predictive_draws"], n_draw)
     pred_rows = (np.arange(n_chain)[:, None] * n_draw + np.arange(n_pred)[None]).ravel()
     rng = np.random.default_rng([seed, 99])
     loglik, block_names, fit_tables = [], [], []
     pp_values, obs_values, sample_maneuver, sample_time = [], [], [], []
     zeros = ch.ChannelParams.zeros(maneuvers[0].channels)
-    for data, (lin, nz) in zip(maneuvers, post.take_maneuvers(), strict=True):
+    for m, (data, (lin, nz)) in enumerate(zip(maneuvers, post.take_maneuvers(), strict=True)):
+        level = 1.0 if offsets is None else np.exp(2 * offsets[:, post.group_index[m]])
         if nz.filter is not None:  # Gauss-Markov noise: filtered at the draws' mean correlation time
             nz = build(lin, post.estimate.boresight, float(np.exp(ratios[-1])))
         wm = predictive.WhitenedManeuver(nz, ratios)
         blocks = predictive.block_index(lin, data.st_time, sampler_cfg["block_s"])
-        loglik.append(predictive.leave_block_out_loglik(lin, wm, dtheta, scale2, blocks))
+        loglik.append(predictive.leave_block_out_loglik(lin, wm, dtheta, scale2 * level, blocks))
         block_names += [f"{data.id}:{b}" for b in range(blocks.max() + 1)]
         resid = predictive.residuals_body(lin, dtheta[pred_rows], wm.nuisance(dtheta[pred_rows]))
-        noise_rep = predictive.undifference_body(lin, wm.noise_draws(scale2[pred_rows], rng), nz)
+        noise_rep = predictive.undifference_body(lin, wm.noise_draws((scale2 * level)[pred_rows], rng), nz)
         for s, channel_set in enumerate(lin.sets):
             observed = preprocess.error_angles(data, channel_set, zeros)
             mean_pred = observed[None] - resid[:, :, s]
@@ -189,12 +207,13 @@ def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
     log-likelihood per ``block_s`` block and ``predictive_draws`` predictive draws.
     """
     spec, theta_hat = post.estimate.spec, post.estimate.theta
+    groups = post.estimate.noise_groups if post.group_index is not None else ()
     draws = post.ensemble_draws()
-    full = posterior_dataset(draws, theta_hat, spec)
+    full = posterior_dataset(draws, theta_hat, spec, groups)
     with warnings.catch_warnings():
         # every walker is a chain here, and a short run may have more walkers than steps
         warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
-        per_walker = posterior_dataset(post.walker_draws(), theta_hat, spec)
+        per_walker = posterior_dataset(post.walker_draws(), theta_hat, spec, groups)
     summary = summarize(full, per_walker, spec.labels, convergence)
     record = sampler_record(post, summary, sampler_cfg, seed)
     if not record["converged"]:
@@ -202,9 +221,9 @@ def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
                     record["failed_parameters"] or "chains shorter than the autocorrelation limit")
     thin = np.linspace(0, draws.shape[1] - 1, sampler_cfg["loglik_draws"]).astype(int)
     kept = draws[:, thin]
-    groups, fit = _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed)
-    idata = posterior_dataset(kept, theta_hat, spec)
-    idata.add_groups(**groups)
+    extra, fit = _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed)
+    idata = posterior_dataset(kept, theta_hat, spec, groups)
+    idata.add_groups(**extra)
     units = ", ".join(f"{label} {unit}" for label, unit in zip(spec.labels, spec.units))
     idata.posterior.attrs.update({"gyrocal_version": __version__, "seed": seed, "units": units,
                                   "prior_only": ", ".join(p.label for p in spec.parameters if p.prior_only)})

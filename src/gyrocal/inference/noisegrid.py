@@ -13,7 +13,7 @@ import logging
 import numpy as np
 
 from gyrocal.inference import noise
-from gyrocal.inference.likelihood import campaign_stats
+from gyrocal.inference.likelihood import campaign_stats, maneuver_stats, total
 from gyrocal.inference.noisefit import profile_reml
 
 __all__ = ["MAX_HALF_WIDTH_LOG_RATIO", "NoiseShapes", "RatioGrid", "ratio_curvature"]
@@ -27,10 +27,11 @@ noise): where the ratios' profile is flat and the grid falls back on their prior
 
 class NoiseShapes:
     """Each maneuver's noise structure at a noise shape: fixed for white noise, rebuilt at each
-    correlation time for Gauss-Markov noise (its filter depends on tau)."""
+    correlation time for Gauss-Markov noise (its filter depends on tau); ``groups`` (each
+    maneuver's noise group) gives the REML profile one level per group."""
 
-    def __init__(self, noises, lins=None, boresight=None):
-        self.noises, self.lins, self.boresight = noises, lins, boresight
+    def __init__(self, noises, lins=None, boresight=None, groups=None):
+        self.noises, self.lins, self.boresight, self.groups = noises, lins, boresight, groups
 
     @property
     def correlated(self) -> bool:
@@ -44,7 +45,7 @@ class NoiseShapes:
 
     def profile(self, ratios) -> float:
         """The REML profile's negative log-likelihood at ``ratios`` (`noisefit.profile_reml`)."""
-        return profile_reml(self.at(ratios), ratios)[0]
+        return profile_reml(self.at(ratios), ratios, self.groups)[0]
 
 
 def _lagrange(f):
@@ -58,13 +59,16 @@ class RatioGrid:
 
     At each node the statistics are computed with ``sigma_cross = 1``. The grid spans
     ``half_width_sd`` sd either way, at most `MAX_HALF_WIDTH_LOG_RATIO`. ``noises`` is the
-    maneuvers' noise structures, or a `NoiseShapes` where they change with the ratios.
+    maneuvers' noise structures, or a `NoiseShapes` where they change with the ratios; ``groups``,
+    each maneuver's noise group, tabulates each group's statistics apart (they scale apart).
     """
 
-    def __init__(self, noises, center, sd, nodes: int, half_width_sd: float):
+    def __init__(self, noises, center, sd, nodes: int, half_width_sd: float, groups=None):
         shapes = noises if isinstance(noises, NoiseShapes) else NoiseShapes(noises)
         center = np.asarray(center, dtype=float)
         self.nodes, self.dims = nodes, len(center)
+        self.groups = None if groups is None or np.max(groups) == 0 else np.asarray(groups)
+        self.n_groups = 1 if self.groups is None else int(self.groups.max()) + 1
         half_width = np.minimum(half_width_sd * np.asarray(sd, dtype=float), MAX_HALF_WIDTH_LOG_RATIO)
         self.start = center - half_width
         self.step = 2 * half_width / (nodes - 1)
@@ -76,12 +80,20 @@ class RatioGrid:
             for index in np.ndindex(*inner):
                 index = index + (last,) if shapes.correlated else index
                 r = self.start + self.step * np.array(index)
-                s = campaign_stats(current, noise.unit_variances(r))
-                row = np.concatenate([s.A.ravel(), s.b, [s.c, s.logdet]])
+                parts = self._group_stats(current, noise.unit_variances(r))
+                row = np.concatenate([np.concatenate([s.A.ravel(), s.b, [s.c, s.logdet]]) for s in parts])
                 if self.values is None:
                     self.values = np.empty((nodes**self.dims, len(row)))
                 self.values[np.ravel_multi_index(index, (nodes,) * self.dims)] = row
-                self.n, self.n_params = s.n, len(s.b)
+                self.n_params = len(parts[0].b)
+                self.n = parts[0].n if self.groups is None else np.array([s.n for s in parts])
+
+    def _group_stats(self, noises, var) -> list:
+        """The statistics of each noise group (one for the campaign without groups)."""
+        if self.groups is None:
+            return [campaign_stats(noises, var)]
+        each = [maneuver_stats(nz, var) for nz in noises]
+        return [total([s for s, g in zip(each, self.groups) if g == k]) for k in range(self.n_groups)]
 
     def weights(self, ratios: np.ndarray):
         """(W, nodes^dims) cubic Lagrange weights, and a mask of points inside the grid."""
@@ -101,11 +113,15 @@ class RatioGrid:
         return weights, inside
 
     def stats(self, ratios: np.ndarray):
-        """Interpolated unit-scale ``A, b, c, logdet`` per row of ``ratios``."""
+        """Interpolated unit-scale ``A, b, c, logdet`` per row of ``ratios``; with noise groups, per
+        row and group (a group axis after the rows')."""
         weights, inside = self.weights(np.atleast_2d(ratios))
         v = weights @ self.values
         p = self.n_params
-        return v[:, :p * p].reshape(-1, p, p), v[:, p * p:p * p + p], v[:, -2], v[:, -1], inside
+        if self.groups is None:
+            return v[:, :p * p].reshape(-1, p, p), v[:, p * p:p * p + p], v[:, -2], v[:, -1], inside
+        v = v.reshape(len(v), self.n_groups, -1)
+        return v[..., :p * p].reshape(len(v), self.n_groups, p, p), v[..., p * p:p * p + p], v[..., -2], v[..., -1], inside
 
 
 def ratio_curvature(noises, ratios, fallback_sd, step=0.02):

@@ -25,9 +25,12 @@ from gyrocal.inference.likelihood import (
 )
 from gyrocal.inference.noise import log_sigma_of, ratios_of, variances
 from gyrocal.inference.noisegrid import NoiseShapes, RatioGrid, ratio_curvature
+from gyrocal.inference.preprocess import noise_groups
 
 __all__ = [
-    "AUTOCORR_WINDOW_C", "DE_SHARE", "GM_FRACTION_LOGIT_SD", "NOISE_NAMES", "START_REDRAWS", "TAU_PRIOR_CENTER_S",
+    "AUTOCORR_WINDOW_C", "DE_SHARE", "GM_FRACTION_LOGIT_SD", "GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDIAN",
+    "GROUP_SD_START_VARIANCE",
+    "NOISE_NAMES", "START_REDRAWS", "TAU_PRIOR_CENTER_S",
     "TAU_PRIOR_LOG_SD",
     "LogPosterior", "Posterior", "Priors", "SamplerResult", "SamplingError", "StudentProposal", "fitted_proposal",
     "leave_one_maneuver_out", "run_ensembles", "sample", "start_covariance"
@@ -68,26 +71,52 @@ class Priors:
         return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, center, sd)
 
 
+GROUP_SD_PRIOR_MEDIAN = 0.5
+"""Noise groups: the prior's median of the sd of the groups' log levels about the campaign's..."""
+
+GROUP_SD_PRIOR_LOG_SD = 1.0
+"""... and its log-normal sd (a spread of a factor 1.07 to 3.6 in noise within two sd)."""
+
+GROUP_SD_START_VARIANCE = 0.25
+"""The start's variance of the log of that sd (few groups tell it to about half a unit)."""
+
+
 class LogPosterior:
-    """Vectorised log posterior of ``x = [dtheta (P), log sigma_cross, log sigma_about, log arw]``."""
+    """Vectorised log posterior of ``x = [dtheta (P), log sigma_cross, log sigma_about, log arw]``
+    (and ``logit st_gm_fraction, log tau`` with correlated noise).
+
+    With noise groups, each group's ``log sigma_cross`` offsets and the log of their sd follow:
+    the offsets are partially pooled (normal about zero with that sd, a hierarchical prior), so a
+    quiet group keeps its own level where its data tell it, and borrows the others' where not.
+    """
 
     def __init__(self, grid: RatioGrid, theta_hat: np.ndarray, priors: Priors):
         self.grid = grid
         self.theta_hat = theta_hat
         self.priors = priors
         self.n_params = len(theta_hat)
+        self.n_noise = len(priors.log_sigma_center)
 
     def __call__(self, x):
         x = np.atleast_2d(x)
-        p = self.n_params
-        d, log_sigma = x[:, :p], x[:, p:]
+        p, k = self.n_params, self.n_noise
+        d, log_sigma = x[:, :p], x[:, p:p + k]
         A, b, c, logdet, inside = self.grid.stats(ratios_of(log_sigma))
-        scale = np.exp(2 * log_sigma[:, 0])
-        quad = (d[:, None, :] @ A @ d[:, :, None])[:, 0, 0] - 2 * np.sum(b * d, axis=1) + c
-        loglik = -0.5 * (quad / scale + logdet + self.grid.n * (np.log(scale) + LOG_2PI))
-        theta = self.theta_hat + d
         pr = self.priors
-        logprior = -0.5 * np.sum(((theta - pr.mean) / pr.sd) ** 2, axis=1)
+        if self.grid.n_groups == 1:
+            scale = np.exp(2 * log_sigma[:, 0])
+            quad = (d[:, None, :] @ A @ d[:, :, None])[:, 0, 0] - 2 * np.sum(b * d, axis=1) + c
+            loglik = -0.5 * (quad / scale + logdet + self.grid.n * (np.log(scale) + LOG_2PI))
+            logprior = 0.0
+        else:
+            offsets, log_sd = x[:, p + k:-1], x[:, -1]
+            log_scale = 2 * (log_sigma[:, :1] + offsets)
+            quad = np.einsum("wi,wgij,wj->wg", d, A, d) - 2 * np.einsum("wgi,wi->wg", b, d) + c
+            loglik = -0.5 * np.sum(quad * np.exp(-log_scale) + logdet + self.grid.n * (log_scale + LOG_2PI), axis=1)
+            logprior = (-0.5 * np.sum(offsets**2, axis=1) * np.exp(-2 * log_sd) - offsets.shape[1] * log_sd
+                        - 0.5 * ((log_sd - np.log(GROUP_SD_PRIOR_MEDIAN)) / GROUP_SD_PRIOR_LOG_SD) ** 2)
+        theta = self.theta_hat + d
+        logprior = logprior - 0.5 * np.sum(((theta - pr.mean) / pr.sd) ** 2, axis=1)
         logprior += -0.5 * np.sum(((log_sigma - pr.log_sigma_center) / pr.log_sigma_sd) ** 2, axis=1)
         ok = inside & np.all(np.abs(theta) <= pr.bound, axis=1)
         value = loglik + logprior
@@ -287,6 +316,8 @@ class Posterior:
     labels: list
     parts: list
     """Each maneuver's `likelihood.Stats` at the point estimate's noise scales."""
+    group_index: np.ndarray | None = None
+    """Each maneuver's noise group, where the campaign has more than one (`preprocess.noise_groups`)."""
 
     @property
     def n_params(self):
@@ -331,16 +362,27 @@ def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dic
     lins, noises = linearize_all(maneuvers, estimate)
     ratios = ratios_of(estimate.log_sigma)
     fallback = np.sqrt(2.0) * priors.log_sigma_sd[0]
-    shapes = NoiseShapes(noises)
+    index = noise_groups(maneuvers)[1] if estimate.group_offsets is not None else None
+    shapes = NoiseShapes(noises, groups=index)
     if estimate.spec.correlated_noise:
-        shapes = NoiseShapes(noises, lins, estimate.boresight)
+        shapes = NoiseShapes(noises, lins, estimate.boresight, index)
         fallback = np.concatenate([[fallback, fallback], priors.log_sigma_sd[3:]])
     ratio_sd = ratio_curvature(shapes, ratios, fallback)
-    grid = RatioGrid(shapes, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"])
+    grid = RatioGrid(shapes, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"], index)
     logpost = LogPosterior(grid, estimate.theta, priors)
-    parts = [maneuver_stats(nz, variances(estimate.log_sigma)) for nz in noises]
+    if index is None:
+        parts = [maneuver_stats(nz, variances(estimate.log_sigma)) for nz in noises]
+    else:
+        parts = [maneuver_stats(nz, estimate.maneuver_variances(m, g)) for m, (nz, g) in enumerate(zip(noises, index))]
     stats = total(parts)
     mean, cov = conditional_posterior(stats, priors.mean - estimate.theta, priors.sd)
     start_mean = np.concatenate([mean, estimate.log_sigma])
-    result = run_ensembles(logpost, start_mean, start_covariance(cov, stats.n, ratio_sd), sampler_cfg, seed)
-    return Posterior(estimate, lins, noises, grid, result, list(estimate.spec.labels), parts)
+    start_cov = start_covariance(cov, stats.n, ratio_sd)
+    if index is not None:
+        offsets = estimate.group_offsets
+        start_mean = np.concatenate([start_mean, offsets, [np.log(max(np.std(offsets), 0.1))]])
+        spread = np.concatenate([0.5 / np.asarray(grid.n, dtype=float), [GROUP_SD_START_VARIANCE]])
+        start_cov = np.block([[start_cov, np.zeros((len(start_cov), len(spread)))],
+                              [np.zeros((len(spread), len(start_cov))), np.diag(spread)]])
+    result = run_ensembles(logpost, start_mean, start_cov, sampler_cfg, seed)
+    return Posterior(estimate, lins, noises, grid, result, list(estimate.spec.labels), parts, index)

@@ -78,12 +78,14 @@ def block_index(lin: Linearization, st_time, block_s) -> np.ndarray:
     return np.repeat(sample_blocks(st_time, block_s), per_time)
 
 
-def split_draws(flat: np.ndarray, n_params: int):
-    """``(dtheta, ratios, scale)`` of draws ``[dtheta (P), log sigma_cross, log sigma_about, log arw]``:
-    the pointwise terms are whitened once, at the draws' mean noise ratios (a factor per draw would
+def split_draws(flat: np.ndarray, n_params: int, n_noise: int | None = None):
+    """``(dtheta, ratios, scale)`` of draws ``[dtheta (P), log sigma_cross, log sigma_about, log arw]``
+    (``n_noise`` noise scales; whatever follows them, the noise groups', is the caller's): the
+    pointwise terms are whitened once, at the draws' mean noise ratios (a factor per draw would
     repeat the banded inversion per draw), while ``scale = sigma_cross^2`` is each draw's own (it
     enters in closed form)."""
-    dtheta, log_sigma = flat[:, :n_params], flat[:, n_params:]
+    stop = None if n_noise is None else n_params + n_noise
+    dtheta, log_sigma = flat[:, :n_params], flat[:, n_params:stop]
     ratios = np.mean(ratios_of(log_sigma), axis=0)
     return dtheta, ratios, np.exp(2 * log_sigma[:, 0])
 
