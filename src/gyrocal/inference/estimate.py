@@ -86,11 +86,12 @@ class PointEstimate:
                  stated_noise=json.dumps(self.stated_noise), n_linearized=len(self.at_estimate), **lins)
 
     @classmethod
-    def load(cls, path, known_effects=None) -> "PointEstimate":
+    def load(cls, path, known_effects=None, linearizations: bool = True) -> "PointEstimate":
         """Read `save`; ``known_effects`` (library and plugins, by name) are needed by the
-        steps that evaluate the model's effects again."""
+        steps that evaluate the model's effects again. ``linearizations=False`` leaves the saved
+        linearisations on disk (160 MB at 10x the default campaign), for steps that never ask."""
         z = np.load(path, allow_pickle=False)
-        n_lin = int(z["n_linearized"]) if "n_linearized" in z.files else 0  # none in files of earlier versions
+        n_lin = int(z["n_linearized"]) if "n_linearized" in z.files and linearizations else 0  # none: older files
         return cls(ModelSpec.from_json(str(z["spec"]), known_effects), z["theta"], z["cov"], z["biases"],
                    z["chi0"], z["log_sigma"], float(z["cost"]), int(z["nfev"]), str(z["message"]),
                    float(z["correlation_time_s"]), json.loads(str(z["stated_noise"])),

@@ -28,7 +28,7 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
     files = paths.model(model)
     calibrations = {m: pd.read_csv(paths.model(m).calibration) for m in models}
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
-    est = PointEstimate.load(files.point_estimate)
+    est = PointEstimate.load(files.point_estimate, linearizations=False)
     info, diagnostics, sampler = read_json(paths.input_json), read_json(files.diagnostics), read_json(files.sampler)
     effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases)
     findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg)
