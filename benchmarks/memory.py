@@ -9,8 +9,10 @@ job's peak resident memory is the one ``gyrocal.pipeline.steps.common.finish`` r
 (``logs/<campaign>/**/<rule>.peak_rss.json``, from ``getrusage``: exact however short the peak, where
 Snakemake's ``benchmark.tsv`` samples every few seconds); its wall time is from the rule's
 benchmark file. A rule with a job per model shows its larger job. preprocess and the report draw
-their figures in two worker processes: their column shows the job's own process and, after ``+``,
-its largest worker (the job's peak is at most the first plus twice the second).
+their figures in two forked worker processes: their column shows the job's own process and, after
+``+``, its largest worker, whose resident pages are mostly the job's, shared. The PSS column is the
+job's own memory, shared pages counted once: the summed proportional set size of the job's process
+and its workers, sampled every 50 ms while the workflow runs.
 
 ``--repeats N`` runs each factor N times and shows the medians (the machine is shared: compare
 ratios within one call). ``--tree DIR`` runs another checkout of gyrocal (its Snakefile and its
@@ -26,6 +28,7 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -48,9 +51,17 @@ def run(tree: Path, k: int) -> dict:
         work = Path(tmp) / "work"
         env = {**os.environ, "PYTHONPATH": str(tree / "src"), "OPENBLAS_NUM_THREADS": "1"}
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "snakemake", "-s", str(tree / "Snakefile"), "--cores", "2", "-q",
-                        "-d", str(work), "--config", f"scenario={path}"], check=True, capture_output=True, env=env)
+        proc = subprocess.Popen([sys.executable, "-m", "snakemake", "-s", str(tree / "Snakefile"), "--cores", "2", "-q",
+                                 "-d", str(work), "--config", f"scenario={path}"], stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, env=env)
+        pss = {}
+        sampler = threading.Thread(target=sample_pss, args=(proc, pss), daemon=True)
+        sampler.start()
+        output = proc.communicate()[0]
         wall = time.perf_counter() - start
+        sampler.join()
+        if proc.returncode:
+            raise subprocess.CalledProcessError(proc.returncode, proc.args, output)
         rules = {}
         for peak_file in sorted((work / "logs").rglob("*.peak_rss.json")):
             rule = peak_file.name.split(".")[0]
@@ -59,8 +70,53 @@ def run(tree: Path, k: int) -> dict:
             seconds = float(bench[1].split("\t")[0])
             old = rules.get(rule, {"mb": 0.0, "child_mb": 0.0, "s": 0.0})
             rules[rule] = {"mb": max(old["mb"], peak["self_mb"]), "child_mb": max(old["child_mb"], peak["children_mb"]),
-                           "s": max(old["s"], seconds)}
+                           "s": max(old["s"], seconds), "pss_mb": pss.get(rule, float("nan"))}
     return {"wall": wall, "rules": rules}
+
+
+def _children(pid: int) -> list:
+    try:
+        with open(f"/proc/{pid}/task/{pid}/children") as f:
+            return [int(c) for c in f.read().split()]
+    except OSError:
+        return []
+
+
+def _pss_mb(pid: int) -> float:
+    """The process's proportional set size (MB of 10^6 bytes): its shared pages divided among their sharers."""
+    try:
+        with open(f"/proc/{pid}/smaps_rollup") as f:
+            return next(int(line.split()[1]) for line in f if line.startswith("Pss:")) * 1024 / 1e6
+    except (OSError, StopIteration):
+        return 0.0
+
+
+def sample_pss(proc, peaks: dict, every_s: float = 0.05):
+    """Every ``every_s``, each job's summed PSS, its process and every process under it (the forked
+    figure workers): the job's own memory, pages shared with its workers counted once. A job is the
+    process that runs the rule's script, ``.snakemake/scripts/tmp....<rule>.py``; ``peaks`` gets the
+    largest sum seen per rule (sampled: a peak shorter than ``every_s`` may be missed)."""
+    while proc.poll() is None:
+        stack = [proc.pid]
+        while stack:
+            pid = stack.pop()
+            try:
+                with open(f"/proc/{pid}/cmdline", "rb") as f:
+                    argv = f.read().split(b"\0")
+            except OSError:
+                continue
+            script = next((a.decode() for a in argv if b".snakemake/scripts/" in a), None)
+            if script is None:
+                stack += _children(pid)
+                continue
+            rule = script.rsplit(".", 2)[-2]
+            tree, total = [pid], 0.0
+            while tree:
+                member = tree.pop()
+                total += _pss_mb(member)
+                tree += _children(member)
+            peaks[rule] = max(peaks.get(rule, 0.0), total)
+        time.sleep(every_s)
 
 
 def main():
@@ -97,20 +153,22 @@ def table(tree: Path, runs: dict, factors, repeats: int):
         return statistics.median(values) if values else float("nan")
 
     first = factors[0]
-    head = "".join(f"{f'{k}x MB':>14s}" for k in factors) + "".join(f"{f'{k}x s':>9s}" for k in factors)
-    print(f"\n{tree}: peak RSS per job (own process + largest worker) and wall time of the rule's largest "
-          f"job, medians of {repeats}")
+    head = ("".join(f"{f'{k}x MB':>14s}" for k in factors) + "".join(f"{f'{k}x PSS':>9s}" for k in factors)
+            + "".join(f"{f'{k}x s':>9s}" for k in factors))
+    print(f"\n{tree}: peak RSS per job (own process + largest worker), the job's peak summed PSS (sampled) "
+          f"and wall time of the rule's largest job, medians of {repeats}")
     print(f"{'rule':16s}{head}{'s ratio':>9s}")
     for rule in RULES:
         mem = ""
         for k in factors:
             own, child = median(k, rule, "mb"), median(k, rule, "child_mb")
             mem += f"{own:>14.0f}" if child < 1 else f"{f'{own:.0f} + {child:.0f}':>14s}"
+        pss = "".join(f"{median(k, rule, 'pss_mb'):9.0f}" for k in factors)
         secs = "".join(f"{median(k, rule, 's'):9.1f}" for k in factors)
         ratio = median(factors[-1], rule, "s") / median(first, rule, "s")
-        print(f"{rule:16s}{mem}{secs}{ratio:9.1f}")
+        print(f"{rule:16s}{mem}{pss}{secs}{ratio:9.1f}")
     walls = "".join(f"{wall(runs[k]):9.1f}" for k in factors)
-    print(f"{'whole run':16s}{' ' * 14 * len(factors)}{walls}")
+    print(f"{'whole run':16s}{' ' * 23 * len(factors)}{walls}")
     print(f"s ratio: the rule's wall time at {factors[-1]}x over {first}x")
 
 

@@ -2,19 +2,24 @@
 
 Each structured computation (banded covariance, leave-block-out densities, grid
 interpolation, score-test drop) is checked against the same quantity computed with
-full matrices, straight from its definition.
+full matrices, straight from its definition; the WLS's trust region against
+`scipy.optimize.least_squares` and numpy's dense least squares on problems with known answers.
 """
 
 import numpy as np
 import pytest
+from scipy import sparse
 from scipy.linalg import cholesky_banded
+from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from gyrocal.criticism import diagnostics
-from gyrocal.inference import errormodel, noise, predictive, selectedinverse
+from gyrocal.inference import errormodel, noise, predictive, selectedinverse, trustregion
+from gyrocal.inference.estimate import trust_region
 from gyrocal.inference.likelihood import Stats, campaign_stats
 from gyrocal.inference.noise import variances
 from gyrocal.inference.noisegrid import RatioGrid
+from gyrocal.inference.trustregion import TERMINATION_MESSAGES
 
 M, SETS, P, CHANNELS = 30, 2, 4, 3
 BORESIGHT = [0.3, 0.0, 0.954]
@@ -377,3 +382,72 @@ def test_fitted_proposal_refuses_noise_scales_that_never_moved():
     draws[:, 4] = 2 * draws[:, 3]
     with pytest.raises(SamplingError, match="singular"):
         fitted_proposal(draws, np.eye(3))
+
+
+def _exponential(t, y):
+    """``a exp(-k t) + c - y`` and its Jacobian (sparse, as the WLS gives it)."""
+    def fun(p):
+        return p[0] * np.exp(-p[1] * t) + p[2] - y
+
+    def jac(p):
+        e = np.exp(-p[1] * t)
+        return sparse.csr_array(np.column_stack([e, -p[0] * t * e, np.ones_like(t)]))
+    return fun, jac
+
+
+def _scipy_trf(fun, jac, x0, tol, lsmr_tol=1e-12):
+    """`least_squares` with the options `trust_region` reproduces."""
+    return least_squares(fun, x0, jac=jac, method="trf", x_scale="jac", tr_solver="lsmr", ftol=tol, xtol=tol,
+                         gtol=1e-10, max_nfev=100, tr_options={"regularize": False, "atol": lsmr_tol, "btol": lsmr_tol})
+
+
+def test_trust_region_solves_a_linear_least_squares_problem_as_a_dense_solve():
+    """Badly scaled columns (1e-2 to 1e2), an inconsistent right-hand side: numpy's lstsq's answer."""
+    rng = np.random.default_rng(3)
+    A = rng.normal(size=(40, 5)) * [1.0, 100.0, 0.01, 10.0, 1.0]
+    b = rng.normal(size=40)
+    x, cost, nfev, status, J = trust_region(lambda x: A @ x - b, lambda x: sparse.csr_array(A), np.zeros(5),
+                                            ftol=1e-12, xtol=1e-12, gtol=1e-12, max_nfev=50, lsmr_tol=1e-14)
+    reference = np.linalg.lstsq(A, b, rcond=None)[0]
+    np.testing.assert_allclose(x, reference, rtol=1e-9)
+    assert cost == pytest.approx(0.5 * np.sum((A @ reference - b) ** 2), rel=1e-12)
+    assert status in (1, 2, 3, 4) and nfev < 50
+    np.testing.assert_array_equal(J.toarray(), A)
+
+
+def test_trust_region_takes_least_squares_steps_to_the_bit_and_fits_an_exponential():
+    """Noise-free ``2 exp(-0.7 t) + 0.3`` from a start far off: the known answer, and the very steps of
+    scipy's trf with the same options (what `wls` relies on); also levenberg-marquardt's answer."""
+    t = np.linspace(0.0, 5.0, 30)
+    fun, jac = _exponential(t, 2.0 * np.exp(-0.7 * t) + 0.3)
+    x0 = np.array([1.0, 0.2, 0.0])
+    x, cost, nfev, status, _ = trust_region(fun, jac, x0, ftol=1e-10, xtol=1e-10, gtol=1e-10, max_nfev=100,
+                                            lsmr_tol=1e-12)
+    np.testing.assert_allclose(x, [2.0, 0.7, 0.3], rtol=1e-10)
+    scipy_trf = _scipy_trf(fun, jac, x0, 1e-10)
+    np.testing.assert_array_equal(x, scipy_trf.x)
+    assert (cost, nfev, status) == (scipy_trf.cost, scipy_trf.nfev, scipy_trf.status)
+    assert TERMINATION_MESSAGES[status] == scipy_trf.message
+    lm = least_squares(fun, x0, jac=lambda p: jac(p).toarray(), method="lm", ftol=1e-15, xtol=1e-15, gtol=1e-15)
+    np.testing.assert_allclose(x, lm.x, rtol=1e-10)
+
+
+def test_trust_region_with_noise_stops_where_scipy_does_and_at_its_optimum(monkeypatch):
+    """With noise the optimum is no longer the truth: trust_region's is least_squares' (trf, to the bit;
+    lm, to the tolerance). Without scipy's private helpers it falls back to least_squares itself, with a
+    warning, and returns the same."""
+    t = np.linspace(0.0, 5.0, 30)
+    y = 2.0 * np.exp(-0.7 * t) + 0.3 + np.random.default_rng(0).normal(0, 0.05, t.size)
+    fun, jac = _exponential(t, y)
+    x0 = np.array([1.0, 0.2, 0.0])
+    ours = trust_region(fun, jac, x0, ftol=1e-10, xtol=1e-10, gtol=1e-10, max_nfev=100, lsmr_tol=1e-12)
+    scipy_trf = _scipy_trf(fun, jac, x0, 1e-10)
+    np.testing.assert_array_equal(ours[0], scipy_trf.x)
+    lm = least_squares(fun, x0, jac=lambda p: jac(p).toarray(), method="lm", ftol=1e-15, xtol=1e-15, gtol=1e-15)
+    np.testing.assert_allclose(ours[0], lm.x, rtol=1e-7)
+    assert ours[1] == pytest.approx(lm.cost, rel=1e-12)
+    monkeypatch.setattr(trustregion, "lsq", None)
+    with pytest.warns(RuntimeWarning, match="least_squares instead"):
+        fallback = trust_region(fun, jac, x0, ftol=1e-10, xtol=1e-10, gtol=1e-10, max_nfev=100, lsmr_tol=1e-12)
+    np.testing.assert_array_equal(fallback[0], ours[0])
+    assert fallback[1:4] == ours[1:4]

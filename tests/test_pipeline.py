@@ -256,6 +256,9 @@ def test_saved_linearisation_is_the_models_to_the_bit_and_older_files_still_load
     old = PointEstimate.load(tmp_path / "older.npz")
     assert old.at_estimate == () and np.array_equal(old.theta, est.theta)
     assert np.array_equal(old.linearize(maneuvers, 0).design, est.at_estimate[0].design)
+    # a step that never linearises leaves them on disk
+    bare = PointEstimate.load(out / "baseline/point_estimate.npz", linearizations=False)
+    assert bare.at_estimate == () and np.array_equal(bare.theta, est.theta) and bare.spec.labels == est.spec.labels
     # a linearisation of another maneuver, or about other parameters, is not taken for this one's
     assert est.linearize(maneuvers[1:], 0).maneuver == maneuvers[1].id
     moved = dataclasses.replace(est, theta=est.theta + 1e-6)

@@ -184,6 +184,39 @@ def test_a_gyro_read_less_often_than_the_reference_is_refused(tiny, tmp_path):
     assert "the gyro is read every 2 s (median), the star tracker every 1 s" in message
 
 
+
+def declare_rates(gyro_hz=None, st_hz=None):
+    """A mutation that declares sampling rates in campaign.yaml."""
+    def mutate(d):
+        meta = yaml.safe_load((d / "campaign.yaml").read_text())
+        for section, rate in (("gyro", gyro_hz), ("star_tracker", st_hz)):
+            if rate is not None:
+                meta[section] = {**(meta.get(section) or {}), "rate_hz": rate}
+        (d / "campaign.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
+    return mutate
+
+
+def test_declared_sampling_rates_that_the_data_keep_pass(tiny, tmp_path):
+    campaign, findings = checks.read_checked(corrupted(tiny, tmp_path, declare_rates(gyro_hz=5, st_hz=1.0)))
+    assert campaign.gyro["rate_hz"] == 5 and campaign.star_tracker["rate_hz"] == 1.0
+    assert not findings.errors
+
+
+@pytest.mark.parametrize("gyro_hz, st_hz, expected", [
+    (10, None, "gyro.csv: the median step between samples is 0.2 s (5 Hz), but campaign.yaml declares gyro: "
+               "{rate_hz: 10}, a 0.1 s step"),
+    (None, 2, "star_tracker.csv: the median step between samples is 1 s (1 Hz), but campaign.yaml declares "
+              "star_tracker: {rate_hz: 2}, a 0.5 s step"),
+])
+def test_data_sampled_otherwise_than_declared_are_refused_naming_the_file(tiny, tmp_path, gyro_hz, st_hz, expected):
+    message = refused(tiny, tmp_path, declare_rates(gyro_hz, st_hz))
+    assert expected in message and ".rate_hz" in message
+
+
+def test_a_declared_rate_must_be_a_positive_number(tiny, tmp_path):
+    with pytest.raises(InputError, match="rate_hz"):
+        checks.read_checked(corrupted(tiny, tmp_path, declare_rates(gyro_hz=-5)))
+
 def test_a_latency_of_one_gyro_sample_is_a_warning(tiny, tmp_path):
     late = corrupted(tiny, tmp_path, edit_csv("star_tracker.csv", lambda f: f.__setitem__("time", f["time"] + 0.2)))
     _, findings = checks.read_checked(late)

@@ -14,9 +14,11 @@ __all__ = [
     "MAX_CLOCK_SEARCH_S",
     "MAX_GYRO_RATE_RAD_S",
     "MAX_GYRO_STEP_S",
+    "RATE_TOLERANCE",
     "SHORT_GAP_FACTOR",
     "clock_findings",
     "clock_offset_s",
+    "declared_rate_findings",
     "extreme_findings",
     "gap_findings",
     "interval_findings",
@@ -75,11 +77,41 @@ MAX_GYRO_STEP_S = 1.0
 a longer median step says the times are not in seconds."""
 
 
+RATE_TOLERANCE = 0.01
+"""A sampling rate declared in campaign.yaml (``gyro.rate_hz``, ``star_tracker.rate_hz``) and the data's
+median step agree to within 1 %: a clock's drift is far less, a unit slip or a thinned or resampled
+file far more."""
+
+
+def declared_rate_findings(campaign: Campaign, findings: Findings) -> bool:
+    """Each file's median step against the rate campaign.yaml declares for it, if it declares one.
+    Returns whether it refused."""
+    refused = False
+    for name, section, time in (("gyro.csv", "gyro", campaign.gyro_time),
+                                ("star_tracker.csv", "star_tracker", campaign.st_time)):
+        declared = (getattr(campaign, section) or {}).get("rate_hz")
+        if declared is None or len(time) < 2:
+            continue
+        step = float(np.median(np.diff(time)))
+        if abs(step * declared - 1.0) > RATE_TOLERANCE:
+            findings.refuse(
+                "sampling", f"{name}: the median step between samples is {step:.6g} s ({1 / step:.6g} Hz), but "
+                f"campaign.yaml declares {section}: {{rate_hz: {declared:g}}}, a {1 / declared:.6g} s step: times in "
+                f"another unit, a thinned or resampled file, or a wrong rate? Correct {name}'s times or "
+                f"campaign.yaml's {section}.rate_hz", figure=1 / step, threshold=float(declared), unit="Hz",
+                where=f"{name} against campaign.yaml {section}.rate_hz")
+            refused = True
+    return refused
+
+
 def interval_findings(campaign: Campaign, findings: Findings) -> bool:
-    """The sample intervals make sense: the times are seconds (a median gyro step over
+    """The sample intervals make sense: each file's against the rate campaign.yaml declares for it
+    (`declared_rate_findings`), the times are seconds (a median gyro step over
     `MAX_GYRO_STEP_S`: milliseconds?), and the gyro is read at least as often as the reference,
     since the error model integrates the gyro between reference samples (a sparser gyro would
     interpolate the rotation, and its intervals would be too narrow). Returns whether it refused."""
+    if declared_rate_findings(campaign, findings):
+        return True
     gyro_step = float(np.median(np.diff(campaign.gyro_time)))
     st_step = float(np.median(np.diff(campaign.st_time)))
     if gyro_step > st_step * (1 + 1e-6):

@@ -16,16 +16,17 @@ from scipy.special import chdtr, chdtrc, gammaln
 from gyrocal.checks.finding import Finding
 from gyrocal.criticism.bands import band_findings
 from gyrocal.inference import errormodel, noise
-from gyrocal.inference.estimate import PointEstimate, linearize_all
-from gyrocal.inference.likelihood import campaign_stats
+from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.likelihood import campaign_stats, maneuver_stats, total
 from gyrocal.inference.noise import CORRELATED_SCALES, NOISE_SCALES, ratios_of, variances
 from gyrocal.inference.predictive import WhitenedManeuver
+from gyrocal.inference.preprocess import noise_groups
 from gyrocal.model import effects
 from gyrocal.model.units import AXES, rad_to_arcsec
 
 __all__ = [
-    "COLLINEAR_FRACTION", "ENCOMPASS_TOP", "Signature", "chi2_log_sf", "conditional_drop", "diagnose", "misfit_checks",
-    "misfit_findings", "noise_rms_arcsec", "rank", "signature_effects", "whiteness"
+    "COLLINEAR_FRACTION", "ENCOMPASS_TOP", "Signature", "chi2_log_sf", "conditional_drop", "diagnose", "linearized",
+    "misfit_checks", "misfit_findings", "noise_rms_arcsec", "rank", "signature_effects", "whiteness"
 ]
 
 
@@ -88,11 +89,12 @@ def _augmented(maneuvers, estimate: PointEstimate, candidates, var):
     effects' columns, all global, with each maneuver's nuisance integrated out."""
     spec = estimate.spec.augmented(candidates)
     theta = np.concatenate([estimate.theta, np.zeros(len(spec) - len(estimate.spec))])
-    out = []
-    for m, data in enumerate(maneuvers):
-        lin = errormodel.linearize(data, spec, theta, estimate.biases[m])
-        out.append(noise.build(lin, estimate.boresight, estimate.correlation_time_s))
-    return spec, campaign_stats(out, var)
+    noises = (noise.build(errormodel.linearize(data, spec, theta, estimate.biases[m]), estimate.boresight,
+                          estimate.correlation_time_s) for m, data in enumerate(maneuvers))
+    if estimate.group_offsets is None:
+        return spec, campaign_stats(noises, var)  # one maneuver's noise at a time: summed, then freed
+    index = noise_groups(maneuvers)[1]
+    return spec, total([maneuver_stats(nz, estimate.maneuver_variances(m, index[m])) for m, nz in enumerate(noises)])
 
 
 COLLINEAR_FRACTION = 1e-3
@@ -212,17 +214,28 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
     return ranking, detail
 
 
-def whiteness(maneuvers, lins, noises, estimate: PointEstimate):
+def linearized(maneuvers, estimate: PointEstimate):
+    """Each maneuver's linearisation and noise structure about the estimate, one maneuver at a
+    time (`linearize_all` holds every maneuver's: over 1 GB at 10x the default campaign)."""
+    for m in range(len(maneuvers)):
+        lin = estimate.linearize(maneuvers, m)
+        yield lin, noise.build(lin, estimate.boresight, estimate.correlation_time_s)
+
+
+def whiteness(maneuvers, pairs, estimate: PointEstimate):
     """Lag-1 autocorrelation of the standardised innovations at the fitted model, per
-    maneuver and overall, with its z-score (``rho sqrt(n)``, N(0, 1) under the model)."""
+    maneuver and overall, with its z-score (``rho sqrt(n)``, N(0, 1) under the model).
+    ``pairs``: each maneuver's linearisation and noise structure, e.g. `linearized`'s."""
     ratios = ratios_of(estimate.log_sigma)
     scale = np.exp(2 * estimate.log_sigma[0])
+    index = noise_groups(maneuvers)[1]
     per, pooled_num, pooled_den = {}, 0.0, 0.0
-    for data, lin, nz in zip(maneuvers, lins, noises):
+    for m, (data, (lin, nz)) in enumerate(zip(maneuvers, pairs)):
         wm = WhitenedManeuver(nz, ratios)
         zero = np.zeros((1, nz.n_params))
         beta = wm.nuisance(zero)
-        w = (wm.wd - wm.wg @ beta[0]) / np.sqrt(scale)
+        level = 1.0 if estimate.group_offsets is None else np.exp(2 * estimate.group_offsets[index[m]])
+        w = (wm.wd - wm.wg @ beta[0]) / np.sqrt(scale * level)
         lag = lin.z.shape[1] * 3
         num, den = float(w[lag:] @ w[:-lag]), float(w @ w)
         per[data.id] = {"lag1": round(num / den, 4), "z": round(num / den * np.sqrt(len(w) / lag), 2),
@@ -295,11 +308,10 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
     ``fit`` is the posterior step's per-sample fit table, ``summary`` its posterior
     summary indexed by label; ``thresholds`` the config's ``diagnostics`` section.
     """
-    lins, noises = linearize_all(maneuvers, estimate)
     residuals = fit[[f"residual_{a}" for a in AXES]].to_numpy()
     residual_rms = float(np.sqrt(np.mean(residuals**2)))
     noise_rms = noise_rms_arcsec(maneuvers, estimate.stated_noise)
-    white = whiteness(maneuvers, lins, noises, estimate)
+    white = whiteness(maneuvers, linearized(maneuvers, estimate), estimate)
     ranking, detail = rank(maneuvers, estimate, list(maneuvers[0].extras), plugin_effects, white)
     keys = [s.key for s in NOISE_SCALES]
     noise_post = {s.key: float(summary.loc[f"noise.{s.key}", "mean"]) for s in CORRELATED_SCALES

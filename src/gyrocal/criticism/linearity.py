@@ -20,8 +20,9 @@ import numpy as np
 import pandas as pd
 from scipy.special import gammaincinv
 
-from gyrocal.inference import errormodel, noise
+from gyrocal.inference import errormodel
 from gyrocal.inference.estimate import linearize_all
+from gyrocal.inference.preprocess import noise_groups
 from gyrocal.model.units import ARCSEC_RAD
 
 __all__ = ["LEVEL", "SHRINK", "check", "probe_steps", "split", "summary"]
@@ -74,11 +75,11 @@ class _Block:
 
 def _blocks(maneuvers, estimate) -> list:
     lins, noises = linearize_all(maneuvers, estimate)
-    var = noise.variances(estimate.log_sigma)
+    index = noise_groups(maneuvers)[1]
     free = estimate.spec.free
     out = []
-    for data, lin, nz in zip(maneuvers, lins, noises):
-        chol = nz.factor(var)
+    for m, (data, lin, nz) in enumerate(zip(maneuvers, lins, noises)):
+        chol = nz.factor(estimate.maneuver_variances(m, index[m]))
         w = nz.whiten(chol, np.asfortranarray(nz.rhs))
         columns, nuisance = w[:, :nz.n_params][:, free], w[:, nz.n_params:nz.n_params + nz.n_nuisance]
         q, _ = np.linalg.qr(nuisance)

@@ -10,17 +10,13 @@ import json
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.linalg import norm
 from scipy import sparse
-from scipy.linalg import qr
-from scipy.optimize._lsq import common as lsq  # least_squares's own helpers: `trust_region` takes its steps
-from scipy.optimize._lsq.least_squares import TERMINATION_MESSAGES
-from scipy.sparse.linalg import LinearOperator, lsmr
 
 from gyrocal.inference import errormodel, identification, noise, noisefit
 from gyrocal.inference.likelihood import campaign_stats
 from gyrocal.inference.noise import variances
 from gyrocal.inference.preprocess import noise_groups
+from gyrocal.inference.trustregion import TERMINATION_MESSAGES, trust_region
 from gyrocal.model.spec import ModelSpec
 
 __all__ = [
@@ -104,11 +100,12 @@ class PointEstimate:
                  stated_noise=json.dumps(self.stated_noise), n_linearized=len(self.at_estimate), **lins)
 
     @classmethod
-    def load(cls, path, known_effects=None) -> "PointEstimate":
+    def load(cls, path, known_effects=None, linearizations: bool = True) -> "PointEstimate":
         """Read `save`; ``known_effects`` (library and plugins, by name) are needed by the
-        steps that evaluate the model's effects again."""
+        steps that evaluate the model's effects again. ``linearizations=False`` leaves the saved
+        linearisations on disk (160 MB at 10x the default campaign), for steps that never ask."""
         z = np.load(path, allow_pickle=False)
-        n_lin = int(z["n_linearized"]) if "n_linearized" in z.files else 0  # none in files of earlier versions
+        n_lin = int(z["n_linearized"]) if "n_linearized" in z.files and linearizations else 0  # none: older files
         return cls(ModelSpec.from_json(str(z["spec"]), known_effects), z["theta"], z["cov"], z["biases"],
                    z["chi0"], z["log_sigma"], float(z["cost"]), int(z["nfev"]), str(z["message"]),
                    float(z["correlation_time_s"]), json.loads(str(z["stated_noise"])),
@@ -198,74 +195,6 @@ class _Whitened:
             j_theta = -noise.transformed(lin.design[..., self.free], self.filters[m]).reshape(n, -1)
             jac.add(m, noise.whiten(chol, np.asfortranarray(np.concatenate([j_theta, nuis], axis=1))))
         return jac.matrix()
-
-
-def _scaled(J, d) -> LinearOperator:
-    """``J diag(d)`` as scipy's ``right_multiplied_operator`` makes it, through the same sparse
-    products, but with ``J``'s transpose a view of it: scipy's adjoint copies the matrix."""
-    transposed = J.T
-    return LinearOperator(J.shape, dtype=J.dtype,
-                          matvec=lambda x: J.dot((np.ravel(x) * d).reshape(-1, 1)).reshape(-1),
-                          matmat=lambda X: J.dot(X * d[:, np.newaxis]),
-                          rmatvec=lambda x: d * transposed.dot(np.asarray(x).reshape(-1, 1)).reshape(-1))
-
-
-def trust_region(fun, jac, x0, ftol: float, xtol: float, gtol: float, max_nfev: int, lsmr_tol: float):
-    """Minimise ``|fun(x)|^2 / 2`` step for step and to the bit as `scipy.optimize.least_squares` with
-    ``method="trf", x_scale="jac", tr_solver="lsmr"``, no bounds, ``regularize: False`` and LSMR's
-    ``atol = btol = lsmr_tol`` (its ``trf_no_bounds``, with scipy's helpers), but holding one Jacobian,
-    asked for only where a step is taken. ``least_squares`` held up to six (1.2 GB at 10x).
-
-    Returns ``(x, cost, nfev, status, J)``: ``status`` as ``least_squares``'s, ``J`` at ``x``.
-    """
-    x = np.atleast_1d(x0).astype(float)
-    f = fun(x)
-    if not np.all(np.isfinite(f)):
-        raise ValueError("Residuals are not finite in the initial point.")
-    J, nfev, cost = jac(x), 1, 0.5 * np.dot(f, f)
-    g = J.T.dot(f)
-    scale, scale_inv = lsq.compute_jac_scale(J)
-    Delta, status = norm(x * scale_inv) or 1.0, None
-    while True:
-        if norm(g, ord=np.inf) < gtol:
-            status = 1
-        if status is not None or nfev == max_nfev:
-            break
-        d, g_h = scale, scale * g
-        J_h = _scaled(J, d)
-        gn_h = lsmr(J_h, f, damp=0.0, atol=lsmr_tol, btol=lsmr_tol)[0]
-        S, _ = qr(np.vstack((g_h, gn_h)).T, mode="economic")
-        JS = J_h.dot(S)
-        B_S = np.dot(JS.T, JS)
-        g_S = S.T.dot(g_h)
-        actual_reduction = -1
-        while actual_reduction <= 0 and nfev < max_nfev:
-            p_S, _ = lsq.solve_trust_region_2d(B_S, g_S, Delta)
-            step_h = S.dot(p_S)
-            predicted_reduction = -lsq.evaluate_quadratic(J_h, g_h, step_h)
-            step = d * step_h
-            x_new = x + step
-            f_new = fun(x_new)
-            nfev += 1
-            step_h_norm = norm(step_h)
-            if not np.all(np.isfinite(f_new)):
-                Delta = 0.25 * step_h_norm
-                continue
-            cost_new = 0.5 * np.dot(f_new, f_new)
-            actual_reduction = cost - cost_new
-            Delta_new, ratio = lsq.update_tr_radius(Delta, actual_reduction, predicted_reduction, step_h_norm,
-                                                    step_h_norm > 0.95 * Delta)
-            status = lsq.check_termination(actual_reduction, cost, norm(step), norm(x), ratio, ftol, xtol)
-            if status is not None:
-                break
-            Delta = Delta_new
-        if actual_reduction > 0:
-            x, f, cost = x_new, f_new, cost_new
-            J = J_h = None  # the last point's Jacobian goes before this one's is made
-            J = jac(x)
-            g = J.T.dot(f)
-            scale, scale_inv = lsq.compute_jac_scale(J, scale_inv)
-    return x, cost, nfev, 0 if status is None else status, J
 
 
 def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, biases0=None, chi00=None,

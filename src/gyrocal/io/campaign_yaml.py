@@ -179,9 +179,9 @@ def read_meta(directory) -> dict:
             fail(cpath, f"{key}: must be a mapping of its noise knowledge (e.g. {key}: "
                          f"{{{'arw_deg_sqrt_h' if key == 'gyro' else 'sigma_cross_arcsec'}: ...}}), got {meta[key]!r}")
     gyro = meta.get("gyro") or {}
-    if set(gyro) - {"arw_deg_sqrt_h", "range_deg_s"}:
-        fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - {'arw_deg_sqrt_h', 'range_deg_s'})}")
-    for key in ("arw_deg_sqrt_h", "range_deg_s"):
+    if set(gyro) - {"arw_deg_sqrt_h", "range_deg_s", "rate_hz"}:
+        fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - {'arw_deg_sqrt_h', 'range_deg_s', 'rate_hz'})}")
+    for key in ("arw_deg_sqrt_h", "range_deg_s", "rate_hz"):
         if key in gyro and not _positive_number(gyro[key]):
             fail(cpath, f"gyro.{key}: must be a positive number")
     name = str(meta.get("name") or default_name(directory))
@@ -213,10 +213,10 @@ def _positive_number(value) -> bool:
 
 
 def _parse_star_tracker(path, raw, line_of=lambda keys: "?") -> dict:
-    allowed = {"sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "mounting"}
+    allowed = {"sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "mounting", "rate_hz"}
     if set(raw) - allowed:
         fail(path, f"star_tracker: unknown key(s) {sorted(set(raw) - allowed)}")
-    for key in ("sigma_cross_arcsec", "sigma_about_arcsec"):
+    for key in ("sigma_cross_arcsec", "sigma_about_arcsec", "rate_hz"):
         if key in raw and not _positive_number(raw[key]):
             fail(path, f"star_tracker.{key}: must be a positive number")
     out = dict(raw)

@@ -37,16 +37,29 @@ def compose(first: Rotation, second: Rotation) -> Rotation:
     return Rotation.from_quat(_compose_quat(p, q))
 
 
-def cumulative_compose(steps: Rotation) -> Rotation:
-    """Inclusive scan ``P_k = s_0 s_1 ... s_k`` of a rotation sequence.
+_CHUNK = 1 << 16
+"""Rows per vectorised block of the scan: its temporaries stay a few MB however long the series."""
 
-    A Hillis-Steele scan: log2(N) vectorised compositions instead of N Python steps.
+
+def _scan_in_place(quat: np.ndarray) -> None:
+    """Inclusive scan ``q_k <- q_0 q_1 ... q_k`` of scalar-last quaternions, in place.
+
+    A Hillis-Steele scan: log2(N) vectorised compositions instead of N Python steps. Each
+    pass ``q_i <- q_(i-shift) q_i`` runs in blocks from the top down, so every block reads
+    only rows the pass has not yet written: one array, whatever the length.
     """
-    quat = steps.as_quat()
-    shift = 1
-    while shift < len(quat):
-        quat = np.concatenate([quat[:shift], _compose_quat(quat[:-shift], quat[shift:])])
+    n, shift = len(quat), 1
+    while shift < n:
+        for stop in range(n, shift, -_CHUNK):
+            start = max(shift, stop - _CHUNK)
+            quat[start:stop] = _compose_quat(quat[start - shift:stop - shift], quat[start:stop])
         shift *= 2
+
+
+def cumulative_compose(steps: Rotation) -> Rotation:
+    """Inclusive scan ``P_k = s_0 s_1 ... s_k`` of a rotation sequence."""
+    quat = steps.as_quat()
+    _scan_in_place(quat)
     return Rotation.from_quat(quat)
 
 
@@ -55,14 +68,23 @@ def propagate(attitude0: Rotation, increments_rad: np.ndarray) -> Rotation:
 
     ``R_{k+1} = R_k exp(dtheta_k)``: composing the rotation vector of each sample is
     exact when the rate is constant within the sample (no first-order Euler step).
+    Built in one (N+1, 4) array, block by block, the same numbers as `cumulative_compose`
+    of the whole series composed with ``R_0``.
     """
     increments_rad = np.atleast_2d(np.asarray(increments_rad, dtype=float))
     if len(increments_rad) == 0:
         return Rotation.concatenate([attitude0])
-    cumulative = cumulative_compose(Rotation.from_rotvec(increments_rad)).as_quat()
     start = attitude0.as_quat().reshape(1, 4)
-    quat = _compose_quat(np.broadcast_to(start, cumulative.shape), cumulative)
-    return Rotation.from_quat(np.concatenate([start, quat]))
+    quat = np.empty((len(increments_rad) + 1, 4))
+    quat[0] = start
+    body = quat[1:]
+    for a in range(0, len(body), _CHUNK):
+        body[a:a + _CHUNK] = Rotation.from_rotvec(increments_rad[a:a + _CHUNK]).as_quat()
+    _scan_in_place(body)
+    for a in range(0, len(body), _CHUNK):
+        block = Rotation.from_quat(body[a:a + _CHUNK]).as_quat()
+        body[a:a + _CHUNK] = _compose_quat(np.broadcast_to(start, block.shape), block)
+    return Rotation.from_quat(quat)
 
 
 def attitude_at(times: np.ndarray, attitudes: Rotation, increments_rad: np.ndarray,

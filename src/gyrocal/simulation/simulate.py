@@ -88,27 +88,44 @@ def build_profiles(scenario) -> list:
     return profiles
 
 
-def _uncontrolled_rates(t, amplitude_rad_s, rng):
-    """Small limit-cycle rates on every axis: a few slow sinusoids with random phases."""
+def _uncontrolled_rates(amplitude_rad_s, rng):
+    """Small limit-cycle rates on every axis: a few slow sinusoids with random phases.
+
+    Draws them now and returns the rates as a function of time, to be evaluated block by block.
+    """
     periods = rng.uniform(60.0, 400.0, size=(3, 3))
     phases = rng.uniform(0, 2 * np.pi, size=(3, 3))
     weights = rng.uniform(0.3, 1.0, size=(3, 3))
     weights /= weights.sum(axis=1, keepdims=True)
-    arg = 2 * np.pi * t[:, None, None] / periods[None] + phases[None]
-    return amplitude_rad_s * np.sum(weights[None] * np.sin(arg), axis=2)
+
+    def rates(t):
+        arg = 2 * np.pi * t[:, None, None] / periods[None] + phases[None]
+        return amplitude_rad_s * np.sum(weights[None] * np.sin(arg), axis=2)
+    return rates
 
 
-def _temperatures(t, dtgs, swing_K, rng):
-    """Slow DTG temperature excursions (K about a 0 reference), one series per DTG."""
+def _temperatures(t_first, t_last, dtgs, swing_K, rng):
+    """Slow DTG temperature excursions (K about a 0 reference) over ``[t_first, t_last]``, one
+    series per DTG: drawn now, returned as a function of time (None without a swing)."""
     if swing_K == 0:
-        return {}
-    span = t[-1] - t[0]
-    out = {}
+        return None
+    span = t_last - t_first
+    waves = {}
     for dtg in dtgs:
         period = span * rng.uniform(0.6, 1.2)
         phase = rng.uniform(0, 2 * np.pi)
-        out[f"temp_dtg{dtg}"] = swing_K * np.sin(2 * np.pi * (t - t[0]) / period + phase)
-    return out
+        waves[f"temp_dtg{dtg}"] = (period, phase)
+
+    def temperatures(t):
+        return {name: swing_K * np.sin(2 * np.pi * (t - t_first) / period + phase)
+                for name, (period, phase) in waves.items()}
+    return temperatures
+
+
+GYRO_BLOCK = 1 << 15
+"""Gyro samples per block of the fine truth grid: each block's arrays are a few MB, so the
+simulator holds the fine grid's increments and attitudes and little else, however long the
+campaign (a block's rows give the same numbers as the whole grid's)."""
 
 
 def truth_parameters(spec: ModelSpec, truth: ch.ChannelParams) -> dict:
@@ -145,35 +162,58 @@ def simulate(scenario: dict, seed=None):
     t_final = profiles[-1].t_end + scenario["maneuver_defaults"]["gap_s"]
     n_gyro = int(np.ceil((t_final - t0) / dt_g))
     dt_sub = dt_g / n_sub
-    t_fine = t0 + dt_sub * np.arange(n_gyro * n_sub + 1)
-    t_mid = 0.5 * (t_fine[1:] + t_fine[:-1])
+    blocks = [(g, min(g + GYRO_BLOCK, n_gyro)) for g in range(0, n_gyro, GYRO_BLOCK)]
 
-    rate = _uncontrolled_rates(t_mid, np.deg2rad(scenario["maneuver_defaults"]["uncontrolled_rate_deg_s"]), rng)
-    for p in profiles:
-        rate[:, AXIS_INDEX[p.axis]] += p.rate(t_mid)
-    increments_fine = rate * dt_sub
+    def t_mid(g, h):
+        """Midpoints of the fine steps of gyro samples ``g:h``."""
+        t_fine = t0 + dt_sub * np.arange(g * n_sub, h * n_sub + 1)
+        return 0.5 * (t_fine[1:] + t_fine[:-1])
+
+    uncontrolled = _uncontrolled_rates(np.deg2rad(scenario["maneuver_defaults"]["uncontrolled_rate_deg_s"]), rng)
+
+    def true_rate(t):
+        rate = uncontrolled(t)
+        for p in profiles:
+            rate[:, AXIS_INDEX[p.axis]] += p.rate(t)
+        return rate
+
+    increments_fine = np.empty((n_gyro * n_sub, 3))
+    for g, h in blocks:
+        increments_fine[g * n_sub:h * n_sub] = true_rate(t_mid(g, h)) * dt_sub
     attitude0 = Rotation.random(random_state=rng.integers(2**32))
     attitudes_fine = kinematics.propagate(attitude0, increments_fine)
 
-    # Gyro channels: model of docs/interface.md section 2 with the optional effects.
-    temps = _temperatures(t_mid, sorted({c.dtg for c in channels}), eff["temperature_swing_K"], rng)
-    extra_scale = np.zeros((len(t_mid), len(channels)))
-    if eff["sf_nonlinearity_ppm_per_deg2_s2"]:
-        own = np.rad2deg(rate[:, ch.input_axes(channels)])
-        extra_scale += eff["sf_nonlinearity_ppm_per_deg2_s2"] * PPM * own**2
-    if temps:
-        for i, c in enumerate(channels):
-            extra_scale[:, i] += eff["sf_temperature_ppm_per_K"] * PPM * temps[f"temp_dtg{c.dtg}"]
-    fine = ch.measure(increments_fine, truth, dt_s=np.full(len(t_mid), dt_sub), extra_scale=extra_scale)
+    # Gyro channels: model of docs/interface.md section 2 with the optional effects, block by block.
+    temperatures = _temperatures(t_mid(0, 1)[0], t_mid(n_gyro - 1, n_gyro)[-1], sorted({c.dtg for c in channels}),
+                                 eff["temperature_swing_K"], rng)
     drift = deg_h_to_rad_s(eff["bias_drift_deg_h_per_h"]) / 3600.0  # rad/s per s
-    fine += drift * (t_mid - t0)[:, None] * dt_sub
     gravity = scenario["accelerometer"]["gravity_m_s2"]
-    if gravity:  # a lab: at rest the accelerometers sense +g along the room's vertical (inertial z)
-        mid = kinematics.compose(attitudes_fine[:-1], Rotation.from_rotvec(0.5 * increments_fine))
-        force_fine = mid.inv().apply([0.0, 0.0, gravity])
-        g_rad_s = np.deg2rad(eff["g_sensitivity_deg_s_per_g"]) / STANDARD_GRAVITY_M_S2
-        fine += (g_rad_s * force_fine.sum(axis=1) * dt_sub)[:, None]
-    continuous = fine.reshape(n_gyro, n_sub, len(channels)).sum(axis=1)
+    g_rad_s = np.deg2rad(eff["g_sensitivity_deg_s_per_g"]) / STANDARD_GRAVITY_M_S2
+    continuous = np.empty((n_gyro, len(channels)))
+    temp_means = {f"temp_dtg{dtg}": np.empty(n_gyro) for dtg in sorted({c.dtg for c in channels})} if temperatures else {}
+    force = np.empty((n_gyro, 3)) if gravity else None
+    for g, h in blocks:
+        rows = slice(g * n_sub, h * n_sub)
+        t = t_mid(g, h)
+        increments = increments_fine[rows]
+        extra_scale = np.zeros((len(t), len(channels)))
+        if eff["sf_nonlinearity_ppm_per_deg2_s2"]:
+            own = np.rad2deg(true_rate(t)[:, ch.input_axes(channels)])
+            extra_scale += eff["sf_nonlinearity_ppm_per_deg2_s2"] * PPM * own**2
+        temps = temperatures(t) if temperatures else {}
+        for i, c in enumerate(channels):
+            if temps:
+                extra_scale[:, i] += eff["sf_temperature_ppm_per_K"] * PPM * temps[f"temp_dtg{c.dtg}"]
+        fine = ch.measure(increments, truth, dt_s=np.full(len(t), dt_sub), extra_scale=extra_scale)
+        fine += drift * (t - t0)[:, None] * dt_sub
+        if gravity:  # a lab: at rest the accelerometers sense +g along the room's vertical (inertial z)
+            mid = kinematics.compose(attitudes_fine[rows], Rotation.from_rotvec(0.5 * increments))
+            force_fine = mid.inv().apply([0.0, 0.0, gravity])
+            fine += (g_rad_s * force_fine.sum(axis=1) * dt_sub)[:, None]
+            force[g:h] = force_fine.reshape(h - g, n_sub, 3).mean(axis=1)
+        continuous[g:h] = fine.reshape(h - g, n_sub, len(channels)).sum(axis=1)
+        for name, series in temps.items():
+            temp_means[name][g:h] = series.reshape(h - g, n_sub).mean(axis=1)
     arw = arw_to_rad_sqrt_s(gyro_cfg["arw_deg_sqrt_h"])
     t_gyro = t0 + dt_g * np.arange(1, n_gyro + 1)
     continuous += rng.normal(0.0, arw * np.sqrt(dt_g), continuous.shape) * maneuver_scale(profiles, t_gyro, True)[:, None]
@@ -187,7 +227,9 @@ def simulate(scenario: dict, seed=None):
     # Star tracker: true attitude at its (possibly late) sample times, times its noise.
     dt_st = 1.0 / scenario["star_tracker_hz"]
     t_st = t0 + eff["st_latency_s"] + dt_st * np.arange(int((t_final - t0 - eff["st_latency_s"]) / dt_st))
-    true_st = kinematics.attitude_at(t_fine, attitudes_fine, increments_fine, t_st - eff["st_latency_s"])
+    true_st = kinematics.attitude_at(t0 + dt_sub * np.arange(n_gyro * n_sub + 1), attitudes_fine, increments_fine,
+                                     t_st - eff["st_latency_s"])
+    del attitudes_fine, increments_fine
     noise = star_tracker_noise(len(t_st), dt_st, st_cfg, eff["st_correlation_time_s"], rng,
                                maneuver_scale(profiles, t_st, False))
     measured = true_st * Rotation.from_rotvec(noise)
@@ -204,10 +246,9 @@ def simulate(scenario: dict, seed=None):
         quat[bad] = Rotation.random(n_bad, random_state=rng.integers(2**32)).as_quat()
 
     gyro_columns = {c.name: gyro_increments[:, i] for i, c in enumerate(channels)}
-    for name, series in temps.items():
-        gyro_columns[name] = series.reshape(n_gyro, n_sub).mean(axis=1) + rng.normal(0, 0.01, n_gyro)
+    for name, mean in temp_means.items():
+        gyro_columns[name] = mean + rng.normal(0, 0.01, n_gyro)
     if gravity:  # each interval's mean specific force, as an accelerometer logged beside the gyros
-        force = force_fine.reshape(n_gyro, n_sub, 3).mean(axis=1)
         force += rng.normal(0.0, scenario["accelerometer"]["noise_m_s2"], force.shape)
         for i, a in enumerate("xyz"):
             gyro_columns[f"acc_{a}"] = force[:, i]

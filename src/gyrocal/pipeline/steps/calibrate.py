@@ -18,7 +18,7 @@ def run(paths: CampaignPaths, maneuver_ids, model: str):
     """``calibration.csv`` per the contract and the correction file for every channel set."""
     out = paths.model(model)
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
-    est = PointEstimate.load(out.point_estimate)
+    est = PointEstimate.load(out.point_estimate, linearizations=False)
     table = calibration_table(est.spec, est.theta, pd.read_csv(out.summary).set_index("label"))
     write_csv(table, out.calibration)
     doc = campaign_correction(posterior_mean_params(est.spec, table), maneuvers, "posterior mean")

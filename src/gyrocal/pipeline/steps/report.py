@@ -2,6 +2,7 @@
 
 import arviz as az
 import pandas as pd
+import xarray as xr
 
 from gyrocal.criticism import verdict
 from gyrocal.inference.estimate import PointEstimate
@@ -28,12 +29,13 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
     files = paths.model(model)
     calibrations = {m: pd.read_csv(paths.model(m).calibration) for m in models}
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
-    est = PointEstimate.load(files.point_estimate)
+    est = PointEstimate.load(files.point_estimate, linearizations=False)
     info, diagnostics, sampler = read_json(paths.input_json), read_json(files.diagnostics), read_json(files.sampler)
     effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases)
     findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg)
-    with az.rc_context(rc={"data.load": "eager"}):  # in memory: the figures are drawn by forked processes
-        posterior = az.from_netcdf(files.posterior)
+    # its posterior group alone (the predictive draws are 100 MB at 10x), in memory: forked processes draw
+    with xr.open_dataset(files.posterior, group="posterior", engine="h5netcdf") as group:
+        posterior = az.InferenceData(posterior=group.load())
     inputs = review.ReviewInputs(
         model=model, spec=est.spec, maneuvers=maneuvers,
         tables=[pd.read_csv(p) for p in paths.maneuvers(maneuver_ids, "csv")],
