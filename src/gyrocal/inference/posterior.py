@@ -250,7 +250,6 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
     n_ens, burn = int(cfg["ensembles"]), int(cfg["burn_steps"])
     chunk, multiple, max_steps = int(cfg["chunk_steps"]), float(cfg["min_tau_multiple"]), int(cfg["max_steps"])
     laplace = StudentProposal(proposal_mean, proposal_cov)
-    theta_cov = proposal_cov[:logpost.n_params, :logpost.n_params]
     start = StudentProposal(proposal_mean, proposal_cov, dof=5.0, inflate=2.0)
     samplers = []
     for e in range(n_ens):
@@ -268,6 +267,7 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
                                 f"ensemble {e} still have zero posterior density (outside the physical bounds or the "
                                 f"noise-ratio grid): the point estimate is not a usable start")
         proposal, state = laplace, p0
+        theta_cov = proposal_cov[:logpost.n_params, :logpost.n_params]
         for _ in range(2):
             warm = _sampler(logpost, walkers, dim, proposal, sampler_seed)
             state = warm.run_mcmc(state, burn // 2)
