@@ -217,8 +217,8 @@ class StLatency(Effect):
 
 class StCorrelatedNoise(Effect):
     name = "st_correlated_noise"
-    description = ("star-tracker noise correlated in time (a filtered attitude): first-order "
-                   "Gauss-Markov with a correlation time estimated from the residuals")
+    description = ("star-tracker noise correlated in time (slow tracker errors, a filtered attitude): white plus "
+                   "first-order Gauss-Markov, its share and correlation time estimated with the other noise scales")
     noise = True
 
 
