@@ -84,3 +84,26 @@ def test_the_gauss_markov_part_is_reproducible_and_declared_in_the_truth(tmp_pat
     assert np.array_equal(a.gyro_columns["dtg1_roll"], white.gyro_columns["dtg1_roll"])  # the gyros' draws unmoved
     assert not np.array_equal(a.st_quat, white.st_quat)
     assert truth["noise"]["gm_tau_s"] == 30.0 and truth["noise"]["gm_sigma_about_arcsec"] == 15.0
+
+
+def test_walk_steps_match_the_walk_a_gyro_interpolated_between_its_samples_has():
+    """Monte Carlo: per-interval noise integrated and interpolated to star-tracker times that fall
+    at the grid and mid-interval (2.5 Hz gyros, 1 Hz star tracker): the steps' variances and the
+    consecutive steps' covariance are `walk_steps`', within 5 sampling sds."""
+    from gyrocal.inference import errormodel
+
+    gyro_time = 0.4 * np.arange(101)
+    st_time = np.arange(1.0, 40.0)
+    n_real = 40000
+    noise = np.random.default_rng(3).normal(size=(n_real, 100)) * np.sqrt(0.4)  # unit ARW: variance dt
+    k = np.searchsorted(gyro_time, st_time, side="left") - 1
+    frac = (st_time - gyro_time[k]) / 0.4
+    before = np.concatenate([np.zeros((n_real, 1)), np.cumsum(noise, axis=1)], axis=1)
+    walk = before[:, k] + frac * noise[:, k]
+    steps = np.diff(np.concatenate([np.zeros((n_real, 1)), walk], axis=1), axis=1)
+    variance, shared = errormodel.walk_steps(gyro_time, st_time)
+    assert np.allclose(steps.var(axis=0), variance, atol=5 * np.sqrt(2 / n_real) * variance.max())
+    assert np.allclose(np.mean(steps[:, 1:] * steps[:, :-1], axis=0), shared, atol=5 * variance.max() / np.sqrt(n_real))
+    assert np.isclose(variance[1], 1.0 - 0.4 * 0.25) and np.isclose(shared[0], 0.4 * 0.25)  # f = 1/2 at t = 1 s
+    on_grid, none_shared = errormodel.walk_steps(gyro_time, 0.4 * np.arange(1, 50))
+    assert np.allclose(on_grid, 0.4) and np.allclose(none_shared, 0.0)

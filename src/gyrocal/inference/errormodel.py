@@ -36,7 +36,7 @@ from gyrocal.model.spec import ModelSpec
 
 __all__ = [
     "COLUMN_WINDOW_INTERVALS", "Linearization", "cumulative_at_st", "effect_derivatives", "effect_regressors",
-    "linearize", "smoothed_columns", "view"
+    "linearize", "smoothed_columns", "view", "walk_steps"
 ]
 
 COLUMN_WINDOW_INTERVALS = 5
@@ -240,3 +240,19 @@ def _shared_walk(n_sets, st_dt):
     for s in range(n_sets):
         out[:, s, s] = st_dt[:, None, None] * np.eye(3)
     return out
+
+
+def walk_steps(gyro_time: np.ndarray, st_time: np.ndarray) -> tuple:
+    """The gyro walk of the differenced error per unit ARW^2 (s): each star-tracker step's variance and
+    the covariance of consecutive steps. A sample a fraction f into gyro interval k sees that interval's
+    noise as ``f n_k`` (`kinematics.attitude_at` interpolates the increment), so its walk has variance
+    ``t_k - t_0 + f^2 dt_k``, not ``t - t_0``: step j has ``st_dt_j - dt (f_{j-1} (1 - f_{j-1}) +
+    f_j (1 - f_j))`` and shares ``dt_k f_j (1 - f_j)`` with step j+1. On the gyro grid (f = 1) the steps
+    are ``st_dt`` and independent, as `_shared_walk` has them; between gyro samples the short-term walk
+    is smaller, and a model that counts ``st_dt`` puts the ARW low (docs/validation.md, "The fitted ARW")."""
+    dt = np.diff(gyro_time)
+    k = np.clip(np.searchsorted(gyro_time, st_time, side="left") - 1, 0, len(dt) - 1)
+    frac = (st_time - gyro_time[k]) / dt[k]
+    inside = dt[k] * frac * (1.0 - frac)
+    st_dt = np.diff(np.concatenate([[gyro_time[0]], st_time]))
+    return st_dt - inside - np.concatenate([[0.0], inside[:-1]]), inside[:-1]
