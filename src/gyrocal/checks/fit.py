@@ -1,5 +1,6 @@
 """Refusals before a posterior is sampled: a point estimate whose noise no sensor can have, one
-beyond the physical bounds, or maneuvers too short for the leave-one-block-out predictive. Each
+beyond the physical bounds, maneuvers too short for the leave-one-block-out predictive, or a
+parameter the data do not identify at the fitted noise; and a sampler stopped by its budget. Each
 raises `EstimateError` with the parameter and the maneuver it concerns."""
 
 import numpy as np
@@ -11,7 +12,8 @@ from gyrocal.inference.likelihood import maneuver_stats
 from gyrocal.inference.noise import variances
 from gyrocal.model import units
 
-__all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "EstimateError", "check_blocks", "check_noise", "check_physical"]
+__all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "NOISE_RATIOS", "EstimateError", "check_blocks", "check_identified",
+           "check_noise", "check_physical", "sampling_stopped"]
 
 
 class EstimateError(InputError):
@@ -100,3 +102,57 @@ def check_blocks(maneuvers, block_s: float):
             f"too short for the leave-one-block-out predictive (blocks of sampler.block_s = {block_s:g} s, each "
             f"predicted from the rest of its maneuver, which needs at least {MIN_REST_SAMPLES} star-tracker samples): "
             f"{'; '.join(short)}. Lengthen its holds, or make sampler.block_s shorter than the maneuver")
+
+
+NOISE_RATIOS = ("log(sigma_about / sigma_cross)", "log(arw / sigma_cross)")
+"""The two noise ratios the posterior's grid spans (`posterior.RatioGrid`), in its order."""
+
+
+def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_sd: float) -> str:
+    """Before sampling, at the fitted noise (``stats``: the data's information, the nuisance integrated
+    out): refuse when a parameter the point estimate kept free carries less than
+    `identification.INFORMATION_RATIO_MIN` of its prior's information, the others estimated with it
+    (it was judged at the stated noise; a fitted noise far above it leaves less), naming it and what to
+    fly. Otherwise return what is weakest, in words, for a sampler that does not converge: the least
+    informed parameters, directions only the prior holds, noise ratios the data do not tell."""
+    spec = est.spec
+    index = np.flatnonzero(spec.free)
+    joint = identification.joint_information(stats.A[np.ix_(index, index)], np.asarray(prior_sd)[index])
+    weak = joint < identification.INFORMATION_RATIO_MIN
+    if weak.any():
+        listed = "; ".join(f"{spec.labels[i]} ({r:.2g} of its prior's information: "
+                           f"{identification.maneuver_to_fly(spec, i)})" for i, r in zip(index[weak], joint[weak]))
+        raise EstimateError(
+            f"point estimate of model {spec.model}: at the fitted noise ({_noise_words(est)}) the data do not "
+            f"identify {listed}. Its posterior would be its prior, and the sampler would wander along it. "
+            "Fly what is named, or state the noise as fitted (campaign.yaml) so that the point estimate marks "
+            "it prior-only")
+    order = [k for k in np.argsort(joint)[:3] if joint[k] < 1.0]
+    notes = ["weakly informed (the data carry less than the prior): " + ", ".join(
+        f"{spec.labels[index[k]]} ({joint[k]:.2g} of its prior's information; "
+        f"{identification.maneuver_to_fly(spec, index[k])})" for k in order)] if order else []
+    held = identification.prior_held_directions(stats.A[np.ix_(index, index)], np.asarray(prior_sd)[index],
+                                                [spec.labels[i] for i in index])
+    notes += [f"a direction only the prior holds ({value:.2g} of its information): "
+              + " ".join(f"{w:+.2f} {label}" for label, w in loads) for value, loads in held]
+    flat = [name for name, sd in zip(NOISE_RATIOS, ratio_sd) if sd >= 0.5 * ratio_prior_sd]
+    if flat:
+        notes.append(f"the data hardly tell the noise ratio(s) {', '.join(flat)} (their profile is as wide as "
+                     "the prior): a longer maneuver, or holds, separate the gyro walk from the reference noise")
+    return "; ".join(notes)
+
+
+def sampling_stopped(stopped, est: PointEstimate, notes: str, labels) -> EstimateError:
+    """The refusal of a sampler stopped by its budget (`budget.SamplingStopped`): its reason, the slowest
+    parameters (``labels``: the sampled ones, in order) and what `check_identified` found weakest."""
+    worst = np.nanmax(stopped.tau, axis=0)
+    name = lambda k: labels[k] if k < len(labels) else f"noise hyperparameter {k - len(labels) + 1}"
+    slow = ", ".join(f"{name(k)} ({worst[k]:.1f} steps)" for k in np.argsort(-np.nan_to_num(worst))[:3])
+    return EstimateError(
+        f"posterior of model {est.spec.model} stopped without converging: {stopped.reason}. Slowest: {slow}. "
+        f"What the data leave weak: {notes or 'nothing stands out'}. Fly what is named, or leave this model out")
+
+
+def _noise_words(est: PointEstimate) -> str:
+    fitted = noise.stated_scales(est.log_sigma)
+    return ", ".join(f"{k} {v:.3g}" for k, v in fitted.items())

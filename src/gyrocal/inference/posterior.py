@@ -15,6 +15,7 @@ import arviz as az
 import emcee
 import numpy as np
 
+from gyrocal.inference.budget import SamplingBudget
 from gyrocal.inference.estimate import linearize_all
 from gyrocal.inference.likelihood import (
     LOG_2PI,
@@ -235,16 +236,12 @@ START_REDRAWS = 100
 
 
 def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict, seed: int) -> SamplerResult:
-    """Independent emcee ensembles, run until every chain is at least k autocorrelation times.
-
-    Moves: independence proposals (`StudentProposal`) mixed with differential
-    evolution (`DE_SHARE`). Each ensemble burns in with a proposal from the Laplace
-    approximation, fits its own proposal to that (`fitted_proposal`), burns in again, refits,
-    and keeps that proposal fixed for production, so adaptation never touches the production
-    chain and the ensembles stay independent. Every sampler of ensemble e starts its own random
-    state from the same seed of e; the start points come from a generator of its own.
-    """
-    dim = len(proposal_mean)
+    """Independent emcee ensembles, run until every chain is k autocorrelation times long, or stopped
+    (`budget.SamplingStopped`: the reason, the times) once the budget cannot get there (`SamplingBudget`). Moves:
+    independence proposals (`StudentProposal`) and differential evolution (`DE_SHARE`). Each ensemble burns
+    in from the Laplace proposal, fits its own (`fitted_proposal`) twice and keeps it for production, so
+    the ensembles stay independent; ensemble e's samplers and start points have seeds of their own."""
+    dim, budget = len(proposal_mean), SamplingBudget(cfg)  # its clock counts the burn-in
     walkers = max(int(cfg["walkers"]), 2 * dim + 2)
     walkers += walkers % 2
     n_ens, burn = int(cfg["ensembles"]), int(cfg["burn_steps"])
@@ -282,6 +279,7 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
         tau = np.array([_autocorr_times(s.get_chain()) for s, _ in samplers])
         if steps >= multiple * tau.max() or steps + chunk > max_steps:
             break
+        budget.check(steps, tau)
     chains = np.stack([s.get_chain() for s, _ in samplers])
     acceptance = np.array([s.acceptance_fraction.mean() for s, _ in samplers])
     return SamplerResult(chains, tau, steps, burn, acceptance, bool(steps >= multiple * tau.max()), walkers)
@@ -357,8 +355,9 @@ def leave_one_maneuver_out(post: Posterior, priors: Priors) -> np.ndarray:
     return leave_one_out_log_evidence(post.parts, priors.mean - post.estimate.theta, priors.sd)
 
 
-def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dict, seed: int) -> Posterior:
-    """Linearise about the point estimate, tabulate the noise ratios and run the ensembles."""
+def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dict, seed: int, before=None) -> Posterior:
+    """Linearise about the point estimate, tabulate the noise ratios and run the ensembles (``before``: a
+    check called first with the data's statistics at the estimate and the ratios' sds)."""
     lins, noises = linearize_all(maneuvers, estimate)
     ratios = ratios_of(estimate.log_sigma)
     fallback = np.sqrt(2.0) * priors.log_sigma_sd[0]
@@ -375,6 +374,8 @@ def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dic
     else:
         parts = [maneuver_stats(nz, estimate.maneuver_variances(m, g)) for m, (nz, g) in enumerate(zip(noises, index))]
     stats = total(parts)
+    if before is not None:
+        before(stats, ratio_sd)
     mean, cov = conditional_posterior(stats, priors.mean - estimate.theta, priors.sd)
     start_mean = np.concatenate([mean, estimate.log_sigma])
     start_cov = start_covariance(cov, stats.n, ratio_sd)

@@ -1,9 +1,11 @@
 """Rule ``posterior``: emcee over one model's parameters and noise scales."""
 
+import numpy as np
 import pandas as pd
 
-from gyrocal.checks.fit import check_blocks, check_noise, check_physical
+from gyrocal.checks.fit import check_blocks, check_identified, check_noise, check_physical, sampling_stopped
 from gyrocal.inference import inferencedata, posterior
+from gyrocal.inference.budget import SamplingStopped
 from gyrocal.inference.estimate import PointEstimate
 from gyrocal.io.outputs import atomic, write_csv, write_json
 from gyrocal.pipeline.paths import CampaignPaths
@@ -22,9 +24,11 @@ def model_priors(est: PointEstimate, priors_cfg: dict, prior_from=None) -> poste
 
 
 def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSettings):
-    """Sample the posterior, check convergence, save InferenceData, summary, model fit, the exact
-    leave-one-maneuver-out predictive densities and PSIS-LOO per block (here, where arviz and the
-    InferenceData already are, so that the comparison of the models needs neither)."""
+    """Sample the posterior (refused where the data do not identify a parameter at the fitted noise, or
+    stopped with the reason where the sampler's budget cannot converge: `gyrocal.checks.fit`), check
+    convergence, save InferenceData, summary, model fit, the exact leave-one-maneuver-out predictive
+    densities and PSIS-LOO per block (here, where arviz and the InferenceData already are, so that the
+    comparison of the models needs neither)."""
     out, s = paths.model(model), settings
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
     est = PointEstimate.load(out.point_estimate, known_effects(s.plugins))
@@ -32,7 +36,14 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSetti
     check_blocks(maneuvers, s.sampler["block_s"])
     check_noise(maneuvers, est)
     check_physical(maneuvers, est, priors.bound)
-    post = posterior.sample(maneuvers, est, priors, s.sampler, s.grid, s.seed)
+    notes = []
+    identified = lambda stats, ratio_sd: notes.append(
+        check_identified(est, priors.sd, stats, ratio_sd, np.sqrt(2.0) * priors.log_sigma_sd[0]))
+    try:
+        post = posterior.sample(maneuvers, est, priors, s.sampler, s.grid, s.seed, before=identified)
+    except SamplingStopped as stopped:
+        labels = list(est.spec.labels) + [f"noise.{n}" for n in posterior.NOISE_NAMES]
+        raise sampling_stopped(stopped, est, notes[0] if notes else "", labels) from None
     idata, summary, fit, record = inferencedata.assemble(post, maneuvers, s.sampler, s.convergence, s.seed)
     with atomic(out.posterior) as tmp:
         idata.to_netcdf(str(tmp))
