@@ -196,7 +196,8 @@ def run(base_scenario_path, cfg: dict, study_cfg: dict, index: int, group: str, 
         campaign_dir = Path(tmp) / "campaign"
         write_campaign(campaign, campaign_dir)
         work = Path(tmp) / "work"
-        calibrate_campaign(campaign_dir, CampaignPaths.under(work), model_cfg, models, figures=False)
+        calibrate_campaign(campaign_dir, CampaignPaths.under(work), model_cfg, models, figures=False,
+                           strict=True)
         parts, facts = [], []
         for model in models:
             rows, fact = model_record(campaign_dir, work, model, truth, hidden_units, known, cfg, study_cfg, rng)
