@@ -184,7 +184,7 @@ def run(base_scenario_path, cfg: dict, study_cfg: dict, index: int, group: str, 
     if group != "clean":
         effect = study_cfg["effects"][group]
         hidden = {effect["simulator_key"]: float(magnitude)}
-        hidden_units = {group: float(magnitude)}
+        hidden_units = {group: float(magnitude) * effect.get("model_per_simulator_unit", 1.0)}
         if effect["model"]:
             models.append(effect["model"])
     scenario = campaign_scenario(base, truth, hidden, f"study_{group}_{index}", seed)
