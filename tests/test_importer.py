@@ -206,6 +206,15 @@ def test_compare_campaigns_verdict_and_exit_code(tmp_path, capsys):
     assert "VERDICT: DISAGREE: 1 of 2" in out and "z = +4.71" in out
 
 
+def test_compare_campaigns_lists_a_prior_only_parameter_as_such_not_with_a_nan_z(tmp_path, capsys):
+    calibration([100.0, 0.0], [3.0, 1.0]).to_csv(tmp_path / "a.csv", index=False)
+    calibration([100.0, 5.0], [3.0, 1.0], [False, True]).to_csv(tmp_path / "b.csv", index=False)
+    cli.main(["compare-campaigns", str(tmp_path / "a.csv"), str(tmp_path / "b.csv")])
+    out = capsys.readouterr().out
+    row = next(line for line in out.splitlines() if " p1 " in f" {line} ")
+    assert row.split()[-2:] == ["prior-only", "True"] and "NaN" not in out and "nan" not in out
+
+
 def triad_calibration(rows, sf):
     """A calibration table of a gyro triad from each channel's response row ``e_a + m`` (rad) and
     scale factor (dimensionless), in the units calibration.csv carries."""

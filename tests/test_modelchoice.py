@@ -127,3 +127,48 @@ def test_stacking_weights_favour_the_better_predictor_and_split_between_equals()
     # each model predicts half the points better: the mixture takes both
     w = modelchoice.stacking_weights([[0.0, -5.0, 0.0, -5.0], [-5.0, 0.0, -5.0, 0.0]])
     assert w == pytest.approx([0.5, 0.5], abs=1e-4)
+
+
+def test_a_pair_that_both_disagrees_and_leaves_a_term_unknown_is_one_sentence_with_no_empty_clause():
+    """The reviewed variant second in the table: the pair came up once from the disagreement and once
+    from the width, and the second time it had nothing to say ("cannot tell a from b: .")."""
+    table = comparison([("a", BASE, False, [9, 9, 9]), ("b", BASE + "+bias_drift", False, [9.5, 9.5, 9.5])])
+    assert modelchoice.reviewed_model(table) == "b"
+    check = modelchoice.sensitivity_check(table, {"a": calibration(5000, 0, sd=510.0), "b": calibration(0, 0)},
+                                          LABELS, 3.0, LIMITS)
+    assert not check.passed and ": ." not in check.why and check.why.count("cannot tell") == 1
+    assert check.why.startswith("the data cannot tell a from b: dtg2_yaw.sf_pos differs by 5,000.0 ppm (9.8 sd); "
+                                "under a, dtg2_yaw.sf_pos is known only within 1,999 ppm")
+
+
+def symmetric_calibration(sf, sd=10.0):
+    return pd.DataFrame({"channel": ["dtg2_yaw"], "parameter": ["sf"], "unit": ["ppm"], "mean": [float(sf)],
+                         "sd": [sd], "ci95_low": [sf - 1.96 * sd], "ci95_high": [sf + 1.96 * sd]})
+
+
+SYMMETRIC = "scale_factor_symmetric+misalignment+bias"
+
+
+def test_the_symmetric_model_is_compared_branch_by_branch_with_the_per_direction_one():
+    """Its one sf is both branches: it agrees with sf_pos -1290, sf_neg -1312 and not with -1712, -1000."""
+    table = comparison([("baseline", BASE, False, [9, 9, 9]), ("symmetric", SYMMETRIC, False, [9.2, 9.2, 9.2])])
+    assert modelchoice.reviewed_model(table) == "symmetric"
+    agree = modelchoice.sensitivity_check(table, {"baseline": calibration(-1290, -1312),
+                                                  "symmetric": symmetric_calibration(-1300)}, ["dtg2_yaw.sf"], 3.0, LIMITS)
+    assert agree.passed
+    differ = modelchoice.sensitivity_check(table, {"baseline": calibration(-1712, -1000),
+                                                   "symmetric": symmetric_calibration(-1300)}, ["dtg2_yaw.sf"], 3.0,
+                                           LIMITS)
+    assert not differ.passed and "dtg2_yaw.sf_pos differs by 412.0 ppm" in differ.why
+    assert "scale_factor: more and longer rotations each way" in differ.why and "scale_factor_symmetric:" not in differ.why
+
+
+def test_the_reason_names_the_reviewed_variant_the_rule_and_the_others():
+    table = comparison([("baseline", BASE, False, [9, 9, 9]), ("symmetric", SYMMETRIC, False, [9.2, 9.2, 9.2]),
+                        ("drift", BASE + "+bias_drift", True, [1, 1, 1])])
+    why = modelchoice.reviewed_reason(table)
+    assert why.startswith("symmetric is reviewed: of the plausible variants (baseline, symmetric), it has the best "
+                          "exact leave-one-maneuver-out elpd (27.6)")
+    assert "baseline -0.6" in why and "drift -24.6 (not plausible: misfit" in why
+    none = comparison([("a", BASE, True, [1, 1]), ("b", SYMMETRIC, True, [2, 2])])
+    assert modelchoice.reviewed_reason(none).startswith("b is reviewed, though no variant is plausible")

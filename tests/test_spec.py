@@ -37,7 +37,7 @@ def test_extra_effects_follow_the_channel_terms_per_channel_or_per_campaign():
     assert spec.n_core == 24 and len(spec) == 31
     assert spec.labels[24] == "dtg1_roll.bias_drift" and spec.parameters[24].channel == 0
     assert spec.labels[30] == "st_latency.latency" and spec.parameters[30].channel is None
-    assert spec.parameters[30].owner == "st_latency" and spec.units[30] == "s"
+    assert spec.parameters[30].owner == "st_latency" and spec.units[30] == "ms" and spec.si_per_unit[30] == 1e-3
 
 
 def test_vector_channel_model_and_contract_round_trip():

@@ -13,7 +13,7 @@ SPEC = baseline((Channel("dtg1_roll", 1, "roll"),))
 CFG = {"convergence": {"r_hat_max": 1.01, "ess_bulk_min": 400},
        "report": {"max_ci_width_ppm": 200, "max_ci_width_arcsec": 30,
                   "physical_bound_ppm": 20000, "physical_bound_arcsec": 3600},
-       "model_choice": {"agree_sd": 3.0}}
+       "model_choice": {"agree_sd": 3.0}, "diagnostics": {"structure_log10_p_min": -6.0}}
 SAMPLER = {"converged": True}
 
 
@@ -99,3 +99,20 @@ def test_every_check_in_the_order_of_verdict_json():
         "the answer does not hang on the model"]
     assert verdict.verdict("mom", "baseline", findings)["verdict"] == "GO"
     assert modelchoice.typed(comparison)["rejected_by"].iloc[0] == ""
+
+
+def misfit_diagnostics(log10_ps):
+    names = ["bias_drift", "rate_sign", "st_latency", "acceleration"]
+    return {"misfit": True, "checks": [{"check": "level", "passed": False, "why": "residual RMS too high"}],
+            "ranking": [{"kind": "effect", "name": n, "log10_p": p} for n, p in zip(names, log10_ps)]}
+
+
+def test_an_explanation_is_called_best_only_where_its_test_is_significant():
+    significant = verdict.misfit_check(misfit_diagnostics([-9.0, -2.0]), -6.0)
+    assert "Best explanation: effect bias_drift (log10 p = -9.0, significant below -6)" in significant.why
+    assert significant.action == "add a variant with bias_drift (models:)"
+    weak = verdict.misfit_check(misfit_diagnostics([-3.2, -2.1, -1.0, -0.5]), -6.0)
+    assert "best" not in weak.why.lower() and "bias_drift (models:)" not in weak.action
+    assert weak.why.endswith("No effect or signature explains the misfit significantly (log10 p below -6); the "
+                             "top-ranked: effect bias_drift (log10 p = -3.2), effect rate_sign (log10 p = -2.1), "
+                             "effect st_latency (log10 p = -1.0)")

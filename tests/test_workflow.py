@@ -19,6 +19,8 @@ MODEL_FILES = ("point_estimate", "posterior", "summary", "fit", "sampler", "elpd
 SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile")]
 SHORT_CHAINS = str(DATA / "short_chains.yaml")
 """The runs here test the workflow's wiring and numbers, not convergence."""
+CONFIGS = [SHORT_CHAINS, str(DATA / "refused_variant.yaml")]
+"""Short chains, and a variant the tiny campaign refuses beside the default ones."""
 FAST_REFUSALS = ("gyro increments in degrees", "scalar-first quaternions under q1..q4")
 """The refusals the fast tier sees end a Snakemake run; every refusal's message is checked through
 `gyrocal validate` in test_robustness, and the rest end a Snakemake run in the full tier."""
@@ -28,7 +30,7 @@ FAST_REFUSALS = ("gyro increments in degrees", "scalar-first quaternions under q
 def workflow_run(tiny, tmp_path_factory):
     """The whole workflow through Snakemake on the tiny campaign, as a user runs it."""
     work = tmp_path_factory.mktemp("workflow")
-    run = subprocess.run(SNAKEMAKE + ["--cores", "2", "-d", str(work), "--configfile", SHORT_CHAINS,
+    run = subprocess.run(SNAKEMAKE + ["--cores", "2", "-d", str(work), "--configfile", *CONFIGS,
                                       "--config", f"telemetry={tiny[0]}"],
                          capture_output=True, text=True, check=False)
     assert run.returncode == 0, run.stderr[-3000:]
@@ -42,12 +44,22 @@ def test_user_campaign_runs_with_no_code_edit(workflow_run):
     assert json.loads((results / "baseline" / "correction.json").read_text())["sets"]
     classic = pd.read_csv(results / "classic.csv")
     assert len(classic) == 24 and not (results / "baseline" / "classic.csv").exists()
-    assert not any("WARNING" in p.read_text() for p in (workflow_run / "logs").rglob("*.log"))
+    assert not any("WARNING" in p.read_text() for p in (workflow_run / "logs").rglob("*.log")
+                   if "g_sensitivity" not in p.parts)
+
+
+def test_a_refused_variant_leaves_its_record_and_the_run_goes_on(workflow_run):
+    results = workflow_run / "results" / "tiny"
+    record = json.loads((results / "g_sensitivity" / "refused.json").read_text())
+    assert (record["status"], record["step"]) == ("refused", "point_estimate") and "acc_x" in record["reason"]
+    assert json.loads((results / "g_sensitivity" / "calibration.csv").read_text()) == record
+    assert list(pd.read_csv(results / "model_comparison.csv")["model"]) == ["baseline", "bias_drift", "symmetric"]
+    assert "effect g_sensitivity needs" in (results / "report.html").read_text()
 
 
 def test_the_rules_write_every_file_the_paths_name(workflow_run):
     paths = CampaignPaths.under(workflow_run / "results" / "tiny")
-    models = ["baseline", "bias_drift"]
+    models = ["baseline", "bias_drift", "symmetric", "g_sensitivity"]
     for path in paths.outputs(models) + [getattr(paths.model(m), f) for m in models for f in MODEL_FILES]:
         assert Path(path).exists(), path
 
@@ -57,7 +69,7 @@ def dry_run_with(tiny, work, tmp_path, override: str):
     settings: the jobs by rule (from its ``Job stats`` table) and all it said."""
     config = tmp_path / "override.yaml"
     config.write_text(override)
-    run = subprocess.run(SNAKEMAKE + ["-n", "-d", str(work), "--configfile", SHORT_CHAINS, str(config),
+    run = subprocess.run(SNAKEMAKE + ["-n", "-d", str(work), "--configfile", *CONFIGS, str(config),
                                       "--config", f"telemetry={tiny[0]}"], capture_output=True, text=True, check=False)
     assert run.returncode == 0, run.stderr[-3000:]
     said = run.stdout + run.stderr
@@ -81,7 +93,7 @@ def test_a_report_threshold_change_reruns_the_report_and_nothing_upstream(tiny, 
 def test_a_sampler_setting_change_reruns_the_posterior_but_not_the_point_estimate(tiny, workflow_run, tmp_path):
     jobs, said = dry_run_with(tiny, workflow_run, tmp_path, "sampler:\n  chunk_steps: 150\n")
     # one posterior per model of the default config, and what reads it; no point estimate, no preprocess
-    assert jobs == {"posterior": 2, "diagnostics": 2, "report": 1, "all": 1}, said[-3000:]
+    assert jobs == {"posterior": 4, "diagnostics": 4, "report": 1, "all": 1}, said[-3000:]  # 4 variants
 
 
 def test_an_unchanged_config_schedules_nothing(tiny, workflow_run, tmp_path):
@@ -95,6 +107,14 @@ def test_bad_config_value_is_refused_with_a_clear_message(tmp_path):
     assert run.returncode != 0
     said = run.stdout + run.stderr
     assert "-3 is less than the minimum of 0" in said and "['seed']" in said
+
+
+def test_an_unknown_model_in_run_models_is_refused_naming_those_defined(tmp_path):
+    run = subprocess.run(SNAKEMAKE + ["--cores", "1", "-n", "-d", str(tmp_path), "--config", "run_models=[baseline,drift]"],
+                         capture_output=True, text=True, check=False)
+    assert run.returncode != 0 and "Traceback" not in run.stderr
+    assert ("gyrocal: the config was refused:\nconfig: run_models names ['drift'], which models: does not define; "
+            "defined: ['baseline', 'bias_drift', 'symmetric']") in run.stderr
 
 
 def test_bad_telemetry_is_refused_naming_the_file(tiny, tmp_path):

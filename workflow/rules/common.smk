@@ -16,6 +16,7 @@ from gyrocal.io import scenario as _scenario
 from gyrocal.pipeline.steps import REFUSED as _REFUSED
 from gyrocal.pipeline.paths import CampaignPaths as _CampaignPaths
 from gyrocal.pipeline.settings import canonical as _canonical
+from gyrocal.pipeline.settings import models_to_run as _models_to_run
 from gyrocal.pipeline.settings import section as _section
 
 
@@ -66,7 +67,11 @@ PATHS = _CampaignPaths(results_of("{campaign}"))
 MODEL = PATHS.model("{model}")
 """Every file of one model variant, with the campaign and the model wildcards."""
 LOGS = "logs/{campaign}"
-MODELS = sorted(config["models"], key=lambda m: m != "baseline")  # baseline is the reference
+try:
+    MODELS = _models_to_run(config)
+    """The variants this run calibrates, the first the comparison's reference (config ``run_models``)."""
+except _InputError as refused:
+    sys.exit(f"gyrocal: the config was refused:\n{refused}")
 PLUGINS = config["plugins"]
 
 wildcard_constraints:

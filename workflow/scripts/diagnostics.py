@@ -2,8 +2,10 @@ from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import DiagnosticsSettings
 from gyrocal.pipeline.steps import common, diagnostics
 
-p = snakemake.params
+p, model = snakemake.params, snakemake.wildcards.model
+paths = CampaignPaths(p.results)
 common.start(snakemake.log[0])
-with common.refusal():
-    diagnostics.run(CampaignPaths(p.results), p.maneuvers, snakemake.wildcards.model, DiagnosticsSettings(**p.settings))
+common.variant_step(paths, model, "diagnostics",
+                    lambda: diagnostics.run(paths, p.maneuvers, model, DiagnosticsSettings(**p.settings)),
+                    snakemake.output)
 common.finish()

@@ -5,7 +5,12 @@ from gyrocal.pipeline.steps import calibrate, common, posterior
 p, model = snakemake.params, snakemake.wildcards.model
 paths = CampaignPaths(p.results)
 common.start(snakemake.log[0])
-with common.refusal():
+
+
+def run():
     posterior.run(paths, p.maneuvers, model, PosteriorSettings(**p.settings))
     calibrate.run(paths, p.maneuvers, model)
+
+
+common.variant_step(paths, model, "posterior", run, snakemake.output)
 common.finish()

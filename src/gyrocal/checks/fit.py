@@ -1,7 +1,9 @@
 """Refusals before a posterior is sampled: a point estimate whose noise no sensor can have, one
 beyond the physical bounds, maneuvers too short for the leave-one-block-out predictive, or a
 parameter the data do not identify at the fitted noise; and a sampler stopped by its budget. Each
-raises `EstimateError` with the parameter and the maneuver it concerns."""
+raises `EstimateError` with the parameter and the maneuver it concerns. A variant whose every added
+parameter is prior-only is skipped (`VariantSkipped`): the data cannot tell it from the model
+without them."""
 
 import numpy as np
 
@@ -12,13 +14,36 @@ from gyrocal.inference.likelihood import maneuver_stats
 from gyrocal.inference.noise import variances
 from gyrocal.model import units
 
-__all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "NOISE_RATIOS", "EstimateError", "check_blocks", "check_identified",
-           "check_noise", "check_physical", "sampling_stopped"]
+__all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "NOISE_RATIOS", "EstimateError", "VariantSkipped", "check_blocks",
+           "check_identified", "check_noise", "check_physical", "check_variant_informed", "sampling_stopped"]
 
 
 class EstimateError(InputError):
     """The point estimate is not physical: the campaign is refused before sampling; the message names
     the parameter and the maneuver."""
+
+
+class VariantSkipped(EstimateError):
+    """A model variant the data cannot inform beyond the channel model: skipped, not refused."""
+
+    status = "skipped"
+    """What the variant's refusal record says (`gyrocal.pipeline.steps.common.variant_step`)."""
+
+
+def check_variant_informed(spec):
+    """Skip a variant whose effects add parameters that are all prior-only (`identification`): its
+    posterior would be the channel model's with those parameters' priors beside it, and its
+    comparison would measure the priors' volume, not the data."""
+    extras = spec.extras
+    if not extras or not all(p.prior_only for p in extras):
+        return
+    listed = "; ".join(f"{p.label} ({p.prior_only})" for p in extras[:3])
+    more = f"; and {len(extras) - 3} more" if len(extras) > 3 else ""
+    added = sorted({p.effect for p in extras})
+    raise VariantSkipped(
+        f"model {spec.model} skipped: every parameter its {', '.join(added)} adds is prior-only, so the data "
+        f"cannot tell it from the model without it: {listed}{more}. Fly maneuvers that inform it (gyrocal plan "
+        f"predicts which), or leave {spec.model} out of run_models")
 
 
 NOISE_PLAUSIBLE = 1e3

@@ -104,7 +104,9 @@ def compare_files(first, second, z_max: float = 3.0) -> tuple:
     compared = table[~table["prior_only"]]
     worst = compared.loc[compared["z"].abs().idxmax()] if len(compared) else None
     agree = bool(len(compared)) and bool((compared["z"].abs() < z_max).all())
-    out.append(table.round(3).to_string(index=False))
+    shown = table.round(3).astype({"z": object})
+    shown.loc[table["prior_only"].to_numpy(), "z"] = "prior-only"  # the data said nothing to compare, not NaN
+    out.append(shown.to_string(index=False))
     if worst is None:
         out.append("VERDICT: nothing to compare (no parameter informed in both)")
     else:

@@ -30,11 +30,14 @@ from scipy.special import logsumexp, softmax
 from gyrocal.checks.finding import Finding
 
 __all__ = [
-    "MEASURES", "SEPARATED_BY", "classify", "disagreements", "interval_widths", "paired_se", "plausibility_check",
-    "reviewed_model", "sensitivity_check", "separating_advice", "stacking_weights", "too_wide", "typed"
+    "MEASURES", "SEPARATED_BY", "branch_labels", "branch_rows", "classify", "disagreements", "interval_widths",
+    "paired_se", "plausibility_check", "reviewed_model", "reviewed_reason", "sensitivity_check", "separating_advice",
+    "stacking_weights", "too_wide", "typed"
 ]
 
 SEPARATED_BY = {
+    "scale_factor": ("more and longer rotations each way about each axis (what sets the scale factors per "
+                     "direction apart from one symmetric scale factor)"),
     "bias_drift": "longer inertial holds before and after each rotation (a drift bends the held error)",
     "sf_nonlinearity": "a second rotation rate in each direction (the scale factor then differs by rate)",
     "st_latency": "shorter, sharper ramps (a time-tag offset shows where the rate changes)",
@@ -129,6 +132,8 @@ def separating_advice(effects_a, effects_b) -> str:
     """What would tell two variants apart: the plan change for each effect one has and the
     other lacks (for a plugin's effect, maneuvers that excite it)."""
     differing = sorted(set(effects_a) ^ set(effects_b))
+    if {"scale_factor", "scale_factor_symmetric"} <= set(differing):  # one question: are the directions' apart?
+        differing.remove("scale_factor_symmetric")
     advice = [f"{e}: {SEPARATED_BY.get(e, 'maneuvers that excite ' + e)}" for e in differing]
     return "; ".join(advice) or "the variants hold the same effects"
 
@@ -146,6 +151,37 @@ def interval_widths(calibration: pd.DataFrame, core_labels: list, width_limits: 
 def too_wide(calibration: pd.DataFrame, core_labels: list, width_limits: dict) -> list:
     """Channel-model terms whose 95 % interval is wider than the limit of their unit."""
     return [w for w in interval_widths(calibration, core_labels, width_limits) if w["width"] > w["limit"]]
+
+
+def branch_rows(calibration: pd.DataFrame) -> pd.DataFrame:
+    """A calibration table with a symmetric model's ``sf`` rows also as ``sf_pos`` and ``sf_neg``
+    (the branches it sets equal), so that it compares term by term with a per-direction model's."""
+    sym = calibration[calibration["parameter"] == "sf"]
+    if sym.empty:
+        return calibration
+    return pd.concat([calibration] + [sym.assign(parameter=b) for b in ("sf_pos", "sf_neg")], ignore_index=True)
+
+
+def branch_labels(labels) -> list:
+    """Channel-model labels with each symmetric ``<channel>.sf`` as its two branches (`branch_rows`)."""
+    return [x for label in labels for x in ([label[:-2] + "sf_pos", label[:-2] + "sf_neg"]
+                                             if label.endswith(".sf") else [label])]
+
+
+def reviewed_reason(classified: pd.DataFrame) -> str:
+    """Why the rule reviews the variant it does (`reviewed_model`), in a sentence naming the others."""
+    reviewed = reviewed_model(classified)
+    best = classified.set_index("model")["elpd_lomo"]
+    plausible = list(classified.loc[classified["plausible"], "model"])
+    if plausible:
+        why = (f"{reviewed} is reviewed: of the plausible variants ({', '.join(plausible)}), it has the best "
+               f"exact leave-one-maneuver-out elpd ({best[reviewed]:.1f})")
+    else:
+        why = (f"{reviewed} is reviewed, though no variant is plausible: it has the best exact "
+               f"leave-one-maneuver-out elpd ({best[reviewed]:.1f})")
+    others = [f"{r.model} {r.elpd_lomo - best[reviewed]:+.1f}" + ("" if r.plausible else f" (not plausible: {r.rejected_by})")
+              for r in classified.itertuples() if r.model != reviewed]
+    return why + (f"; the others' elpd against it: {', '.join(others)}" if others else "; it is the only variant compared")
 
 
 def typed(comparison: pd.DataFrame) -> pd.DataFrame:
@@ -166,6 +202,8 @@ def sensitivity_check(classified: pd.DataFrame, calibrations: dict, core_labels:
     name = "the answer does not hang on the model"
     reviewed = reviewed_model(classified)
     members = list(classified.loc[~classified["loo_rejected"].astype(bool), "model"])
+    calibrations = {m: branch_rows(t) for m, t in calibrations.items()}
+    core_labels = branch_labels(core_labels)
     every = disagreements({m: calibrations[m] for m in members}, core_labels, 0.0)
     found = [d for d in every if d["z"] > agree_sd]
     details = {"threshold": float(agree_sd), "unit": "sd"}
@@ -179,15 +217,17 @@ def sensitivity_check(classified: pd.DataFrame, calibrations: dict, core_labels:
                f"LOO rejects every variant but {', '.join(members)}")
         return Finding.judged(name, True, why, **details)
     effects = {r.model: r.effects.split("+") for r in classified.itertuples()}
+    terms = {}  # per pair of variants, in either order: what differs, and what the other leaves unknown
+    for d in found:
+        terms.setdefault(frozenset(d["models"]), (d["models"], []))[1].append(
+            f"{d['label']} differs by {abs(d['difference']):,.1f} {d['unit']} ({d['z']:.1f} sd)")
+    for other, w in wide.items():
+        terms.setdefault(frozenset((reviewed, other)), ((reviewed, other), []))[1].extend(
+            f"under {other}, {x['label']} is known only within {x['width']:,.0f} {x['unit']} (95 %; limit {x['limit']:g})"
+            for x in w)
     sentences = []
-    for a, b in dict.fromkeys([d["models"] for d in found] + [(reviewed, m) for m in wide]):
-        terms = [f"{d['label']} differs by {abs(d['difference']):,.1f} {d['unit']} ({d['z']:.1f} sd)"
-                 for d in found if d["models"] == (a, b)]
-        other = b if a == reviewed else a
-        if other in wide and (a == reviewed or b == reviewed):
-            terms += [f"under {other}, {w['label']} is known only within {w['width']:,.0f} {w['unit']} "
-                      f"(95 %; limit {w['limit']:g})" for w in wide.pop(other)]
-        shown = "; ".join(terms[:3]) + (f"; and {len(terms) - 3} more" if len(terms) > 3 else "")
+    for (a, b), said in terms.values():
+        shown = "; ".join(said[:3]) + (f"; and {len(said) - 3} more" if len(said) > 3 else "")
         sentences.append(f"the data cannot tell {a} from {b}: {shown}. What would separate them: "
                          f"{separating_advice(effects[a], effects[b])}")
     return Finding.judged(name, False, ". ".join(sentences), **details,

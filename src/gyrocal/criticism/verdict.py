@@ -16,8 +16,8 @@ from gyrocal.inference.calibration import core_rows, posterior_mean_params
 from gyrocal.inference.classic import hold_windows
 from gyrocal.model.units import AXES, rad_to_arcsec
 
-__all__ = ["bounds_check", "checks", "convergence_check", "correction_check", "correction_effect", "estimate_effect",
-           "informed_check", "informed_core", "interval_check", "misfit_check", "verdict",
+__all__ = ["RANKED_SHOWN", "bounds_check", "checks", "convergence_check", "correction_check", "correction_effect",
+           "estimate_effect", "informed_check", "informed_core", "interval_check", "misfit_check", "verdict",
            "width_limits"]
 
 
@@ -83,17 +83,32 @@ def convergence_check(calibration: pd.DataFrame, spec, sampler: dict, conv: dict
                           action="" if passed else "run longer chains (sampler.max_steps)", **details)
 
 
-def misfit_check(diagnostics: dict) -> Finding:
+RANKED_SHOWN = 3
+"""How many top-ranked explanations a misfit names where none is significant."""
+
+
+def misfit_check(diagnostics: dict, log10_p_min: float) -> Finding:
     """The reviewed model's residuals are consistent with its noise model (``diagnostics.json``);
-    a misfit names the failed checks and the best-ranked explanation."""
+    a misfit names the failed checks and the best explanation, where its score test is significant
+    at ``log10_p_min`` (the config's ``diagnostics.structure_log10_p_min``); where none is, it says
+    so and names the top-ranked ones with their p."""
     failed = [c for c in diagnostics["checks"] if not c["passed"]]
     if not failed:
         return Finding.judged("no misfit", not diagnostics["misfit"], "the residuals are consistent with the noise model")
-    best = diagnostics["ranking"][0]
-    why = ("misfit: " + "; ".join(f"{c['check']}: {c['why']}" for c in failed)
-           + f". Best explanation: {best['kind']} {best['name']}")
-    action = (f"add a variant with {best['name']} (models:)" if best["kind"] == "effect" else
-              f"model what follows the {best['name']} signature (an effect under plugins:)")
+    ranking = diagnostics["ranking"]
+    why = "misfit: " + "; ".join(f"{c['check']}: {c['why']}" for c in failed)
+    best = ranking[0] if ranking else None
+    if best is not None and best["log10_p"] < log10_p_min:
+        why += (f". Best explanation: {best['kind']} {best['name']} (log10 p = {best['log10_p']:.1f}, "
+                f"significant below {log10_p_min:g})")
+        action = (f"add a variant with {best['name']} (models:)" if best["kind"] == "effect" else
+                  f"model what follows the {best['name']} signature (an effect under plugins:)")
+    else:
+        top = ", ".join(f"{r['kind']} {r['name']} (log10 p = {r['log10_p']:.1f})" for r in ranking[:RANKED_SHOWN])
+        why += (f". No effect or signature explains the misfit significantly (log10 p below {log10_p_min:g})"
+                + (f"; the top-ranked: {top}" if top else ""))
+        action = ("look at the residual figures for what the ranking lacks: a noise the stated one understates, "
+                  "or an effect outside the library (plugins:)")
     return Finding.judged("no misfit", not diagnostics["misfit"], why, action=action)
 
 
@@ -180,7 +195,7 @@ def checks(model: str, calibrations: dict, spec, sampler: dict, diagnostics: dic
     calibration, rcfg = calibrations[model], cfg["report"]
     classified = modelchoice.typed(comparison)
     return [convergence_check(calibration, spec, sampler, cfg["convergence"]),
-            misfit_check(diagnostics),
+            misfit_check(diagnostics, cfg["diagnostics"]["structure_log10_p_min"]),
             informed_check(spec),
             interval_check(calibration, spec, rcfg),
             bounds_check(calibration, spec, rcfg),

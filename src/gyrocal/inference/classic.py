@@ -106,11 +106,14 @@ def classic(data: ManeuverData, bias_from_holds: bool = False) -> pd.DataFrame:
 
 def classic_table(maneuvers, spec: ModelSpec, bias_from_holds: bool = False) -> pd.DataFrame:
     """`classic` over every maneuver in the parameters' units; a parameter seen twice is
-    averaged. Columns: channel, parameter, unit, value, n."""
+    averaged, a symmetric model's ``sf`` over both directions. Columns: channel, parameter, unit,
+    value, n."""
     parts = [part for part in (classic(d, bias_from_holds) for d in maneuvers) if len(part)]
     if not parts:
         return pd.DataFrame(columns=["channel", "parameter", "unit", "value", "n"])
     table = pd.concat(parts, ignore_index=True)
+    symmetric = np.array([f"{c}.sf" in spec.labels for c in table["channel"]], dtype=bool)
+    table.loc[symmetric & table["parameter"].str.startswith("sf_").to_numpy(), "parameter"] = "sf"
     table = (table.groupby(["channel", "parameter"], sort=False)
              .agg(value=("value", "mean"), n=("value", "size")).reset_index())
     columns = [spec.index(f"{r.channel}.{r.parameter}") for r in table.itertuples()]

@@ -28,6 +28,7 @@ import numpy as np
 from scipy.ndimage import uniform_filter1d
 from scipy.spatial.transform import Rotation
 
+from gyrocal.errors import InputError
 from gyrocal.inference.preprocess import ManeuverData
 from gyrocal.model import channels as ch
 from gyrocal.model import kinematics
@@ -103,12 +104,13 @@ def view(data: ManeuverData) -> ManeuverView:
 
 def effect_derivatives(effect, m: ManeuverView) -> tuple:
     """An effect's ``gyro`` and ``star_tracker`` derivatives on one maneuver; a missing
-    extra column is named with the columns the maneuver has."""
+    extra column is refused (`InputError`), named with the columns the maneuver has."""
     try:
         return effect.gyro(m), effect.star_tracker(m)
     except KeyError as exc:
-        raise ValueError(f"effect {effect.name} needs {exc} in maneuver {m.id}, which has the "
-                         f"extra gyro.csv columns {sorted(m.extras)}") from exc
+        raise InputError(f"effect {effect.name} needs {exc} in maneuver {m.id}, which has the "
+                         f"extra gyro.csv columns {sorted(m.extras)}: add the column to gyro.csv, or leave "
+                         f"{effect.name} out of this campaign's models") from exc
 
 
 def effect_regressors(data: ManeuverData, spec: ModelSpec):
@@ -143,7 +145,8 @@ def effect_regressors(data: ManeuverData, spec: ModelSpec):
 def _channel_derivatives(sub: ch.ChannelParams, u, phi, dt):
     """d(body increment)/d(parameter) of one channel set (eq. 3 inverted), (K, 3) each.
 
-    Returns the channel-model terms keyed by ``(channel, name)``, the set's three bias
+    Returns the channel-model terms keyed by ``(channel, name)`` (a symmetric ``sf``: the sum of
+    the two branches' columns), the set's three bias
     columns (K, 3, 3) and the inverse response matrices (K, 3, 3).
     """
     positive = (u - np.outer(dt, sub.bias_rad_s)) > 0
@@ -156,6 +159,7 @@ def _channel_derivatives(sub: ch.ChannelParams, u, phi, dt):
         w = -m_inv[:, :, i]
         terms[c.name, "sf_pos"] = w * (sensed[:, i] * positive[:, i])[:, None]
         terms[c.name, "sf_neg"] = w * (sensed[:, i] * ~positive[:, i])[:, None]
+        terms[c.name, "sf"] = terms[c.name, "sf_pos"] + terms[c.name, "sf_neg"]  # symmetric: both branches
         for b in c.other_axes:
             terms[c.name, f"mis_{b}"] = w * (scale[:, i] * phi[:, ch.AXIS_INDEX[b]])[:, None]
     return terms, -m_inv * dt[:, None, None], m_inv

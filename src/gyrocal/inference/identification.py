@@ -34,7 +34,7 @@ would narrow its interval by less than half a percent."""
 
 def unflown(maneuvers, spec: ModelSpec) -> dict:
     """Channel-model terms no maneuver informs, with the reason: a scale-factor branch needs a
-    maneuver about its channel's axis in its direction; a misalignment toward axis b needs a
+    maneuver about its channel's axis in its direction (a symmetric one, in either); a misalignment toward axis b needs a
     maneuver about b (either direction)."""
     flown = {(d.axis, sign) for d in maneuvers for sign in (("+", "-") if d.direction == "both" else (d.direction,))}
     rotated = {d.axis for d in maneuvers}
@@ -45,6 +45,8 @@ def unflown(maneuvers, spec: ModelSpec) -> dict:
             sign = "+" if p.name == "sf_pos" else "-"
             if (axis, sign) not in flown:
                 reasons[p.label] = f"no {sign}{axis} maneuver"
+        elif p.name == "sf" and axis not in rotated:
+            reasons[p.label] = f"no {axis} maneuver"
         elif p.name.startswith("mis_") and p.name[4:] not in rotated:
             reasons[p.label] = f"no {p.name[4:]} maneuver"
     return reasons

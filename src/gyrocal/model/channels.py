@@ -5,10 +5,10 @@ For channel c with input axis a::
     omega_c = (1 + s_c) * (omega_a + sum_b m_cb * omega_b) + b_c
 
 with ``s_c = sf_pos`` when the rate the channel senses, ``omega_a + sum_b m_cb * omega_b``, is
-positive and ``sf_neg`` when it is negative: the branch follows the channel's own output, which is
-all the onboard correction sees (`correction`) and all the inverse (`solve_body`) can use.
-Everything here is in SI: scale factors dimensionless, misalignments in rad,
-bias in rad/s. The same relations hold for increments over an interval ``dt``.
+positive and ``sf_neg`` when it is negative (a symmetric model's one ``sf`` is both): the branch
+follows the channel's own output, which is all the onboard correction sees (`correction`) and all
+the inverse (`solve_body`) can use. Everything here is in SI: scale factors dimensionless,
+misalignments in rad, bias in rad/s. The same relations hold for increments over an interval ``dt``.
 """
 
 from dataclasses import dataclass, field
@@ -60,9 +60,10 @@ MOM_CHANNELS = (
 )
 """The Mars Orbiter Mission arrangement: DTG1 roll+pitch, DTG2 yaw+pitch, DTG3 yaw+roll."""
 
-SYMBOLS = {"sf_pos": ("sf_pos", None), "sf_neg": ("sf_neg", None),
+SYMBOLS = {"sf_pos": ("sf_pos", None), "sf_neg": ("sf_neg", None), "sf": (("sf_pos", "sf_neg"), None),
            **{f"mis_{b}": ("mis_rad", i) for i, b in enumerate(AXES)}}
-"""Eq. 3's terms by their contract names: ``mis_<b>`` is the misalignment toward axis b."""
+"""Eq. 3's terms by their contract names: ``mis_<b>`` is the misalignment toward axis b; ``sf``
+(the symmetric model's) is one scale factor for both branches, ``sf_pos = sf_neg = sf``."""
 
 
 @dataclass
@@ -94,16 +95,19 @@ class ChannelParams:
     def get(self, i: int, name: str) -> float:
         """Channel i's term ``name`` (a `SYMBOLS` key), SI."""
         field_name, column = SYMBOLS[name]
+        if isinstance(field_name, tuple):  # "sf": the branches' mean (equal where the model is symmetric)
+            return float(np.mean([self.get(i, f) for f in field_name]))
         values = getattr(self, field_name)
         return float(values[i] if column is None else values[i, column])
 
     def set(self, i: int, name: str, value: float):
         field_name, column = SYMBOLS[name]
-        values = getattr(self, field_name)
-        if column is None:
-            values[i] = value
-        else:
-            values[i, column] = value
+        for f in field_name if isinstance(field_name, tuple) else (field_name,):
+            values = getattr(self, f)
+            if column is None:
+                values[i] = value
+            else:
+                values[i, column] = value
 
     def subset(self, names):
         """The parameters of the named channels, in the given order."""

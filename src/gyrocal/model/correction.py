@@ -9,7 +9,9 @@ with bias-free channel rates ``w`` (rad/s), the corrected body rate is
 set's channel i toward axis b) and ``k_i = 1 / (1 + sf_i)``, with ``sf_pos`` when
 ``w_i > 0`` and ``sf_neg`` when ``w_i < 0``. ``matrix_pos`` and ``matrix_neg`` are
 ``M diag(k)`` with every channel on its positive or negative branch: the exact
-inverse of the channel model (docs/interface.md section 2) for a single-axis rotation.
+inverse of the channel model (docs/interface.md section 2) for a single-axis rotation. A
+symmetric model's one ``sf`` sets both branches, so its file keeps this format with
+``scale_correction_pos`` equal to ``scale_correction_neg``.
 """
 
 import numpy as np

@@ -39,8 +39,9 @@ from gyrocal.model.channels import MOVING_RATE_FRACTION
 from gyrocal.model.units import AXES, DEG_H_RAD_S, PPM, STANDARD_GRAVITY_M_S2, arcsec_to_rad
 
 __all__ = [
-    "BASELINE", "LIBRARY", "Bias", "BiasDrift", "Effect", "GSensitivity", "GravityOffset", "ManeuverView", "Misalignment",
-    "Parameter", "PluginError", "ScaleFactor", "SfNonlinearity", "StCorrelatedNoise", "StLatency", "check_effect",
+    "BASELINE", "LIBRARY", "SCALE_FACTORS", "SF_BOUND_PPM", "SF_PRIOR_SD_PPM", "Bias", "BiasDrift", "Effect",
+    "GSensitivity", "GravityOffset", "ManeuverView", "Misalignment", "Parameter", "PluginError", "ScaleFactor",
+    "ScaleFactorSymmetric", "SfNonlinearity", "StCorrelatedNoise", "StLatency", "check_effect",
     "known", "load_plugins", "resolve"
 ]
 
@@ -122,10 +123,25 @@ class ManeuverView:
         return np.repeat((values * self.dt)[:, None], len(self.channels), axis=1)
 
 
+SF_PRIOR_SD_PPM = 5000.0
+"""The prior sd of every residual scale factor, per direction or symmetric."""
+SF_BOUND_PPM = 30000.0
+"""The physical bound of every residual scale factor."""
+
+
 class ScaleFactor(Effect):
     name = "scale_factor"
     description = "residual scale factor of each channel, separately for positive and negative rate (eq. 3)"
-    parameters = (Parameter("sf_pos", "ppm", PPM, 5000.0, 30000.0), Parameter("sf_neg", "ppm", PPM, 5000.0, 30000.0))
+    parameters = (Parameter("sf_pos", "ppm", PPM, SF_PRIOR_SD_PPM, SF_BOUND_PPM),
+                  Parameter("sf_neg", "ppm", PPM, SF_PRIOR_SD_PPM, SF_BOUND_PPM))
+    core = True
+
+
+class ScaleFactorSymmetric(Effect):
+    name = "scale_factor_symmetric"
+    description = ("one residual scale factor of each channel for both directions of rate (eq. 3 with "
+                   "sf_pos = sf_neg): where the maneuvers cannot resolve the asymmetry")
+    parameters = (Parameter("sf", "ppm", PPM, SF_PRIOR_SD_PPM, SF_BOUND_PPM),)
     core = True
 
 
@@ -209,7 +225,8 @@ class GravityOffset(Effect):
 class StLatency(Effect):
     name = "st_latency"
     description = "time-tag offset of the star tracker behind the gyros (positive: its attitude is late)"
-    parameters = (Parameter("latency", "s", 1.0, 1.0, 10.0, per_channel=False),)
+    # In ms: a latency is a few to hundreds of ms, which seconds print as "-0.00".
+    parameters = (Parameter("latency", "ms", 1e-3, 1000.0, 10000.0, per_channel=False),)
 
     def star_tracker(self, m):
         return {"latency": -m.st_body_rate}
@@ -222,9 +239,11 @@ class StCorrelatedNoise(Effect):
     noise = True
 
 
-LIBRARY = {e.name: e for e in (ScaleFactor(), Misalignment(), Bias(), BiasDrift(), SfNonlinearity(),
+LIBRARY = {e.name: e for e in (ScaleFactor(), ScaleFactorSymmetric(), Misalignment(), Bias(), BiasDrift(), SfNonlinearity(),
                                 GSensitivity(), GravityOffset(), StLatency(), StCorrelatedNoise())}
 BASELINE = ("scale_factor", "misalignment", "bias")
+SCALE_FACTORS = ("scale_factor", "scale_factor_symmetric")
+"""The channel model's scale-factor terms: a model holds exactly one of them in place of the baseline's."""
 
 
 class PluginError(InputError):
@@ -276,12 +295,16 @@ def check_effect(effect, where):
 
 
 def resolve(model_name: str, names, plugins: dict) -> list:
-    """The effect objects of a model; the baseline's three must be there."""
+    """The effect objects of a model; the baseline's three must be there, its scale factors
+    per direction (``scale_factor``) or symmetric (``scale_factor_symmetric``)."""
     known = {**LIBRARY, **plugins}
     unknown = [n for n in names if n not in known]
     if unknown:
         raise ValueError(f"model {model_name}: unknown effect(s) {unknown}; known: {sorted(known)}")
-    missing = [n for n in BASELINE if n not in names]
+    scale = [n for n in names if n in SCALE_FACTORS]
+    if len(scale) > 1:
+        raise ValueError(f"model {model_name}: takes one of {list(SCALE_FACTORS)}, not both")
+    missing = [n for n in BASELINE if n not in names and not (n == "scale_factor" and scale)]
     if missing:
         raise ValueError(f"model {model_name}: every model builds on the paper's baseline; add {missing}")
     return [known[n] for n in names]

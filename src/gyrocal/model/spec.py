@@ -44,10 +44,11 @@ class ParameterSpec:
     A prior-only parameter is kept out of the fit: its column is zero, its posterior its prior."""
 
 
-CONFIG_PRIOR_KEYS = {"sf_sd_ppm": ("scale_factor", "prior_sd"), "sf_bound_ppm": ("scale_factor", "bound"),
-                     "mis_sd_arcsec": ("misalignment", "prior_sd"), "mis_bound_arcsec": ("misalignment", "bound")}
-"""The config's ``priors:`` keys that override an effect's declared prior sd or bound; each
-key ends in the unit its effect declares."""
+CONFIG_PRIOR_KEYS = {"sf_sd_ppm": (fx.SCALE_FACTORS, "prior_sd"), "sf_bound_ppm": (fx.SCALE_FACTORS, "bound"),
+                     "mis_sd_arcsec": (("misalignment",), "prior_sd"),
+                     "mis_bound_arcsec": (("misalignment",), "bound")}
+"""The config's ``priors:`` keys that override the declared prior sd or bound of the effects
+named; each key ends in the unit they declare."""
 
 
 def _specs_of(effect, parameter, channels, core) -> list:
@@ -191,12 +192,12 @@ class ModelSpec:
         for key, value in (priors or {}).items():
             if key not in CONFIG_PRIOR_KEYS:
                 continue
-            effect, field = CONFIG_PRIOR_KEYS[key]
+            owners, field = CONFIG_PRIOR_KEYS[key]
             unit = key.rsplit("_", 1)[1]
             for p in self.parameters:
-                if p.effect == effect:
+                if p.effect in owners:
                     if p.unit != unit:
-                        raise ValueError(f"priors.{key}: {effect} declares {p.name} in {p.unit}, not {unit}")
+                        raise ValueError(f"priors.{key}: {p.effect} declares {p.name} in {p.unit}, not {unit}")
                     overrides.setdefault(p.label, {})[field] = float(value)
         if earlier is not None:
             for row in earlier.itertuples():

@@ -29,6 +29,8 @@ class ModelPaths:
     calibration = _under_root("calibration.csv")
     correction = _under_root("correction.json")
     diagnostics = _under_root("diagnostics.json")
+    refusal = _under_root("refused.json", "Where the variant was refused or skipped: the step and the reason "
+                                          "(`gyrocal.pipeline.steps.common.variant_step`).")
 
 
 @dataclass(frozen=True)

@@ -10,10 +10,12 @@ from gyrocal.pipeline.settings import (
     PointEstimateSettings,
     PosteriorSettings,
     ReportSettings,
+    models_to_run,
 )
 from gyrocal.pipeline.steps import (
     calibrate,
     classic,
+    common,
     compare_models,
     diagnostics,
     point_estimate,
@@ -23,36 +25,57 @@ from gyrocal.pipeline.steps import (
     validate,
 )
 
-__all__ = ["calibrate_campaign", "review_campaign", "run_campaign"]
+__all__ = ["calibrate_campaign", "calibrate_models", "review_campaign", "run_campaign"]
 
 
-def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models, figures=True,
-                       through="diagnostics") -> list:
-    """Validate and preprocess one campaign, then each model up to its diagnostics
-    (``through="posterior"``: up to its posterior). Returns the maneuver ids, in the campaign's order."""
+def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=None, figures=True,
+                       through="diagnostics", strict=False) -> list:
+    """Validate and preprocess one campaign, then each model (`calibrate_models`); ``models`` None:
+    the config's (`models_to_run`). Returns the maneuver ids, in the campaign's order."""
+    models = models_to_run(cfg) if models is None else models
     paths.mkdirs(models)
     campaign = telemetry.read_campaign(campaign_dir)
     validate.run(campaign_dir, paths, campaign, cfg["sampler"]["block_s"])
     ids = preprocess.run(campaign_dir, paths, figures, campaign=campaign)
     classic.run(paths, ids)
-    for model in models:
-        point_estimate.run(paths, ids, model, PointEstimateSettings.of(cfg, model))
-        posterior.run(paths, ids, model, PosteriorSettings.of(cfg))
-        if through == "posterior":
-            continue
-        calibrate.run(paths, ids, model)
-        diagnostics.run(paths, ids, model, DiagnosticsSettings.of(cfg))
+    calibrate_models(paths, ids, cfg, models, through, strict)
     return ids
 
 
-def review_campaign(paths: CampaignPaths, ids, cfg: dict, models, truth_json=None, processes: int = 1):
+def calibrate_models(paths: CampaignPaths, ids, cfg: dict, models, through="diagnostics", strict=False):
+    """Each model up to its diagnostics (``through="posterior"``: up to its posterior), on a campaign
+    already preprocessed. A refused variant gets its refusal record and the others go on, as in the
+    workflow (`common.variant_step`); ``strict``: its refusal is raised (the study's runs)."""
+    paths.mkdirs(models)
+
+    def variant_step(model, step, run):
+        return run() if strict else common.variant_step(paths, model, step, run)
+
+    for model in models:
+        variant_step(model, "point_estimate",
+                     lambda model=model: point_estimate.run(paths, ids, model, PointEstimateSettings.of(cfg, model)))
+
+        def sample(model=model):
+            posterior.run(paths, ids, model, PosteriorSettings.of(cfg))
+            if through != "posterior":
+                calibrate.run(paths, ids, model)
+
+        variant_step(model, "posterior", sample)
+        if through != "posterior":
+            variant_step(model, "diagnostics",
+                         lambda model=model: diagnostics.run(paths, ids, model, DiagnosticsSettings.of(cfg)))
+
+
+def review_campaign(paths: CampaignPaths, ids, cfg: dict, models=None, truth_json=None, processes: int = 1):
     """Compare the models and write the pre-uplink review and its verdict."""
+    models = models_to_run(cfg) if models is None else models
     compare_models.run(paths, models, ModelChoiceSettings.of(cfg))
     report.run(paths, ids, list(models), ReportSettings.of(cfg), truth_json, processes)
 
 
-def run_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models, truth_json=None) -> list:
-    """Every step of one campaign's run, as ``snakemake`` runs them. Returns the maneuver ids."""
+def run_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=None, truth_json=None) -> list:
+    """Every step of one campaign's run, as ``snakemake`` runs them (``models`` None: the config's
+    `models_to_run`). Returns the maneuver ids."""
     ids = calibrate_campaign(campaign_dir, paths, cfg, models)
     review_campaign(paths, ids, cfg, models, truth_json)
     return ids

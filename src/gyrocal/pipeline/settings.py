@@ -5,8 +5,10 @@ changes). The rules pass the same sections as their ``params``."""
 from dataclasses import dataclass, field
 from typing import ClassVar
 
+from gyrocal.errors import InputError
+
 __all__ = ["SECTIONS", "DiagnosticsSettings", "ModelChoiceSettings", "PointEstimateSettings", "PosteriorSettings",
-           "ReportSettings", "canonical", "section"]
+           "ReportSettings", "canonical", "models_to_run", "section"]
 
 SECTIONS = {
     "point_estimate": ("noise", "plugins"),
@@ -20,6 +22,22 @@ def canonical(value):
     """``value`` with the keys of every mapping sorted: Snakemake compares a rule's params by their
     repr, so the order a config file happens to give must not rerun a job."""
     return {k: canonical(value[k]) for k in sorted(value)} if isinstance(value, dict) else value
+
+
+def models_to_run(cfg: dict) -> list:
+    """The variants a run calibrates and compares, the first the comparison's reference: the config's
+    ``run_models`` in its order, or, where it is empty, every variant under ``models:`` with
+    ``baseline`` first. A name ``models:`` does not define is refused, naming those it does."""
+    defined = list(cfg["models"])
+    chosen = list(cfg.get("run_models") or [])
+    if not chosen:
+        return sorted(defined, key=lambda m: m != "baseline")
+    unknown = [m for m in chosen if m not in defined]
+    if unknown:
+        raise InputError(f"config: run_models names {unknown}, which models: does not define; defined: {defined}")
+    if len(set(chosen)) < len(chosen):
+        raise InputError(f"config: run_models lists a model twice: {chosen}")
+    return chosen
 
 
 def section(cfg: dict, step: str) -> dict:

@@ -1,7 +1,7 @@
 """What the review is made from (`ReviewInputs`: the files the report step read, and the verdict's
 findings) and what its template shows (`ReviewContext`: every table and figure, ready to render)."""
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
@@ -45,6 +45,8 @@ class ReviewInputs:
     """The end-of-maneuver error before and after the correction (`gyrocal.criticism.verdict.estimate_effect`)."""
     truth: dict | None = None
     """The simulation's true parameters (channel -> parameter -> value), or None for real data."""
+    refused: list = field(default_factory=list)
+    """The refusal records (``<model>/refused.json``) of the variants refused or skipped."""
 
 
 @dataclass(frozen=True)
@@ -102,3 +104,9 @@ class ReviewContext:
     """The sampler's mean acceptance fraction."""
     config: str
     """The whole config as YAML."""
+    channel_kind: str = "gyro"
+    """What the campaign's channels are called: ``DTG`` where campaign.yaml gives each a ``dtg:``."""
+    reviewed_why: str = ""
+    """Why the model-choice rule reviews this variant (`gyrocal.criticism.modelchoice.reviewed_reason`)."""
+    refused: pd.DataFrame = field(default_factory=pd.DataFrame)
+    """The variants refused or skipped: model, status, step, reason."""

@@ -19,6 +19,7 @@ import yaml
 from markupsafe import Markup
 
 from gyrocal import __version__
+from gyrocal.criticism import modelchoice
 from gyrocal.criticism import verdict as judge
 from gyrocal.inference import identification
 from gyrocal.io import telemetry
@@ -27,7 +28,7 @@ from gyrocal.report import figures as plots
 from gyrocal.report.context import CorrectionSet, ReviewContext, ReviewInputs
 
 __all__ = [
-    "EMBED_PNG", "ReviewContext", "ReviewInputs", "build_context", "draw_all", "embed_png", "entry", "html_table",
+    "EMBED_PNG", "ReviewContext", "ReviewInputs", "build_context", "channel_kind", "draw_all", "embed_png", "entry", "html_table",
     "mounting_text", "number", "paper_tables", "render"
 ]
 
@@ -62,11 +63,13 @@ def entry(row, truth=None) -> str:
 
 
 def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> dict:
-    """Tables 1-3 of the paper, each entry point | mean [95 % interval] (truth)."""
+    """Tables 1-3 of the paper, each entry point | mean [95 % interval] (truth). A column names
+    each channel's DTG only where the campaign declares DTGs (campaign.yaml's ``dtg:``)."""
     cal = calibration.set_index(["channel", "parameter"])
 
     def cell(channel, parameter):
-        row = cal.loc[(channel, parameter)]
+        """A symmetric model's one ``sf`` fills both branches' cells (each against its branch's truth)."""
+        row = cal.loc[(channel, parameter if (channel, parameter) in cal.index else "sf")]
         t = truth.get(channel, {}).get(parameter) if truth else None
         return entry(row, t)
 
@@ -83,19 +86,26 @@ def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> di
                 t1_mis.append({"term": paper_term(a, b), "contract name": f"mis_{b}",
                                "channel": c.name, "misalignment (arcsec)": cell(c.name, f"mis_{b}")})
     t2, t3 = [], []
+    gyro = {"DTG": lambda c: "-" if c.dtg is None else f"DTG#{c.dtg}"} if any(c.dtg for c in channels) else {}
     for a in PAPER_AXES:
         for c in sorted((c for c in channels if c.axis == a), key=lambda c: (c.dtg or 0, c.name)):
-            t2.append({"axis": a, "DTG": "-" if c.dtg is None else f"DTG#{c.dtg}", "channel": c.name,
+            t2.append({"axis": a, **{k: f(c) for k, f in gyro.items()}, "channel": c.name,
                        "selected": "yes" if c.name in in_loop else "no",
                        "positive scale factor (ppm)": cell(c.name, "sf_pos"),
                        "negative scale factor (ppm)": cell(c.name, "sf_neg")})
             others = [b for b in PAPER_AXES if b != a]
-            row = {"axis": a, "DTG": "-" if c.dtg is None else f"DTG#{c.dtg}", "channel": c.name}
+            row = {"axis": a, **{k: f(c) for k, f in gyro.items()}, "channel": c.name}
             for b in others:
                 row[f"{paper_term(a, b)} = mis_{b} (arcsec)"] = cell(c.name, f"mis_{b}")
             t3.append(row)
     return {"table1_sf": pd.DataFrame(t1), "table1_mis": pd.DataFrame(t1_mis),
             "table2": pd.DataFrame(t2), "table3": pd.DataFrame(t3)}
+
+
+def channel_kind(channels) -> str:
+    """What the report calls the channels: ``DTG`` where campaign.yaml gives every one a ``dtg:``
+    number, else ``gyro`` (a MEMS triad is not a DTG)."""
+    return "DTG" if all(c.dtg is not None for c in channels) else "gyro"
 
 
 def mounting_text(mounting: dict) -> str:
@@ -172,7 +182,10 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         warnings=list(info["warnings"]), renormalised=info["rows"]["star_tracker_renormalised"],
         unit_norm_tol=telemetry.UNIT_NORM_TOL, checksums=json.dumps(info["checksums_sha256"], indent=1),
         sampler=inputs.sampler, acceptance=float(np.mean(inputs.sampler["acceptance"])),
-        config=yaml.safe_dump(inputs.config, sort_keys=False))
+        config=yaml.safe_dump(inputs.config, sort_keys=False),
+        channel_kind=channel_kind(spec.channels),
+        reviewed_why=modelchoice.reviewed_reason(modelchoice.typed(inputs.comparison)),
+        refused=pd.DataFrame(inputs.refused, columns=["model", "status", "step", "reason"]))
 
 
 def number(value) -> str:

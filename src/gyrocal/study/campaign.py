@@ -184,7 +184,7 @@ def run(base_scenario_path, cfg: dict, study_cfg: dict, index: int, group: str, 
     if group != "clean":
         effect = study_cfg["effects"][group]
         hidden = {effect["simulator_key"]: float(magnitude)}
-        hidden_units = {group: float(magnitude)}
+        hidden_units = {group: float(magnitude) * effect.get("model_per_simulator_unit", 1.0)}
         if effect["model"]:
             models.append(effect["model"])
     scenario = campaign_scenario(base, truth, hidden, f"study_{group}_{index}", seed)
@@ -196,7 +196,8 @@ def run(base_scenario_path, cfg: dict, study_cfg: dict, index: int, group: str, 
         campaign_dir = Path(tmp) / "campaign"
         write_campaign(campaign, campaign_dir)
         work = Path(tmp) / "work"
-        calibrate_campaign(campaign_dir, CampaignPaths.under(work), model_cfg, models, figures=False)
+        calibrate_campaign(campaign_dir, CampaignPaths.under(work), model_cfg, models, figures=False,
+                           strict=True)
         parts, facts = [], []
         for model in models:
             rows, fact = model_record(campaign_dir, work, model, truth, hidden_units, known, cfg, study_cfg, rng)

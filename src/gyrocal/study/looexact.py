@@ -196,7 +196,8 @@ def scale_moments(flat: np.ndarray, n_params: int) -> tuple:
 def run_steps(campaign_dir, out, cfg: dict, model: str = "baseline") -> list:
     """gyrocal's steps up to the posterior on one campaign directory (`gyrocal.pipeline.run.calibrate_campaign`);
     the model's outputs land in ``out/<model>/``. Returns the preprocessed maneuver files."""
-    return calibrate_campaign(campaign_dir, CampaignPaths.under(out), cfg, [model], through="posterior")
+    return calibrate_campaign(campaign_dir, CampaignPaths.under(out), cfg, [model], through="posterior",
+                              strict=True)
 
 
 def campaign_without(campaign_dir, out_dir, t_lo: float, t_hi: float) -> tuple:

@@ -37,7 +37,8 @@ def summarize(record_paths, scenario_path, cfg, study_cfg, out_dir):
     for path in {e.get("scenario", str(scenario_path)) for e in study_cfg["effects"].values()}:
         table = (planned if path == str(scenario_path) else plan.plan(plan.read_scenario(path), cfg)).detection
         flown = [name for name, e in study_cfg["effects"].items() if e.get("scenario", str(scenario_path)) == path]
-        detectable.update(table[table["effect"].isin(flown)].groupby("effect")["detectable_magnitude"].min())
+        found = table[table["effect"].isin(flown)].groupby("effect")["detectable_magnitude"].min()
+        detectable.update({e: v / study_cfg["effects"][e].get("model_per_simulator_unit", 1.0) for e, v in found.items()})
     accuracy = validation.accuracy(params)
     clean = validation.clean_baseline(params)
     tables = {

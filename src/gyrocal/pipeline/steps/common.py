@@ -1,4 +1,5 @@
-"""What every step shares: its process set-up, the refusal of bad input, and small readers."""
+"""What every step shares: its process set-up, the refusal of bad input, a model variant's refusal
+record, and small readers."""
 
 import json
 import logging
@@ -6,14 +7,16 @@ import os
 import sys
 import warnings
 from contextlib import contextmanager
+from pathlib import Path
 
 from gyrocal.errors import InputError
 from gyrocal.inference import preprocess
-from gyrocal.io.outputs import write_json
+from gyrocal.io.outputs import write_json, write_text
 from gyrocal.model import effects
 from gyrocal.pipeline.steps import REFUSED
 
-__all__ = ["finish", "known_effects", "load_maneuvers", "peak_rss", "read_json", "refusal", "start"]
+__all__ = ["VARIANT_STEPS", "compared", "finish", "known_effects", "load_maneuvers", "peak_rss", "read_json",
+           "read_refusal", "refusal", "refusals", "start", "variant_step"]
 
 log = logging.getLogger("gyrocal")
 
@@ -81,6 +84,60 @@ def refusal():
     except InputError as exc:
         log.error("%s\n%s", REFUSED, exc)
         sys.exit(f"{REFUSED}\n{exc}")
+
+
+VARIANT_STEPS = ("point_estimate", "posterior", "diagnostics")
+"""A model variant's steps, in order; the first starts the variant afresh."""
+
+
+def read_refusal(paths, model) -> dict | None:
+    """A variant's refusal record (``<model>/refused.json``), or None where it was not refused."""
+    path = Path(paths.model(model).refusal)
+    return read_json(path) if path.is_file() else None
+
+
+def refusals(paths, models) -> dict:
+    """The refusal records of the variants ``models`` that have one, by model, in their order."""
+    return {m: r for m in models if (r := read_refusal(paths, m)) is not None}
+
+
+def compared(paths, models) -> list:
+    """The variants ``models`` that were not refused, in their order (the first the comparison's
+    reference); refused with every variant's reason where none is left."""
+    records = refusals(paths, models)
+    kept = [m for m in models if m not in records]
+    if not kept:
+        raise InputError("every model variant was refused or skipped, so there is nothing to review: "
+                         + " ".join(f"[{m}, {r['status']} at {r['step']}] {r['reason']}" for m, r in records.items()))
+    return kept
+
+
+def variant_step(paths, model: str, step: str, run, outputs=()) -> dict | None:
+    """Run one step of a model variant (``run()``, a `VARIANT_STEPS` step) so that a refused variant
+    does not stop the others: refused input (`gyrocal.errors.InputError`; a variant skipped because
+    the data cannot inform what it adds, `gyrocal.checks.fit.VariantSkipped`) is written to the
+    variant's ``refused.json`` (model, status refused or skipped, step, reason) and logged; a later
+    step of a variant refused earlier does not run. Either way each of ``outputs`` (the files the
+    workflow's rule declares) is written with that record in place of its results. Returns the
+    record, or None where the step ran."""
+    record_path = paths.model(model).refusal
+    if step == VARIANT_STEPS[0]:
+        Path(record_path).unlink(missing_ok=True)  # a new point estimate: an earlier refusal no longer holds
+    record = read_refusal(paths, model)
+    if record is None:
+        try:
+            run()
+            return None
+        except InputError as exc:
+            record = {"model": model, "status": getattr(exc, "status", "refused"), "step": step, "reason": str(exc)}
+            said = f"gyrocal: model {model} {record['status']} at step {step} (the other variants go on):\n{exc}"
+            log.warning("%s", said)
+            print(said, file=sys.stderr)
+            write_json(record, record_path)
+    text = json.dumps(record, indent=1)
+    for path in outputs:
+        write_text(text, path)
+    return record
 
 
 known_effects = effects.known

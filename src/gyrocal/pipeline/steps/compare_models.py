@@ -6,7 +6,7 @@ from gyrocal.criticism import comparison
 from gyrocal.io.outputs import write_csv, write_with
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import ModelChoiceSettings
-from gyrocal.pipeline.steps.common import read_json
+from gyrocal.pipeline.steps.common import compared, read_json
 from gyrocal.report import figures as plots
 
 __all__ = ["run"]
@@ -15,7 +15,9 @@ __all__ = ["run"]
 def run(paths: CampaignPaths, models, settings: ModelChoiceSettings):
     """``model_comparison.csv``: residual RMS, PSIS-LOO (each model's ``elpd_blocks.csv``) and exact
     leave-one-maneuver-out per variant, what moved, which variants are plausible and which one is
-    reviewed; and its figure."""
+    reviewed; and its figure. A variant refused or skipped (its ``refused.json``) is left out; the
+    first one left is the reference."""
+    models = compared(paths, models)
     each = [paths.model(m) for m in models]
     table = comparison.compare(list(models), [pd.read_csv(m.elpd_blocks) for m in each],
                                [read_json(m.diagnostics) for m in each],

@@ -2,6 +2,7 @@
 
 import logging
 
+from gyrocal.checks.fit import check_variant_informed
 from gyrocal.inference import classic
 from gyrocal.inference.estimate import point_estimate
 from gyrocal.inference.noise import noise_knowledge, stated_scales
@@ -20,7 +21,8 @@ log = logging.getLogger("gyrocal")
 def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PointEstimateSettings):
     """The full-trajectory WLS of one model, started from the classic estimate; saved
     with the model's specification, the noise knowledge it used and its linearisation. The classic
-    start is computed here, for the model's own specification (a tenth of a second)."""
+    start is computed here, for the model's own specification (a tenth of a second). A variant whose
+    added parameters are all prior-only is skipped (`check_variant_informed`) before it is saved."""
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
     fx = effects.resolve(model, settings.effects, effects.load_plugins(settings.plugins or []))
     model_spec = ModelSpec.build(model, fx, maneuvers[0].channels)
@@ -30,6 +32,7 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PointEstimateS
     for p in est.spec.parameters:
         if p.prior_only:
             log.warning("%s is prior-only: %s", p.label, p.prior_only)
+    check_variant_informed(est.spec)
     if model_spec.correlated_noise:
         log.info("star-tracker noise correlation time: %.2f s", est.correlation_time_s)
     log.info("WLS: %s (%d evaluations); noise %s", est.message, est.nfev,

@@ -9,7 +9,7 @@ from gyrocal.inference.estimate import PointEstimate
 from gyrocal.io.outputs import write_json, write_text
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import ReportSettings
-from gyrocal.pipeline.steps.common import load_maneuvers, read_json
+from gyrocal.pipeline.steps.common import compared, load_maneuvers, read_json, refusals
 from gyrocal.report import review
 
 __all__ = ["run"]
@@ -21,9 +21,12 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
 
     The checks are `gyrocal.criticism.verdict`'s findings on the reviewed model (the one
     ``model_comparison.csv`` names); the report renders them. Every model's ``calibration.csv``
-    is read for the model-sensitivity check. Its figures are drawn by ``processes`` processes.
+    is read for the model-sensitivity check; the variants refused or skipped are listed with their
+    reasons. Its figures are drawn by ``processes`` processes.
     """
     cfg = settings.config
+    refused = list(refusals(paths, models).values())
+    models = compared(paths, models)
     table = pd.read_csv(paths.comparison)
     model = str(table.loc[table["reviewed"], "model"].iloc[0])
     files = paths.model(model)
@@ -42,6 +45,6 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
         calibration=calibrations[model], fit=pd.read_csv(files.fit), posterior=posterior, diagnostics=diagnostics,
         sampler=sampler, correction=read_json(files.correction), correction_path=files.correction,
         comparison=table, info=info, config=cfg, findings=findings, effect_table=effect,
-        truth=read_json(truth_json)["parameters"] if truth_json else None)
+        truth=read_json(truth_json)["parameters"] if truth_json else None, refused=refused)
     write_text(review.render(review.build_context(inputs, processes)), paths.report)
     write_json(verdict.verdict(info["campaign"], model, findings), paths.verdict)
