@@ -164,3 +164,38 @@ def test_reml_recovers_the_gauss_markov_sd_and_correlation_time(tau_s, gm_arcsec
     assert fitted[0] == pytest.approx(np.hypot(10.0, gm_arcsec), rel=0.1)  # the tracker's total sd
     assert fitted[3] == pytest.approx(gm_arcsec**2 / (100 + gm_arcsec**2), abs=0.08)  # its Gauss-Markov share
     assert fitted[4] == pytest.approx(tau_s, rel=0.4)
+
+
+@pytest.mark.parametrize("tau", [0.0, 4.0])
+def test_walk_between_gyro_samples_matches_the_interpolated_walk(tau):
+    """Star-tracker samples inside gyro intervals see each interval's walk in part
+    (`errormodel.walk_steps`): the filtered walk covariance is the dense one of that walk."""
+    from gyrocal.inference.errormodel import walk_steps
+
+    gyro_time = np.arange(0.0, 12.01, 0.4)
+    st_time = np.array([0.9, 2.0, 3.1, 4.3, 5.05, 6.4, 7.7, 9.2])
+    m = len(st_time)
+    lin = _tiny(m=m, n_sets=1)
+    lin.st_dt = np.diff(np.concatenate([[gyro_time[0]], st_time]))
+    var, shared = walk_steps(gyro_time, st_time)
+    lin.walk_var, lin.walk_lag1 = var, np.concatenate([[0.0], shared])
+    dt = np.diff(gyro_time)
+    k = np.searchsorted(gyro_time, st_time) - 1
+    frac = (st_time - gyro_time[k]) / dt[k]
+    seen = np.zeros((m, len(dt)))  # W_j = sum of the intervals before k_j, plus f_j of interval k_j
+    for j in range(m):
+        seen[j, :k[j]] = 1.0
+        seen[j, k[j]] = frac[j]
+    walk = seen @ np.diag(dt) @ seen.T
+    dense = np.kron(walk, np.eye(3))
+    nz = noise.build(lin, [0, 0, 1], tau)
+    t = np.eye(3 * m)
+    if nz.filter is None:
+        t[3:, :-3] -= np.eye(3 * m)[3:, 3:]
+    else:
+        t1, t2 = nz.filter.row_coefficients(3)
+        idx = np.arange(3 * m)
+        t[idx[3:], idx[:-3]] = t1[:-3]
+        t[idx[6:], idx[:-6]] = t2[:-6]
+    var_only = {"cross": 0.0, "about": 0.0, "walk": 1.0, "gm_cross": 0.0, "gm_about": 0.0}
+    np.testing.assert_allclose(_banded_to_dense(nz.covariance(var_only)), t @ dense @ t.T, atol=1e-12)

@@ -36,8 +36,16 @@ from gyrocal.model.effects import ManeuverView
 from gyrocal.model.spec import ModelSpec
 
 __all__ = [
-    "COLUMN_WINDOW_INTERVALS", "Linearization", "cumulative_at_st", "effect_derivatives", "effect_regressors",
-    "linearize", "smoothed_columns", "view", "walk_steps"
+    "COLUMN_WINDOW_INTERVALS",
+    "ON_GRID",
+    "Linearization",
+    "cumulative_at_st",
+    "effect_derivatives",
+    "effect_regressors",
+    "linearize",
+    "smoothed_columns",
+    "view",
+    "walk_steps"
 ]
 
 COLUMN_WINDOW_INTERVALS = 5
@@ -69,15 +77,26 @@ class Linearization:
     `from_arrays` leave it, since it is ``S^2`` times ``st_dt``'s size and mostly zeros."""
     body_error: np.ndarray
     """(M, S, 3) the same error in body axes (rad), for plots and diagnostics."""
+    walk_var: np.ndarray | None = None
+    """(M,) each star-tracker step's walk variance per unit ARW^2 (`walk_steps`); None: ``st_dt``."""
+    walk_lag1: np.ndarray | None = None
+    """(M,) the walk covariance of step j with step j - 1 per unit ARW^2 (the first: 0); None: none."""
 
     def random_walk(self) -> np.ndarray:
-        """`shared_walk`, built from ``st_dt`` where it was not given."""
-        return _shared_walk(len(self.sets), self.st_dt) if self.shared_walk is None else self.shared_walk
+        """`shared_walk`, built from the steps' walk variances where it was not given."""
+        if self.shared_walk is not None:
+            return self.shared_walk
+        return _shared_walk(len(self.sets), self.st_dt if self.walk_var is None else self.walk_var)
+
+    def walk_lag1_or_none(self):
+        """`walk_lag1`, or None where consecutive steps share no walk (every sample on the gyro grid)."""
+        return None if self.walk_lag1 is None or not np.any(self.walk_lag1) else self.walk_lag1
 
     def arrays(self, prefix: str) -> dict:
         """The fields as arrays named ``prefix + field`` (`numpy.savez`), less the random-walk
         covariance, which is built from ``st_dt`` when asked (`random_walk`)."""
-        out = {prefix + f.name: getattr(self, f.name) for f in fields(self) if f.name not in _NOT_SAVED}
+        out = {prefix + f.name: getattr(self, f.name) for f in fields(self)
+               if f.name not in _NOT_SAVED and getattr(self, f.name) is not None}
         out[prefix + "labels"] = np.asarray(json.dumps({"maneuver": self.maneuver, "sets": self.sets}))
         return out
 
@@ -86,7 +105,8 @@ class Linearization:
         """What `arrays` saved, the same to the bit as the linearisation that was saved."""
         labels = json.loads(str(arrays[prefix + "labels"]))
         sets = [tuple(s) for s in labels["sets"]]
-        saved = {f.name: arrays[prefix + f.name] for f in fields(cls) if f.name not in _NOT_SAVED}
+        saved = {f.name: arrays[prefix + f.name] for f in fields(cls)
+                 if f.name not in _NOT_SAVED and prefix + f.name in arrays}  # files before walk_var lack it
         return cls(labels["maneuver"], sets, shared_walk=None, **saved)
 
 
@@ -210,7 +230,9 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
             st_matrix = at_st.as_matrix()
     design[..., ~spec.free] = 0.0
     st_dt = np.diff(np.concatenate([[data.gyro_time[0]], data.st_time]))
-    return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, None, body)
+    walk_var, shared = walk_steps(data.gyro_time, data.st_time)
+    return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, None, body, walk_var,
+                         np.concatenate([[0.0], shared]))
 
 
 def smoothed_columns(per_interval: np.ndarray, dt_s: np.ndarray, st_time_s: np.ndarray) -> np.ndarray:
@@ -246,6 +268,10 @@ def _shared_walk(n_sets, st_dt):
     return out
 
 
+ON_GRID = 1e-9
+"""A star-tracker sample closer than this share of a gyro interval to a gyro sample is on it."""
+
+
 def walk_steps(gyro_time: np.ndarray, st_time: np.ndarray) -> tuple:
     """The gyro walk of the differenced error per unit ARW^2 (s): each star-tracker step's variance and
     the covariance of consecutive steps. A sample a fraction f into gyro interval k sees that interval's
@@ -258,5 +284,6 @@ def walk_steps(gyro_time: np.ndarray, st_time: np.ndarray) -> tuple:
     k = np.clip(np.searchsorted(gyro_time, st_time, side="left") - 1, 0, len(dt) - 1)
     frac = (st_time - gyro_time[k]) / dt[k]
     inside = dt[k] * frac * (1.0 - frac)
+    inside[frac * (1.0 - frac) < ON_GRID] = 0.0  # on a gyro sample but for rounding: st_dt, to the bit
     st_dt = np.diff(np.concatenate([[gyro_time[0]], st_time]))
     return st_dt - inside - np.concatenate([[0.0], inside[:-1]]), inside[:-1]

@@ -101,11 +101,13 @@ def _lagged(u: np.ndarray, k: int) -> np.ndarray:
 
 
 def covariance_blocks(st_matrix: np.ndarray, body_shapes: dict, walk: np.ndarray, st_dt_s: np.ndarray,
-                      tau_s: float, n_sets: int):
+                      tau_s: float, n_sets: int, walk_lag1=None):
     """Per component, the filtered covariance's diagonal blocks (M, B, B) and the blocks one and
     two samples below them, per unit variance (B = 3 x sets). ``body_shapes`` maps ``cross`` and
     ``about`` to the tracker-frame 3x3 covariance shapes; ``walk`` is (M, S, S, 3, 3), each
-    interval's walk covariance per unit ARW^2. Returns ``(blocks, filter)``."""
+    interval's walk covariance per unit ARW^2, ``walk_lag1`` (M,) the walk shared by step j with
+    step j - 1 where star-tracker samples fall inside gyro intervals (`errormodel.walk_steps`).
+    Returns ``(blocks, filter)``."""
     alpha, beta, phi = coefficients(st_dt_s, tau_s)
     m = len(st_dt_s)
     ones = np.ones((n_sets, n_sets))
@@ -136,6 +138,12 @@ def covariance_blocks(st_matrix: np.ndarray, body_shapes: dict, walk: np.ndarray
     w1 = _lagged(w, 1)
     c = np.zeros(m)
     c[1:] = 1.0 + alpha[1:]
+    c_prev = _lagged(c, 1)[:, None, None]
     c = c[:, None, None]
-    blocks["walk"] = (w + c**2 * w1, c * w1, np.zeros_like(w))
+    if walk_lag1 is None:
+        blocks["walk"] = (w + c**2 * w1, c * w1, np.zeros_like(w))
+    else:  # y_j = D_j + c_j D_(j-1), with Cov(D_j, D_(j-1)) = shared_j
+        shared = np.asarray(walk_lag1, dtype=float)[:, None, None] * np.eye(3 * n_sets)
+        shared1 = _lagged(shared, 1)
+        blocks["walk"] = (w + c**2 * w1 + 2 * c * shared, shared + c * w1 + c * c_prev * shared1, c * shared1)
     return blocks, Filter(alpha, beta)

@@ -245,7 +245,7 @@ def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -
     n = m_samples * block
     if correlation_time_s > 0:
         blocks, filt = markov.covariance_blocks(lin.st_matrix, shapes, lin.random_walk(), lin.st_dt,
-                                                correlation_time_s, n_sets)
+                                                correlation_time_s, n_sets, lin.walk_lag1_or_none())
         components = {k: _banded_lower(v[0], [v[1][1:], v[2][2:]], 2) for k, v in blocks.items()}
         rhs = np.asfortranarray(np.concatenate([filt.apply(lin.design).reshape(n, -1), filt.apply(nuis).reshape(n, -1),
                                                 filt.apply(lin.z).reshape(n, 1)], axis=1))
@@ -263,10 +263,14 @@ def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -
     walk = lin.random_walk().transpose(0, 1, 3, 2, 4).reshape(m_samples, block, block)
     components = {k: _banded_lower(diag[k], lower[k]) for k in COMPONENTS[:2]}
     on_diagonal = np.einsum("jaa->ja", walk)
-    if np.count_nonzero(walk) == np.count_nonzero(on_diagonal):  # each set's walk is isotropic: dt I
+    shared = lin.walk_lag1_or_none()
+    if shared is None and np.count_nonzero(walk) == np.count_nonzero(on_diagonal):  # isotropic: dt I
         components["walk"] = on_diagonal.ravel()
-    else:
-        components["walk"] = _banded_lower(walk, [np.zeros((max(m_samples - 1, 0), block, block))])
+    else:  # samples inside gyro intervals: consecutive steps share the walk of the interval between
+        lag1 = np.zeros((max(m_samples - 1, 0), block, block))
+        if shared is not None:
+            lag1 += shared[1:, None, None] * np.eye(block)
+        components["walk"] = _banded_lower(walk, [lag1])
     rhs = np.asfortranarray(np.concatenate([
         difference(lin.design).reshape(n, -1),
         difference(nuis).reshape(n, -1),
