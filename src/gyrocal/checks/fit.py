@@ -129,8 +129,9 @@ def check_blocks(maneuvers, block_s: float):
             f"{'; '.join(short)}. Lengthen its holds, or make sampler.block_s shorter than the maneuver")
 
 
-NOISE_RATIOS = ("log(sigma_about / sigma_cross)", "log(arw / sigma_cross)")
-"""The two noise ratios the posterior's grid spans (`posterior.RatioGrid`), in its order."""
+NOISE_RATIOS = ("log(sigma_about / sigma_cross)", "log(arw / sigma_cross)", "logit st_gm_fraction", "log st_gm_tau_s")
+"""The noise ratios the posterior's grid spans (`noisegrid.RatioGrid`, `noise.ratios_of`), in its
+order: two, and two more with correlated star-tracker noise."""
 
 
 def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_sd: float) -> str:
