@@ -7,6 +7,8 @@ from scipy.spatial.transform import Rotation
 from gyrocal.inference import likelihood, markov, noise
 from gyrocal.inference.errormodel import Linearization
 
+from test_numerics import BORESIGHT, band_to_dense, dense_covariance
+
 
 def _tiny(m=7, n_sets=2, n_par=2, seed=3):
     rng = np.random.default_rng(seed)
@@ -18,47 +20,13 @@ def _tiny(m=7, n_sets=2, n_par=2, seed=3):
     return Linearization("tiny", [("a",)] * n_sets, z, design, bias, R, st_dt, None, z.copy())
 
 
-def _dense_covariance(lin, boresight, var, tau):
-    """The undifferenced noise covariance, term by term from its definition."""
-    m, s = lin.z.shape[:2]
-    b = np.asarray(boresight, float) / np.linalg.norm(boresight)
-    body = var["cross"] * (np.eye(3) - np.outer(b, b)) + var["about"] * np.outer(b, b)
-    gm_body = var.get("gm_cross", 0.0) * (np.eye(3) - np.outer(b, b)) + var.get("gm_about", 0.0) * np.outer(b, b)
-    phi = np.exp(-lin.st_dt / tau) if tau > 0 else np.zeros(m)
-    phi[0] = 0.0
-    t = np.cumsum(lin.st_dt)
-    C = np.zeros((m, s, 3, m, s, 3))
-    for j in range(m):
-        for k in range(m):
-            shared = (j == k) * lin.st_matrix[j] @ body @ lin.st_matrix[j].T
-            for i in range(min(j, k) + 1):
-                v = (1 - phi[i] ** 2) * lin.st_matrix[i] @ gm_body @ lin.st_matrix[i].T
-                shared = shared + np.prod(phi[i + 1:j + 1]) * np.prod(phi[i + 1:k + 1]) * v
-            walk = var["walk"] * t[min(j, k)] * np.eye(3)
-            for a in range(s):
-                for c in range(s):
-                    C[j, a, :, k, c, :] = shared + (a == c) * walk
-    n = m * s * 3
-    return C.reshape(n, n)
-
-
-def _banded_to_dense(ab):
-    n = ab.shape[1]
-    out = np.zeros((n, n))
-    for d in range(ab.shape[0]):
-        idx = np.arange(n - d)
-        out[idx + d, idx] = ab[d, :n - d]
-        out[idx, idx + d] = ab[d, :n - d]
-    return out
-
-
 VAR = {"cross": 1.0, "about": 4.0, "walk": 0.3, "gm_cross": 2.5, "gm_about": 10.0}
 
 
 @pytest.mark.parametrize("tau", [0.7, 5.0, 300.0])
 def test_filtered_covariance_is_the_filter_applied_to_the_dense_covariance(tau):
     lin = _tiny()
-    nz = noise.build(lin, [0.2, -0.5, 0.8], tau)
+    nz = noise.build(lin, BORESIGHT, tau)
     m, s = lin.z.shape[:2]
     width = 3 * s
     t_dense = np.eye(m * width)
@@ -66,8 +34,8 @@ def test_filtered_covariance_is_the_filter_applied_to_the_dense_covariance(tau):
     idx = np.arange(m * width)
     t_dense[idx[width:], idx[:-width]] = t1[:-width]
     t_dense[idx[2 * width:], idx[:-2 * width]] = t2[:-2 * width]
-    expected = t_dense @ _dense_covariance(lin, [0.2, -0.5, 0.8], VAR, tau) @ t_dense.T
-    np.testing.assert_allclose(_banded_to_dense(nz.covariance(VAR)), expected, rtol=1e-10, atol=1e-10)
+    expected = t_dense @ dense_covariance(lin, VAR, tau) @ t_dense.T
+    np.testing.assert_allclose(band_to_dense(nz.covariance(VAR)), expected, rtol=1e-10, atol=1e-10)
 
 
 def test_filter_ends_the_memory_of_walk_and_gauss_markov_for_irregular_sampling():
@@ -94,9 +62,9 @@ def test_likelihood_statistics_equal_the_dense_generalised_least_squares():
     (the filter has determinant one), nuisance integrated out the same way."""
     lin = _tiny(m=9)
     tau = 6.0
-    nz = noise.build(lin, [0.0, 0.0, 1.0], tau)
+    nz = noise.build(lin, BORESIGHT, tau)
     stats = likelihood.maneuver_stats(nz, VAR)
-    C = _dense_covariance(lin, [0.0, 0.0, 1.0], VAR, tau)
+    C = dense_covariance(lin, VAR, tau)
     n = C.shape[0]
     X = lin.design.reshape(n, -1)
     G = noise.nuisance_design(lin).reshape(n, -1)
@@ -152,6 +120,7 @@ def _simulated(tau_s, gm_arcsec, m=1200, n_man=4, seed=0):
     return lins, b
 
 
+@pytest.mark.full
 @pytest.mark.parametrize("tau_s, gm_arcsec", [(3.0, 15.0), (30.0, 8.0)])
 def test_reml_recovers_the_gauss_markov_sd_and_correlation_time(tau_s, gm_arcsec):
     from gyrocal.inference import noisefit
@@ -198,4 +167,4 @@ def test_walk_between_gyro_samples_matches_the_interpolated_walk(tau):
         t[idx[3:], idx[:-3]] = t1[:-3]
         t[idx[6:], idx[:-6]] = t2[:-6]
     var_only = {"cross": 0.0, "about": 0.0, "walk": 1.0, "gm_cross": 0.0, "gm_about": 0.0}
-    np.testing.assert_allclose(_banded_to_dense(nz.covariance(var_only)), t @ dense @ t.T, atol=1e-12)
+    np.testing.assert_allclose(band_to_dense(nz.covariance(var_only)), t @ dense @ t.T, atol=1e-12)
