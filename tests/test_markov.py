@@ -3,11 +3,10 @@
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
+from test_numerics import BORESIGHT, band_to_dense, dense_covariance
 
 from gyrocal.inference import likelihood, markov, noise
 from gyrocal.inference.errormodel import Linearization
-
-from test_numerics import BORESIGHT, band_to_dense, dense_covariance
 
 
 def _tiny(m=7, n_sets=2, n_par=2, seed=3):
