@@ -111,8 +111,11 @@ def combination_summary(full, per_walker, spec, convergence: dict) -> pd.DataFra
 
     def derived(idata):
         values = combinations.combination_draws(idata.posterior["channel_param"].to_numpy(), combos)
-        return az.from_dict(posterior={"channel_param": values}, coords={"parameter": labels},
-                            dims={"channel_param": ["parameter"]})
+        with warnings.catch_warnings():
+            # per walker, every walker is a chain: a short run may have more walkers than steps
+            warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
+            return az.from_dict(posterior={"channel_param": values}, coords={"parameter": labels},
+                                dims={"channel_param": ["parameter"]})
 
     return summarize(derived(full), derived(per_walker), labels, convergence)
 
