@@ -112,11 +112,20 @@ def test_a_plan_predicts_the_combinations_as_sqrt_a_c_a_and_says_one_direction_d
         assert np.isinf(row["crlb_sd"])
 
 
+def test_a_plan_says_an_estimated_mounting_would_take_up_each_axis_rotation_of_the_triad(cfg):
+    table = plan.plan(simulate.load_scenario(DATA / "tiny.yaml"), cfg).mounting_separability()
+    rotation = table[table["kind"] == "rotation"]
+    assert list(rotation["axis"]) == ["roll", "pitch", "yaw"] and not rotation["separable"].any()
+    assert rotation["ratio_mounting_free"].to_numpy() == pytest.approx(1.0, abs=1e-3)
+    assert table.loc[table["kind"] == "non-orthogonality", "separable"].all()
+
+
 def test_cli_plan_on_the_default_campaign_prints_and_writes_the_tables(tmp_path, capsys):
     assert cli.main(["plan", str(ROOT / "config" / "scenarios" / "mom.yaml"), "--out", str(tmp_path),
                      "--config", str(CONFIG)]) == 0
     printed = capsys.readouterr().out
     assert "pairs the plan cannot separate" in printed and "sf_nonlinearity" in printed
+    assert "if the reference's mounting is estimated from these data" in printed
     table = pd.read_csv(tmp_path / "plan.csv")
     combos = table["parameter"].isin(["sf_mean", "sf_asym"])
     assert (~combos).sum() == 24 and combos.sum() == 12 and set(table["unit"]) == {"ppm", "arcsec"}

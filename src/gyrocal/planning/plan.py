@@ -142,6 +142,14 @@ class Plan:
     information: np.ndarray | None = None
     """The Fisher information of the spec's parameters (SI), prior-only columns zeroed."""
 
+    def mounting_separability(self) -> pd.DataFrame:
+        """`combinations.mounting_separability` of the predicted covariance: what an estimated
+        reference mounting (``mounting: estimate``) would take up of the misalignments."""
+        cov_unit = self.cov / np.outer(self.spec.si_per_unit, self.spec.si_per_unit)
+        frame = pd.DataFrame(combinations.mounting_separability(cov_unit, self.spec),
+                             columns=["axis", "kind", "combination", "ratio_fitted", "ratio_mounting_free"])
+        return frame.assign(separable=frame["ratio_mounting_free"] <= combinations.RESOLVED_RATIO_MAX)
+
     def table(self) -> pd.DataFrame:
         """Per parameter, in its unit: predicted posterior sd, Cramér-Rao bound, prior sd, their
         ratio, whether it will be resolved (`combinations.RESOLVED_RATIO_MAX`), why it is
@@ -357,6 +365,12 @@ def report(plans, threshold: float = CORRELATION_MAX) -> str:
                 table.to_string(index=False, float_format=lambda v: f"{v:.4g}")]
         pairs = [f"  {a} ~ {b}: correlation {r:+.3f}" for a, b, r in p.pairs]
         out += [f"-- pairs the plan cannot separate (|correlation| > {threshold:g}):"] + (pairs or ["  none"])
+        mounting = p.mounting_separability()
+        if len(mounting):
+            out += ["-- if the reference's mounting is estimated from these data (mounting: estimate): sd over the "
+                    "prior's of each misalignment combination, as fitted and with the mounting free (separable: "
+                    f"<= {combinations.RESOLVED_RATIO_MAX:g})",
+                    mounting.to_string(index=False, float_format=lambda v: f"{v:.3f}")]
         out += [f"-- smallest magnitude the structure test detects {DETECTION_POWER:.0%} of the time "
                 "(the same on every channel):",
                 p.detection.to_string(index=False, float_format=lambda v: f"{v:.4g}")]
