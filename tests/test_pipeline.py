@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal.inference import errormodel, estimate, noise
+from gyrocal.inference import calibration, combinations, errormodel, estimate, noise
 from gyrocal.inference.estimate import PointEstimate
 from gyrocal.inference.likelihood import campaign_stats
 from gyrocal.io import telemetry
@@ -26,7 +26,7 @@ from conftest import rerun_from, truth_vector
 
 def calibration_with_truth(out, truth):
     table = pd.read_csv(out / "baseline/calibration.csv")
-    t = truth["parameters"]
+    t = {name: {**values, **combinations.combination_values(values)} for name, values in truth["parameters"].items()}
     table["truth"] = [t[r.channel][r.parameter] for r in table.itertuples()]
     return table
 
@@ -93,7 +93,8 @@ def test_calibration_csv_follows_the_contract(tiny_run):
     table = pd.read_csv(tiny_run[0] / "baseline/calibration.csv")
     assert list(table.columns) == ["channel", "parameter", "unit", "point", "mean", "sd", "ci95_low",
                                    "ci95_high", "r_hat", "ess_bulk", "prior_only"]
-    assert len(table) == 24 and table["channel"].nunique() == 6
+    assert len(table) == 24 + 12 and table["channel"].nunique() == 6
+    assert table["parameter"].iloc[24:].tolist() == ["sf_mean", "sf_asym"] * 6   # derived rows after the parameters
     assert set(table["unit"]) == {"ppm", "arcsec"}
     assert (table["ci95_low"] < table["mean"]).all() and (table["mean"] < table["ci95_high"]).all()
 
@@ -105,7 +106,9 @@ def test_tiny_posterior_converges_and_covers_a_truth_that_is_not_the_papers(tiny
     table = calibration_with_truth(tiny_run[0], tiny[1])
     assert (table["r_hat"] < 1.01).all() and (table["ess_bulk"] >= 400).all()
     inside = (table["ci95_low"] <= table["truth"]) & (table["truth"] <= table["ci95_high"])
-    assert inside.sum() >= 21, table[~inside]
+    derived = calibration.combination_rows(table)
+    assert inside[~derived].sum() >= 21, table[~inside]
+    assert inside[derived].sum() >= 10, table[~inside]
 
 
 def test_same_seed_same_numbers(tiny_run, config, tmp_path):
@@ -156,7 +159,8 @@ def test_sequential_campaign_takes_priors_from_an_earlier_posterior(tiny_run, co
     earlier.to_csv(tmp_path / "earlier.csv", index=False)
     priors = posterior_step.model_priors(est, config["priors"], tmp_path / "earlier.csv")
     spec = est.spec
-    for r in earlier.itertuples():
+    assert set(earlier["parameter"]) >= {"sf_mean", "sf_asym"}   # derived rows are in the file, and ignored
+    for r in calibration.parameter_rows(earlier).itertuples():
         i = spec.index(f"{r.channel}.{r.parameter}")
         assert priors.mean[i] == pytest.approx(r.mean * spec.si_per_unit[i], rel=1e-12)
         assert priors.sd[i] == pytest.approx(r.sd * spec.si_per_unit[i], rel=1e-12)
@@ -177,11 +181,13 @@ def test_wls_is_within_3_sd_of_the_truth_on_the_default_scenario(mom, mom_run):
 
 
 def test_posterior_95_intervals_cover_the_papers_values(mom, mom_run):
-    """At least 22 of the 24 channel parameters inside their central 95 % interval."""
+    """At least 22 of the 24 channel parameters inside their central 95 % interval, and 10 of the 12
+    combinations (sf_mean, sf_asym)."""
     out, _ = mom_run
     table = calibration_with_truth(out, mom[1])
     inside = (table["ci95_low"] <= table["truth"]) & (table["truth"] <= table["ci95_high"])
-    assert inside.sum() >= 22, table[~inside]
+    derived = calibration.combination_rows(table)
+    assert inside[~derived].sum() >= 22 and inside[derived].sum() >= 10, table[~inside]
     assert json.loads((out / "baseline/sampler.json").read_text())["converged"]
 
 

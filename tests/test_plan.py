@@ -93,13 +93,43 @@ def test_a_direction_never_flown_leaves_its_scale_factors_at_their_prior(cfg):
         assert table.loc[(channel, "sf_pos"), "predicted_sd"] < 100.0
 
 
+def test_a_plan_predicts_the_combinations_as_sqrt_a_c_a_and_says_one_direction_does_not_resolve_them(cfg):
+    """Without the -pitch maneuver sf_neg sits at its prior, so neither sf_mean nor sf_asym of a pitch
+    channel is resolved (ratio near 1/sqrt(2)); roll's both are, and their sd is sqrt(a' C a)."""
+    scenario = simulate.load_scenario(DATA / "tiny.yaml")
+    scenario["maneuvers"] = [m for m in scenario["maneuvers"] if m["id"] != "pitch_neg"]
+    p = plan.plan(scenario, cfg)
+    table = p.table().set_index(["channel", "parameter"])
+    pos, neg = p.spec.index("dtg1_roll.sf_pos"), p.spec.index("dtg1_roll.sf_neg")
+    c = p.cov[np.ix_([pos, neg], [pos, neg])] / 1e-12
+    assert table.loc[("dtg1_roll", "sf_mean"), "predicted_sd"] == pytest.approx(np.sqrt(c.sum() / 4), rel=1e-9)
+    assert table.loc[("dtg1_roll", "sf_asym"), "predicted_sd"] == pytest.approx(
+        np.sqrt(c[0, 0] + c[1, 1] - 2 * c[0, 1]), rel=1e-9)
+    assert table.loc[("dtg1_roll", "sf_mean"), "resolved"] and table.loc[("dtg1_roll", "sf_asym"), "resolved"]
+    for name in ("sf_mean", "sf_asym"):
+        row = table.loc[("dtg1_pitch", name)]
+        assert not row["resolved"] and row["sd_over_prior"] == pytest.approx(np.sqrt(0.5), abs=0.01)
+        assert np.isinf(row["crlb_sd"])
+
+
+def test_a_plan_says_an_estimated_mounting_would_take_up_each_axis_rotation_of_the_triad(cfg):
+    table = plan.plan(simulate.load_scenario(DATA / "tiny.yaml"), cfg).mounting_separability()
+    rotation = table[table["kind"] == "rotation"]
+    assert list(rotation["axis"]) == ["roll", "pitch", "yaw"] and not rotation["separable"].any()
+    assert rotation["ratio_mounting_free"].to_numpy() == pytest.approx(1.0, abs=1e-3)
+    assert table.loc[table["kind"] == "non-orthogonality", "separable"].all()
+
+
 def test_cli_plan_on_the_default_campaign_prints_and_writes_the_tables(tmp_path, capsys):
     assert cli.main(["plan", str(ROOT / "config" / "scenarios" / "mom.yaml"), "--out", str(tmp_path),
                      "--config", str(CONFIG)]) == 0
     printed = capsys.readouterr().out
     assert "pairs the plan cannot separate" in printed and "sf_nonlinearity" in printed
+    assert "if the reference's mounting is estimated from these data" in printed
     table = pd.read_csv(tmp_path / "plan.csv")
-    assert len(table) == 24 and set(table["unit"]) == {"ppm", "arcsec"}
+    combos = table["parameter"].isin(["sf_mean", "sf_asym"])
+    assert (~combos).sum() == 24 and combos.sum() == 12 and set(table["unit"]) == {"ppm", "arcsec"}
+    assert table.loc[combos, "resolved"].all()
     assert table["predicted_sd"].between(1.0, 50.0).all()   # tens of ppm and a few arcsec on MOM
     detection = pd.read_csv(tmp_path / "plan_detection.csv")
     assert set(detection["effect"]) == {"bias_drift", "sf_nonlinearity", "g_sensitivity", "gravity_offset",

@@ -12,6 +12,7 @@ from gyrocal import checks
 from gyrocal.checks import outliers, physics, sampling, saturation, sensing
 from gyrocal.checks.fit import EstimateError
 from gyrocal.inference import preprocess
+from gyrocal.inference.calibration import parameter_rows
 from gyrocal.io.telemetry import read_campaign
 from gyrocal.model.units import rad_to_arcsec
 from gyrocal.pipeline import cli
@@ -241,8 +242,8 @@ def test_a_prior_only_parameter_drags_no_identified_one(unflown_run, tiny_run, t
     """Without pitch_neg, the parameters no pitch rotation informs (scale factors of the roll and
     yaw channels, misalignments toward roll and yaw) stay where the full campaign puts them; every
     informed parameter still covers the truth."""
-    full = pd.read_csv(tiny_run[0] / "baseline/calibration.csv")
-    cal = pd.read_csv(unflown_run / "baseline/calibration.csv")
+    full = parameter_rows(pd.read_csv(tiny_run[0] / "baseline/calibration.csv"))
+    cal = parameter_rows(pd.read_csv(unflown_run / "baseline/calibration.csv"))
     informed = ~cal["prior_only"].to_numpy()
     pitch_channel = cal["channel"].str.endswith("_pitch")
     untouched = informed & ~(pitch_channel & cal["parameter"].str.startswith("sf")) & (cal["parameter"] != "mis_pitch")

@@ -88,7 +88,7 @@ def test_a_model_with_an_arcsec_plugin_parameter_runs_end_to_end(tiny, tmp_path,
     cfg = config_with(config, {"cyclic": BASE + ["cyclic_error"]}, [plugin])
     run_campaign(tiny[0], tmp_path, cfg, ("cyclic",), tiny[0].parent / "truth.json")
     table = pd.read_csv(tmp_path / "cyclic" / "calibration.csv")
-    assert len(table) == 25
+    assert len(table) == 25 + 12   # and the derived sf_mean, sf_asym per channel after them
     extra = table.iloc[24]
     assert (extra["channel"], extra["parameter"], extra["unit"]) == ("cyclic_error", "amplitude", "arcsec")
     assert extra["ci95_low"] < 0 < extra["ci95_high"]           # the simulation has no cyclic error

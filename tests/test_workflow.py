@@ -40,7 +40,7 @@ def workflow_run(tiny, tmp_path_factory):
 def test_user_campaign_runs_with_no_code_edit(workflow_run):
     results = workflow_run / "results" / "tiny"
     table = pd.read_csv(results / "baseline" / "calibration.csv")
-    assert len(table) == 24
+    assert len(table) == 24 + 12   # the parameters, then sf_mean and sf_asym per channel
     assert json.loads((results / "baseline" / "correction.json").read_text())["sets"]
     classic = pd.read_csv(results / "classic.csv")
     assert len(classic) == 24 and not (results / "baseline" / "classic.csv").exists()

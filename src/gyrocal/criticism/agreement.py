@@ -7,6 +7,10 @@ no more than their intervals allow. For each parameter both ``calibration.csv`` 
 Misalignments are relative to the body frame each run aligned its reference to (``mounting:
 estimate``, a coarse alignment from that run's own data). Where the two runs' mountings differ,
 B is first turned into A's body frame, so that the same physical axis is compared.
+
+The derived rows (``sf_mean``, ``sf_asym``: combinations of a channel's scale factors) are
+compared too, and shown, but the verdict counts the parameters alone: a combination repeats
+what its parameters say (with the correlation they lacked).
 """
 
 import json
@@ -16,6 +20,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation
 
+from gyrocal.inference.calibration import combination_rows
 from gyrocal.model.units import ARCSEC_RAD, AXES, PPM
 
 __all__ = ["KEYS", "compare", "compare_files", "into_frame", "mounting_of", "turnable"]
@@ -43,7 +48,8 @@ def into_frame(table: pd.DataFrame, turn: Rotation) -> pd.DataFrame:
     """A calibration table with its body frame turned by ``turn`` (taking its body axes into the
     other run's). Each channel senses ``(1 + s) (e_a + m) . omega``; its row ``e_a + m`` turns
     exactly, the misalignments become the row's components across over the one along, and the
-    scale factors take the one along. Means and point estimates move; sds and intervals move
+    scale factors (and their mean) take the one along; the asymmetry ``sf_pos - sf_neg`` scales
+    by it. Means and point estimates move; sds and intervals move
     with the means (a shift of frame does not change what the data told)."""
     out = table.copy()
     columns = [c for c in ("mean", "point", "ci95_low", "ci95_high") if c in out]
@@ -57,8 +63,10 @@ def into_frame(table: pd.DataFrame, turn: Rotation) -> pd.DataFrame:
             row[AXES.index(b)] = out.at[i, "mean"] * ARCSEC_RAD
         turned = turn.apply(row)
         shift = {i: turned[AXES.index(b)] / turned[a] / ARCSEC_RAD - out.at[i, "mean"] for b, i in mis.items()}
-        for i in rows.index[rows["parameter"].str.startswith("sf_")]:
+        for i in rows.index[rows["parameter"].isin(("sf", "sf_pos", "sf_neg", "sf_mean"))]:
             shift[i] = ((1.0 + out.at[i, "mean"] * PPM) * turned[a] - 1.0) / PPM - out.at[i, "mean"]
+        for i in rows.index[rows["parameter"] == "sf_asym"]:
+            shift[i] = out.at[i, "mean"] * (turned[a] - 1.0)
         for i, d in shift.items():
             out.loc[i, columns] += d
     return out
@@ -101,7 +109,8 @@ def compare_files(first, second, z_max: float = 3.0) -> tuple:
             if left:
                 out.append(f"not turned (no misalignment toward two axes): {', '.join(left)}")
     table = compare(a, b)
-    compared = table[~table["prior_only"]]
+    derived = combination_rows(table)
+    compared = table[~table["prior_only"].to_numpy() & ~derived]
     worst = compared.loc[compared["z"].abs().idxmax()] if len(compared) else None
     agree = bool(len(compared)) and bool((compared["z"].abs() < z_max).all())
     shown = table.round(3).astype({"z": object})
@@ -113,4 +122,9 @@ def compare_files(first, second, z_max: float = 3.0) -> tuple:
         out.append(f"VERDICT: {'AGREE' if agree else 'DISAGREE'}: {int((compared['z'].abs() >= z_max).sum())} of "
                    f"{len(compared)} parameters beyond |z| = {z_max:g}; largest {worst.channel}.{worst.parameter} "
                    f"z = {worst.z:+.2f}")
+    combos = table[derived & ~table["prior_only"].to_numpy()]
+    if len(combos):
+        far = combos.loc[combos["z"].abs().idxmax()]
+        out.append(f"combinations (not counted above): {int((combos['z'].abs() >= z_max).sum())} of {len(combos)} "
+                   f"beyond |z| = {z_max:g}; largest {far.channel}.{far.parameter} z = {far.z:+.2f}")
     return "\n".join(out), agree

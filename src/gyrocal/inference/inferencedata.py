@@ -17,12 +17,13 @@ import xarray as xr
 from arviz.stats.stats_utils import logsumexp
 
 from gyrocal import __version__
-from gyrocal.inference import predictive, preprocess
+from gyrocal.inference import combinations, predictive, preprocess
 from gyrocal.inference.noise import CORRELATED_SCALES, build, noise_scales, scales_in_units, stated_scales
 from gyrocal.model import channels as ch
 from gyrocal.model.units import AXES, rad_to_arcsec
 
-__all__ = ["CI_PROB", "PARETO_K_MAX", "assemble", "loo", "loo_blocks", "posterior_dataset", "sampler_record", "summarize"]
+__all__ = ["CI_PROB", "PARETO_K_MAX", "assemble", "combination_summary", "loo", "loo_blocks", "posterior_dataset",
+           "sampler_record", "summarize"]
 
 log = logging.getLogger("gyrocal")
 
@@ -116,6 +117,26 @@ def summarize(idata, per_walker, labels, convergence: dict) -> pd.DataFrame:
     return frame
 
 
+def combination_summary(full, per_walker, spec, convergence: dict) -> pd.DataFrame | None:
+    """`summarize` of the identifiable combinations (`combinations.scale_combinations`: ``sf_mean``,
+    ``sf_asym``), computed draw by draw from the parameters' draws, so their correlation is honoured;
+    None for a model with no scale factor."""
+    combos = combinations.scale_combinations(spec)
+    if not combos:
+        return None
+    labels = [c.label for c in combos]
+
+    def derived(idata):
+        values = combinations.combination_draws(idata.posterior["channel_param"].to_numpy(), combos)
+        with warnings.catch_warnings():
+            # per walker, every walker is a chain: a short run may have more walkers than steps
+            warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
+            return az.from_dict(posterior={"channel_param": values}, coords={"parameter": labels},
+                                dims={"channel_param": ["parameter"]})
+
+    return summarize(derived(full), derived(per_walker), labels, convergence)
+
+
 def sampler_record(post, summary, sampler_cfg: dict, seed: int) -> dict:
     """``sampler.json``: the convergence verdict and what it rests on."""
     res, est = post.result, post.estimate
@@ -202,7 +223,8 @@ def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
     """Everything the posterior step writes: ``(idata, summary, fit, sampler record)``.
 
     ``post``'s linearisations and noise structures are used up (`_fit_and_predictive`).
-    The summary and convergence use every draw; the InferenceData keeps
+    The summary and convergence use every draw (the summary also holds the identifiable
+    combinations, after the noise scales; the sampler record judges the parameters alone); the InferenceData keeps
     ``loglik_draws`` evenly spaced draws per ensemble, with the pointwise
     log-likelihood per ``block_s`` block and ``predictive_draws`` predictive draws.
     """
@@ -216,6 +238,9 @@ def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
         per_walker = posterior_dataset(post.walker_draws(), theta_hat, spec, groups)
     summary = summarize(full, per_walker, spec.labels, convergence)
     record = sampler_record(post, summary, sampler_cfg, seed)
+    derived = combination_summary(full, per_walker, spec, convergence)
+    if derived is not None:
+        summary = pd.concat([summary, derived], ignore_index=True)
     if not record["converged"]:
         log.warning("THE SAMPLER DID NOT CONVERGE: %s; numbers are not reliable",
                     record["failed_parameters"] or "chains shorter than the autocorrelation limit")

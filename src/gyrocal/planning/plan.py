@@ -6,9 +6,11 @@ parameters sit at their prior mean; the preprocessing, the linearised model (`er
 noise model (`noise`) and the likelihood (`likelihood`) are gyrocal's own, so the information is
 the one the WLS and the posterior use, with the nuisance (initial attitude error, biases)
 integrated out, at the stated noise. From it: each parameter's predicted posterior sd and its
-Cramér-Rao bound without the prior, the pairs the plan cannot separate, and for each library
-effect the model lacks, the smallest magnitude the diagnostics' structure test
-(`diagnostics.rank`, `diagnostics.misfit_checks`) would detect `DETECTION_POWER` of the time.
+Cramér-Rao bound without the prior, the same for each channel's identifiable combinations
+(``sf_mean``, ``sf_asym``: `combinations`) and whether each will be resolved, the pairs the plan
+cannot separate, and for each library effect the model lacks, the smallest magnitude the
+diagnostics' structure test (`diagnostics.rank`, `diagnostics.misfit_checks`) would detect
+`DETECTION_POWER` of the time.
 """
 
 import copy
@@ -21,7 +23,7 @@ from scipy import stats as sps
 from scipy.optimize import brentq
 
 from gyrocal.criticism.diagnostics import COLLINEAR_FRACTION
-from gyrocal.inference import errormodel, identification, noise, preprocess
+from gyrocal.inference import combinations, errormodel, identification, noise, preprocess
 from gyrocal.inference.identification import CORRELATION_MAX, confounded_pairs
 from gyrocal.inference.likelihood import Stats, campaign_stats
 from gyrocal.io.yamlfile import load_yaml
@@ -137,10 +139,22 @@ class Plan:
     crlb_sd: np.ndarray
     pairs: list
     detection: pd.DataFrame
+    information: np.ndarray | None = None
+    """The Fisher information of the spec's parameters (SI), prior-only columns zeroed."""
+
+    def mounting_separability(self) -> pd.DataFrame:
+        """`combinations.mounting_separability` of the predicted covariance: what an estimated
+        reference mounting (``mounting: estimate``) would take up of the misalignments."""
+        cov_unit = self.cov / np.outer(self.spec.si_per_unit, self.spec.si_per_unit)
+        frame = pd.DataFrame(combinations.mounting_separability(cov_unit, self.spec),
+                             columns=["axis", "kind", "combination", "ratio_fitted", "ratio_mounting_free"])
+        return frame.assign(separable=frame["ratio_mounting_free"] <= combinations.RESOLVED_RATIO_MAX)
 
     def table(self) -> pd.DataFrame:
         """Per parameter, in its unit: predicted posterior sd, Cramér-Rao bound, prior sd, their
-        ratio, why it is prior-only, and what it is confounded with."""
+        ratio, whether it will be resolved (`combinations.RESOLVED_RATIO_MAX`), why it is
+        prior-only, and what it is confounded with; then per channel its combinations ``sf_mean``
+        and ``sf_asym``, their sd ``sqrt(a' C a)`` of the predicted covariance."""
         spec = self.spec
         sd = spec.to_unit(np.sqrt(np.diag(self.cov)))
         prior = np.array([p.prior_sd for p in spec.parameters])
@@ -148,12 +162,26 @@ class Plan:
         for a, b, r in self.pairs:
             partners[a].append(f"{b} ({r:+.2f})")
             partners[b].append(f"{a} ({r:+.2f})")
-        return pd.DataFrame({
+        params = pd.DataFrame({
             "plan": self.name, "channel": [p.owner for p in spec.parameters],
             "parameter": [p.name for p in spec.parameters], "unit": spec.units,
             "predicted_sd": sd, "crlb_sd": spec.to_unit(self.crlb_sd), "prior_sd": prior,
             "sd_over_prior": sd / prior, "prior_only": [p.prior_only for p in spec.parameters],
             "confounded_with": ["; ".join(partners[label]) for label in spec.labels]})
+        combos = combinations.scale_combinations(spec)
+        if combos:
+            cov_unit = self.cov / np.outer(spec.si_per_unit, spec.si_per_unit)
+            c_sd, c_prior, ratio = combinations.prior_relative(cov_unit, combinations.weights(combos), prior)
+            crlb = (combinations.crlb_sd(self.information, spec, combos) if self.information is not None
+                    else np.full(len(combos), np.nan))
+            params = pd.concat([params, pd.DataFrame({
+                "plan": self.name, "channel": [c.owner for c in combos], "parameter": [c.name for c in combos],
+                "unit": [c.unit for c in combos], "predicted_sd": c_sd, "crlb_sd": crlb, "prior_sd": c_prior,
+                "sd_over_prior": ratio, "prior_only": ["every part prior-only" if c.prior_only else "" for c in combos],
+                "confounded_with": ""})], ignore_index=True)
+        params.insert(params.columns.get_loc("prior_only"), "resolved",
+                      params["sd_over_prior"] <= combinations.RESOLVED_RATIO_MAX)
+        return params
 
 
 def _applicable(effect, data) -> str:
@@ -248,7 +276,7 @@ def plan(scenario: dict, cfg: dict, model: str = "baseline", name: str = "") -> 
     cov = predicted_covariance(A[:n, :n], spec.prior_sd_si)
     return Plan(name or scenario["name"], spec, cov, crlb_sd(A[:n, :n], spec.free, spec.prior_sd_si),
                 confounded_pairs(cov, spec.free, spec.labels),
-                detection_table(A, spec, augmented, skipped, cfg["diagnostics"]["structure_log10_p_min"]))
+                detection_table(A, spec, augmented, skipped, cfg["diagnostics"]["structure_log10_p_min"]), A[:n, :n])
 
 
 CONFIG_SECTIONS = ("models", "priors", "noise", "diagnostics")
@@ -331,10 +359,18 @@ def report(plans, threshold: float = CORRELATION_MAX) -> str:
     out = []
     for p in plans:
         table = p.table().drop(columns=["plan", "confounded_with"])
-        out += [f"== plan {p.name}, model {p.spec.model}: predicted posterior sd (crlb_sd: without the prior)",
+        out += [f"== plan {p.name}, model {p.spec.model}: predicted posterior sd (crlb_sd: without the prior; "
+                f"sf_mean = (sf_pos + sf_neg) / 2, sf_asym = sf_pos - sf_neg; resolved: sd_over_prior <= "
+                f"{combinations.RESOLVED_RATIO_MAX:g})",
                 table.to_string(index=False, float_format=lambda v: f"{v:.4g}")]
         pairs = [f"  {a} ~ {b}: correlation {r:+.3f}" for a, b, r in p.pairs]
         out += [f"-- pairs the plan cannot separate (|correlation| > {threshold:g}):"] + (pairs or ["  none"])
+        mounting = p.mounting_separability()
+        if len(mounting):
+            out += ["-- if the reference's mounting is estimated from these data (mounting: estimate): sd over the "
+                    "prior's of each misalignment combination, as fitted and with the mounting free (separable: "
+                    f"<= {combinations.RESOLVED_RATIO_MAX:g})",
+                    mounting.to_string(index=False, float_format=lambda v: f"{v:.3f}")]
         out += [f"-- smallest magnitude the structure test detects {DETECTION_POWER:.0%} of the time "
                 "(the same on every channel):",
                 p.detection.to_string(index=False, float_format=lambda v: f"{v:.4g}")]

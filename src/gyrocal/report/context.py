@@ -17,7 +17,7 @@ class ReviewInputs:
     model: str
     """The reviewed model's name."""
     spec: object
-    """Its `gyrocal.model.spec.ModelSpec` (the point estimate's)."""
+    """Its `gyrocal.model.spec.ModelSpec` (the point estimate's, with the priors its posterior used)."""
     maneuvers: list
     """The campaign's preprocessed maneuvers."""
     tables: list
@@ -81,6 +81,15 @@ class ReviewContext:
     convergence: pd.DataFrame
     confounded: pd.DataFrame
     correlation_max: float
+    resolution: pd.DataFrame
+    """Per channel its terms and combinations against their priors (`gyrocal.report.resolution`)."""
+    resolution_sentences: list
+    """One sentence per channel: what is resolved, what is not, and which maneuver would resolve it."""
+    resolved_ratio_max: float
+    prior_directions: pd.DataFrame
+    """The directions of the channel parameters left to the prior."""
+    mounting_separability: pd.DataFrame
+    """With an estimated mounting, which misalignment combinations it takes up; empty otherwise."""
     diagnostics: dict
     misfit_checks: pd.DataFrame
     ranking: pd.DataFrame

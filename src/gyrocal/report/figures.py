@@ -146,9 +146,11 @@ def pair_figure(idata, channel):
 
 
 def trace_figure(idata, calibration):
-    """Traces of the noise scales and of the three parameters with the lowest ESS."""
+    """Traces of the noise scales and of the three parameters with the lowest ESS (sampled
+    parameters only: the table's derived combinations have no trace of their own)."""
     import arviz as az
-    worst = calibration.nsmallest(3, "ess_bulk")
+    sampled = (calibration["channel"] + "." + calibration["parameter"]).isin(idata.posterior["parameter"].values)
+    worst = calibration[sampled.to_numpy()].nsmallest(3, "ess_bulk")
     labels = [f"{r.channel}.{r.parameter}" for r in worst.itertuples()]
     axes = az.plot_trace(idata, var_names=["channel_param", "sigma_cross_arcsec", "sigma_about_arcsec",
                                            "arw_deg_sqrt_h"], coords={"parameter": labels}, compact=False,

@@ -21,15 +21,16 @@ from markupsafe import Markup
 from gyrocal import __version__
 from gyrocal.criticism import modelchoice
 from gyrocal.criticism import verdict as judge
-from gyrocal.inference import identification
+from gyrocal.inference import combinations, identification
 from gyrocal.io import telemetry
 from gyrocal.model.units import PAPER_AXES, paper_term
 from gyrocal.report import figures as plots
+from gyrocal.report import resolution
 from gyrocal.report.context import CorrectionSet, ReviewContext, ReviewInputs
 
 __all__ = [
-    "EMBED_PNG", "ReviewContext", "ReviewInputs", "build_context", "channel_kind", "draw_all", "embed_png", "entry", "html_table",
-    "mounting_text", "number", "paper_tables", "render"
+    "COMBINATION_HEADINGS", "EMBED_PNG", "ReviewContext", "ReviewInputs", "build_context", "channel_kind", "draw_all",
+    "embed_png", "entry", "html_table", "mounting_text", "number", "paper_tables", "render"
 ]
 
 EMBED_PNG = {"dpi": 80, "pil_kwargs": {"compress_level": 3}}  # zlib 3: 28 % faster, 8 % larger
@@ -62,10 +63,17 @@ def entry(row, truth=None) -> str:
     return text
 
 
+COMBINATION_HEADINGS = {"sf_mean": "sf_mean = (sf_pos + sf_neg) / 2 (ppm)", "sf_asym": "sf_asym = sf_pos - sf_neg (ppm)"}
+"""Table 2's columns of each channel's identifiable combinations (`gyrocal.inference.combinations`)."""
+
+
 def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> dict:
-    """Tables 1-3 of the paper, each entry point | mean [95 % interval] (truth). A column names
-    each channel's DTG only where the campaign declares DTGs (campaign.yaml's ``dtg:``)."""
+    """Tables 1-3 of the paper, each entry point | mean [95 % interval] (truth); table 2 also shows each
+    channel's identifiable combinations. A column names each channel's DTG only where the campaign
+    declares DTGs (campaign.yaml's ``dtg:``)."""
     cal = calibration.set_index(["channel", "parameter"])
+    if truth:
+        truth = {name: {**values, **combinations.combination_values(values)} for name, values in truth.items()}
 
     def cell(channel, parameter):
         """A symmetric model's one ``sf`` fills both branches' cells (each against its branch's truth)."""
@@ -92,7 +100,9 @@ def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> di
             t2.append({"axis": a, **{k: f(c) for k, f in gyro.items()}, "channel": c.name,
                        "selected": "yes" if c.name in in_loop else "no",
                        "positive scale factor (ppm)": cell(c.name, "sf_pos"),
-                       "negative scale factor (ppm)": cell(c.name, "sf_neg")})
+                       "negative scale factor (ppm)": cell(c.name, "sf_neg"),
+                       **{heading: cell(c.name, name) for name, heading in COMBINATION_HEADINGS.items()
+                          if (c.name, name) in cal.index}})
             others = [b for b in PAPER_AXES if b != a]
             row = {"axis": a, **{k: f(c) for k, f in gyro.items()}, "channel": c.name}
             for b in others:
@@ -147,7 +157,9 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
     jobs += [("trace_figure", (inputs.posterior, calibration)), ("comparison_figure", (inputs.comparison,))]
     drawn = [Markup(img) for img in draw_all(jobs, processes)]
     draws = inputs.posterior.posterior["channel_param"].sel(parameter=list(spec.labels)).to_numpy()
-    pairs = identification.confounded_pairs(np.cov(draws.reshape(-1, len(spec)).T), spec.free, spec.labels)
+    cov = np.cov(draws.reshape(-1, len(spec)).T)
+    pairs = identification.confounded_pairs(cov, spec.free, spec.labels)
+    resolved = resolution.resolution_table(spec, calibration, judge.width_limits(inputs.config["report"], spec))
     accounting = pd.DataFrame([{"maneuver": d.id, **d.counts} for d in maneuvers])
     accounting.loc[len(accounting)] = {"maneuver": "campaign files", "st_read": info["rows"]["star_tracker"],
                                        "st_invalid": info["rows"]["star_tracker_invalid"],
@@ -165,6 +177,11 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         convergence=calibration[["channel", "parameter", "unit", "mean", "sd", "r_hat", "ess_bulk"]].round(
             {"mean": 2, "sd": 2, "r_hat": 4, "ess_bulk": 0}),
         confounded=pd.DataFrame(pairs, columns=["parameter", "with", "posterior correlation"]).round(3),
+        resolution=resolved.round({"mean": 1, "sd": 1, "ci95_low": 1, "ci95_high": 1, "prior_sd": 1, "sd_over_prior": 3,
+                                   "ci95_width": 1}),
+        resolution_sentences=resolution.channel_sentences(spec, resolved, maneuvers),
+        resolved_ratio_max=combinations.RESOLVED_RATIO_MAX, prior_directions=resolution.prior_directions(spec, cov),
+        mounting_separability=resolution.mounting_table(spec, cov, info["mounting"]),
         correlation_max=identification.CORRELATION_MAX,
         diagnostics=diagnostics, misfit_checks=pd.DataFrame(diagnostics["checks"]),
         ranking=pd.DataFrame(diagnostics["ranking"])[["name", "kind", "score", "chi2_drop", "df", "log10_p",

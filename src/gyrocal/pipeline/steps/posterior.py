@@ -10,16 +10,15 @@ from gyrocal.inference.estimate import PointEstimate
 from gyrocal.io.outputs import atomic, write_csv, write_json
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import PosteriorSettings
-from gyrocal.pipeline.steps.common import known_effects, load_maneuvers
+from gyrocal.pipeline.steps.common import known_effects, load_maneuvers, posterior_spec
 
 __all__ = ["model_priors", "run"]
 
 
 def model_priors(est: PointEstimate, priors_cfg: dict, prior_from=None) -> posterior.Priors:
     """The spec's declared priors, overridden by the config and by an earlier campaign's
-    ``calibration.csv`` (``prior_from``)."""
-    earlier = pd.read_csv(prior_from) if prior_from else None
-    spec = est.spec.with_priors(priors_cfg, earlier, str(prior_from))
+    ``calibration.csv`` (``prior_from``; `common.posterior_spec`)."""
+    spec = posterior_spec(est.spec, priors_cfg, prior_from)
     return posterior.Priors.from_spec(spec, est.stated_noise, priors_cfg["noise_log_sd"])
 
 

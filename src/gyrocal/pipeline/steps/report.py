@@ -9,7 +9,7 @@ from gyrocal.inference.estimate import PointEstimate
 from gyrocal.io.outputs import write_json, write_text
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import ReportSettings
-from gyrocal.pipeline.steps.common import compared, load_maneuvers, read_json, refusals
+from gyrocal.pipeline.steps.common import compared, load_maneuvers, posterior_spec, read_json, refusals
 from gyrocal.report import review
 
 __all__ = ["run"]
@@ -40,7 +40,7 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
     with xr.open_dataset(files.posterior, group="posterior", engine="h5netcdf") as group:
         posterior = az.InferenceData(posterior=group.load())
     inputs = review.ReviewInputs(
-        model=model, spec=est.spec, maneuvers=maneuvers,
+        model=model, spec=posterior_spec(est.spec, cfg["priors"], cfg.get("prior_from")), maneuvers=maneuvers,
         tables=[pd.read_csv(p) for p in paths.maneuvers(maneuver_ids, "csv")],
         calibration=calibrations[model], fit=pd.read_csv(files.fit), posterior=posterior, diagnostics=diagnostics,
         sampler=sampler, correction=read_json(files.correction), correction_path=files.correction,
