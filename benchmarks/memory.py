@@ -134,6 +134,8 @@ def main():
                 runs[tree][k].append(run(tree, k))
         print(f"{k}x: {6 * k} maneuvers, run wall "
               + ", ".join(f"{wall(runs[tree][k]):.0f} s" for tree in trees) + f" (median of {args.repeats})", flush=True)
+        for tree in trees:  # as measured, for a call stopped before its table
+            print(f"  {tree}: " + json.dumps([r["rules"] for r in runs[tree][k]]), flush=True)
     for tree in trees:
         table(tree, runs[tree], args.factors, args.repeats)
     for tree in trees[1:]:
