@@ -22,6 +22,7 @@ each gets its table, with the whole run's wall time over the first checkout's.
 """
 
 import argparse
+import contextlib
 import json
 import os
 import statistics
@@ -75,11 +76,13 @@ def run(tree: Path, k: int) -> dict:
 
 
 def _children(pid: int) -> list:
-    try:
-        with open(f"/proc/{pid}/task/{pid}/children") as f:
-            return [int(c) for c in f.read().split()]
-    except OSError:
-        return []
+    """The process's children, whichever of its threads started them (Snakemake starts jobs from a
+    thread of its own)."""
+    out = []
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        with contextlib.suppress(OSError):
+            out += [int(c) for c in (task / "children").read_text().split()]
+    return out
 
 
 def _pss_mb(pid: int) -> float:
@@ -105,7 +108,7 @@ def sample_pss(proc, peaks: dict, every_s: float = 0.05):
                     argv = f.read().split(b"\0")
             except OSError:
                 continue
-            script = next((a.decode() for a in argv if b".snakemake/scripts/" in a), None)
+            script = next((a.decode() for a in argv if b".snakemake/scripts/" in a and a.endswith(b".py")), None)
             if script is None:
                 stack += _children(pid)
                 continue
@@ -134,6 +137,8 @@ def main():
                 runs[tree][k].append(run(tree, k))
         print(f"{k}x: {6 * k} maneuvers, run wall "
               + ", ".join(f"{wall(runs[tree][k]):.0f} s" for tree in trees) + f" (median of {args.repeats})", flush=True)
+        for tree in trees:  # as measured, for a call stopped before its table
+            print(f"  {tree}: " + json.dumps([r["rules"] for r in runs[tree][k]]), flush=True)
     for tree in trees:
         table(tree, runs[tree], args.factors, args.repeats)
     for tree in trees[1:]:
