@@ -29,7 +29,8 @@ __all__ = ["calibrate_campaign", "review_campaign", "run_campaign"]
 def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models, figures=True,
                        through="diagnostics") -> list:
     """Validate and preprocess one campaign, then each model up to its diagnostics
-    (``through="posterior"``: up to its posterior). Returns the maneuver ids, in the campaign's order."""
+    (``through="posterior"``: up to its posterior; ``"point_estimate"``: up to its point estimate, what
+    `gyrocal joint` reads). Returns the maneuver ids, in the campaign's order."""
     paths.mkdirs(models)
     campaign = telemetry.read_campaign(campaign_dir)
     validate.run(campaign_dir, paths, campaign, cfg["sampler"]["block_s"])
@@ -37,6 +38,8 @@ def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models, fi
     classic.run(paths, ids)
     for model in models:
         point_estimate.run(paths, ids, model, PointEstimateSettings.of(cfg, model))
+        if through == "point_estimate":
+            continue
         posterior.run(paths, ids, model, PosteriorSettings.of(cfg))
         if through == "posterior":
             continue
