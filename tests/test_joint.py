@@ -164,3 +164,29 @@ def test_the_joint_calibration_has_the_contracts_columns_and_one_campaigns_sd_ov
 def test_joint_names_a_run_without_a_point_estimate(tmp_path, capsys):
     assert cli.main(["joint", str(tmp_path / "x"), str(tmp_path / "y"), "--out", str(tmp_path / "o")]) == 2
     assert "no point estimate of model 'baseline'" in capsys.readouterr().err
+
+
+def test_a_campaigns_own_effects_are_integrated_out_under_their_prior():
+    """A model with bias drift: the channel parameters' information is the inverse of the core block
+    of the covariance with the drift's prior added (numpy's dense inverse), and a prior-only
+    parameter has none."""
+    from gyrocal.model import effects as fx
+    from gyrocal.model.channels import Channel
+    from gyrocal.model.spec import ModelSpec
+    channels = [Channel("gyro_x", None, "roll"), Channel("gyro_y", None, "pitch"), Channel("gyro_z", None, "yaw")]
+    spec = ModelSpec.build("drift", fx.resolve("drift", fx.BASELINE + ("bias_drift",), {}), channels)
+    spec = spec.with_prior_only({"gyro_z.sf_neg": "no -yaw maneuver"})
+    free = spec.free
+    rng = np.random.default_rng(8)
+    units = spec.si_per_unit
+    cov = np.full((len(spec), len(spec)), np.nan)
+    cov[np.ix_(free, free)] = np.linalg.inv(_spd(rng, int(free.sum()), 1.0)) * np.outer(units, units)[np.ix_(free, free)]
+    theta = rng.standard_normal(len(spec)) * units
+    lik = CampaignLikelihood.of("a", spec, theta, cov, spec.prior_mean_si, spec.prior_sd_si)
+    prec = np.where(np.arange(len(spec)) >= spec.n_core, 1.0 / spec.prior_sd_si**2, 0.0)[free]
+    dense = np.linalg.inv(np.linalg.inv(cov[np.ix_(free, free)]) + np.diag(prec))
+    core_free = free[spec.core]
+    reference = np.linalg.inv(dense[:core_free.sum(), :core_free.sum()])
+    assert lik.info[np.ix_(core_free, core_free)] == pytest.approx(reference, rel=1e-8)
+    assert not lik.free[spec.index("gyro_z.sf_neg")] and np.all(lik.info[spec.index("gyro_z.sf_neg")] == 0)
+    assert len(lik.labels) == spec.n_core == 12
