@@ -1,5 +1,5 @@
-"""The ``gyrocal`` command: simulate, import or validate a campaign; compare two calibrations; plan a campaign;
-measure a gyro's noise at rest; check the linear model against the exact one."""
+"""The ``gyrocal`` command: simulate, import or validate a campaign; compare two calibrations or fit several
+jointly; plan a campaign; measure a gyro's noise at rest; check the linear model against the exact one."""
 
 import argparse
 import os
@@ -35,6 +35,14 @@ def main(argv=None):
     cmp_.add_argument("first")
     cmp_.add_argument("second")
     cmp_.add_argument("--z-max", type=float, default=3.0, help="agreement limit on |z| (default 3)")
+    jnt = sub.add_parser("joint", help="one calibration from several runs of one unit, and their consistency test")
+    jnt.add_argument("runs", nargs="+", metavar="RUN", help="two or more runs' results/<campaign> folders")
+    jnt.add_argument("--out", required=True, help="where calibration.csv and consistency.json go")
+    jnt.add_argument("--model", default="baseline", help="the model variant (default baseline)")
+    jnt.add_argument("--config", default="config/config.yaml",
+                     help="gyrocal config whose priors the joint fit takes once (default config/config.yaml; "
+                          "without it the effects' declared priors)")
+    jnt.add_argument("--level", type=float, default=0.05, help="the consistency test's level (default 0.05)")
     aln = sub.add_parser("allan", help="the gyro noise of a static recording: Allan deviation and angle random walk")
     aln.add_argument("mapping", help="a shipped mapping (repoimu) or a mapping file (.yaml)")
     aln.add_argument("file", help="a recording with the gyros at rest")
@@ -69,6 +77,11 @@ def main(argv=None):
             text, agree = compare_files(args.first, args.second, args.z_max)
             print(text)
             return 0 if agree else 1
+        elif args.command == "joint":
+            from gyrocal.pipeline.steps.joint import run
+            text, consistent = run(args.runs, args.out, args.model, _priors(args.config), args.level)
+            print(text)
+            return 0 if consistent else 1
         elif args.command == "allan":
             from gyrocal.io.importer import read_file, read_mapping
             from gyrocal.planning.allan import static_report
@@ -98,6 +111,16 @@ def _block_s(config_path):
     if not Path(config_path).is_file():
         return None
     return ((load_yaml(config_path) or {}).get("sampler") or {}).get("block_s")
+
+
+def _priors(config_path):
+    """The ``priors`` section of a gyrocal config, or None where there is no config."""
+    from pathlib import Path
+
+    from gyrocal.io.yamlfile import load_yaml
+    if not Path(config_path).is_file():
+        return None
+    return (load_yaml(config_path) or {}).get("priors")
 
 
 def entry():

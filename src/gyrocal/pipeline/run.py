@@ -30,8 +30,10 @@ __all__ = ["calibrate_campaign", "calibrate_models", "review_campaign", "run_cam
 
 def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=None, figures=True,
                        through="diagnostics", strict=False) -> list:
-    """Validate and preprocess one campaign, then each model (`calibrate_models`); ``models`` None:
-    the config's (`models_to_run`). Returns the maneuver ids, in the campaign's order."""
+    """Validate and preprocess one campaign, then each model (`calibrate_models`; ``through``:
+    ``"posterior"`` stops after its posterior, ``"point_estimate"`` after its point estimate, what
+    `gyrocal joint` reads); ``models`` None: the config's (`models_to_run`). Returns the maneuver
+    ids, in the campaign's order."""
     models = models_to_run(cfg) if models is None else models
     paths.mkdirs(models)
     campaign = telemetry.read_campaign(campaign_dir)
@@ -43,7 +45,8 @@ def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=Non
 
 
 def calibrate_models(paths: CampaignPaths, ids, cfg: dict, models, through="diagnostics", strict=False):
-    """Each model up to its diagnostics (``through="posterior"``: up to its posterior), on a campaign
+    """Each model up to its diagnostics (``through="posterior"``: up to its posterior; ``"point_estimate"``:
+    up to its point estimate), on a campaign
     already preprocessed. A refused variant gets its refusal record and the others go on, as in the
     workflow (`common.variant_step`); ``strict``: its refusal is raised (the study's runs)."""
     paths.mkdirs(models)
@@ -54,6 +57,8 @@ def calibrate_models(paths: CampaignPaths, ids, cfg: dict, models, through="diag
     for model in models:
         variant_step(model, "point_estimate",
                      lambda model=model: point_estimate.run(paths, ids, model, PointEstimateSettings.of(cfg, model)))
+        if through == "point_estimate":
+            continue
 
         def sample(model=model):
             posterior.run(paths, ids, model, PosteriorSettings.of(cfg))

@@ -17,6 +17,6 @@ REFUSED = "gyrocal: the campaign was refused:"
 numerics."""
 
 __all__ = [
-    "REFUSED", "calibrate", "classic", "common", "compare_models", "diagnostics", "fleet", "plan", "point_estimate",
-    "posterior", "preprocess", "report", "validate"
+    "REFUSED", "calibrate", "classic", "common", "compare_models", "diagnostics", "fleet", "joint", "plan",
+    "point_estimate", "posterior", "preprocess", "report", "validate"
 ]
