@@ -127,7 +127,7 @@ def test_reml_recovers_the_gauss_markov_sd_and_correlation_time(tau_s, gm_arcsec
 
     lins, b = _simulated(tau_s, gm_arcsec)
     start = np.log([10 * ARCSEC_RAD, 40 * ARCSEC_RAD, 0.003 * DEG_SQRT_H_RAD_SQRT_S])
-    log_sigma = noisefit.estimate_correlated_noise(lins, b, start, 10.0)
+    log_sigma, _ = noisefit.estimate_correlated_noise(lins, b, start, 10.0)
     fitted = noise.scales_in_units(log_sigma)
     assert fitted[0] == pytest.approx(np.hypot(10.0, gm_arcsec), rel=0.1)  # the tracker's total sd
     assert fitted[3] == pytest.approx(gm_arcsec**2 / (100 + gm_arcsec**2), abs=0.08)  # its Gauss-Markov share
