@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def profile_ml(noises, ratios):
-    """`estimate.profile_reml`'s profile with maximum likelihood: the nuisance and the channel
+    """`noisefit.profile_reml`'s profile with maximum likelihood: the nuisance and the channel
     parameters are fitted, not integrated out (all n data count, no log det of the information)."""
     from gyrocal.inference.likelihood import campaign_stats
     from gyrocal.inference.noise import variances
@@ -48,10 +48,10 @@ def profile_ml(noises, ratios):
 
 
 def noise_at(noises, log_sigma0, ml: bool) -> np.ndarray:
-    from gyrocal.inference import estimate
+    from gyrocal.inference import noisefit
 
     if not ml:
-        return estimate.estimate_noise(noises, log_sigma0)
+        return noisefit.estimate_noise(noises, log_sigma0)[0]
     start = np.asarray(log_sigma0)[1:] - log_sigma0[0]
     opt = minimize(lambda r: profile_ml(noises, r)[0], start, method="Nelder-Mead",
                    options={"xatol": 1e-3, "fatol": 1e-3})
