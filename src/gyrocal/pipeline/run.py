@@ -34,7 +34,7 @@ def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models, fi
     campaign = telemetry.read_campaign(campaign_dir)
     validate.run(campaign_dir, paths, campaign, cfg["sampler"]["block_s"])
     ids = preprocess.run(campaign_dir, paths, figures, campaign=campaign)
-    classic.run(paths, ids)
+    classic.run(paths, ids, cfg["noise"])
     for model in models:
         point_estimate.run(paths, ids, model, PointEstimateSettings.of(cfg, model))
         posterior.run(paths, ids, model, PosteriorSettings.of(cfg))
