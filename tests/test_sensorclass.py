@@ -77,3 +77,18 @@ def test_campaign_yaml_declares_the_sensor_class(tiny, tmp_path):
 def test_an_unknown_sensor_class_in_campaign_yaml_is_refused(tiny, tmp_path):
     with pytest.raises(InputError, match="sensor_class"):
         telemetry.read_campaign(with_gyro(tiny, tmp_path, {"sensor_class": "hrg"}))
+
+
+def test_a_scenarios_sensor_class_reaches_the_campaign_and_the_plan(tmp_path):
+    from gyrocal.planning import plan
+    from gyrocal.simulation import simulate
+
+    from conftest import DATA, ROOT
+    scenario = simulate.load_scenario(DATA / "tiny.yaml")
+    scenario["gyro"]["sensor_class"] = "mems"
+    campaign, _ = simulate.simulate(scenario)
+    telemetry.write_campaign(campaign, tmp_path / "campaign")
+    assert telemetry.read_campaign(tmp_path / "campaign").gyro["sensor_class"] == "mems"
+    predicted = plan.plan(scenario, plan.read_config(ROOT / "config" / "config.yaml")).table()
+    sd = predicted.set_index(["channel", "parameter"])["prior_sd"]
+    assert sd[("dtg1_roll", "sf_pos")] == 10000.0 and sd[("dtg1_roll", "mis_yaw")] == 2000.0
