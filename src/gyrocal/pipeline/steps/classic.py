@@ -20,7 +20,8 @@ def run(paths: CampaignPaths, maneuver_ids, noise: dict):
     knowledge, where ``campaign.yaml`` (as ``input.json`` records it) is silent."""
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
     stated = noise_knowledge(read_json(paths.input_json), noise)
-    table = classic.classic_table(maneuvers, spec.baseline(maneuvers[0].channels), "auto", stated)
+    table = classic.classic_table(maneuvers, spec.baseline(maneuvers[0].channels), "auto", stated,
+                                  classic.PIPELINE_ITERATIONS)
     for note in dict.fromkeys(n for n in table["note"] if n):
         log.warning("classic: %s", note)
     write_csv(table, paths.classic)
