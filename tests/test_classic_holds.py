@@ -45,8 +45,8 @@ def unbiased():
 def tables(maneuvers, truth):
     """Both variants' tables with the truth and each one's error, in the parameters' units."""
     base = spec.baseline(maneuvers[0].channels)
-    paper, holds = (classic.classic_table(maneuvers, base, bias_from_holds=b).set_index(["channel", "parameter"])
-                    for b in (False, True))
+    paper, holds = (classic.classic_table(maneuvers, base, b).set_index(["channel", "parameter"])
+                    for b in ("trusted", "holds"))
     truth_values = np.array([truth["parameters"][c][p] for c, p in paper.index])
     return paper.assign(err=paper["value"] - truth_values), holds.assign(err=holds["value"] - truth_values)
 
@@ -102,4 +102,4 @@ def test_without_bias_the_two_variants_agree(unbiased):
 
 def test_default_is_the_paper_variant(unbiased):
     data = unbiased[0][0]
-    assert classic.classic(data).equals(classic.classic(data, bias_from_holds=False))
+    assert classic.classic(data).equals(classic.classic(data, "trusted"))

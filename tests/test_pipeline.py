@@ -191,17 +191,17 @@ def test_posterior_95_intervals_cover_the_papers_values(mom, mom_run):
     assert json.loads((out / "baseline/sampler.json").read_text())["converged"]
 
 
-def test_classic_reproduces_the_papers_values_within_its_own_noise(mom, mom_run):
-    """Its noise: the walk (ARW sqrt(T)) and the residual bias drift (0.01 deg/h T) over a
-    maneuver of T = 1430 s, divided by the rotation (sf) or about 1 rad (misalignment)."""
+def test_classic_reproduces_the_papers_values_within_its_own_sd(mom, mom_run):
+    """Each value's bias from its maneuver's 400 s holds, its sd from the stated noise (the walk,
+    the star tracker and the hold bias's own error): every value within 4 sd of the truth."""
     out, _ = mom_run
-    classic = pd.read_csv(out / "classic.csv")
+    classic = pd.read_csv(out / "classic.csv", keep_default_na=False)
     truth = mom[1]["parameters"]
-    sigma_arcsec = np.hypot(0.18 * np.sqrt(1430.0), 36.0 * 1430.0 / 3600.0)
-    assert len(classic) == 24
+    assert len(classic) == 24 and (classic["bias_source"] == "holds").all()
+    sf = classic["unit"] == "ppm"
+    assert 20 < classic["sd"][sf].median() < 60 and 2 < classic["sd"][~sf].median() < 10  # measured: 31, 4.6
     for row in classic.itertuples():
-        sigma = sigma_arcsec / (np.pi / 2 * 206264.806) / PPM if row.unit == "ppm" else sigma_arcsec
-        assert abs(row.value - truth[row.channel][row.parameter]) < 4 * sigma, row
+        assert abs(row.value - truth[row.channel][row.parameter]) < 4 * row.sd, row
 
 
 def test_linearised_model_agrees_with_the_exact_one_to_1_percent_of_the_sd(mom, mom_run):

@@ -2,7 +2,7 @@ rule preprocess:
     """Read and check the campaign (format and physics: bad input stops the run here), record rows,
     checksums and what was left out (input.json); then every maneuver: slice, propagate every
     channel set nominally, error angles of eq. 4, a table and figure each; then the paper's method
-    over them (classic.csv). Everything a campaign gives with no model and no setting, in one job:
+    over them (classic.csv, its sd from the noise knowledge). Everything a campaign gives with no model, in one job:
     each part takes a fraction of a second, and a job's start-up more (the steps stay apart in
     gyrocal.pipeline.steps: validate, preprocess, classic)."""
     input:
@@ -21,6 +21,7 @@ rule preprocess:
         campaign_dir=campaign_dir,
         results=campaign_results,
         block_s=config["sampler"]["block_s"],  # validation refuses a maneuver too short for the posterior's blocks
+        noise=_canonical(config["noise"]),  # the classic values' sd, where campaign.yaml states no noise
     threads: 2  # its figures are drawn in parallel; it runs alone, before the models split the cores
     conda:
         "../envs/gyrocal.yaml"

@@ -8,5 +8,5 @@ with common.refusal():
     campaign = telemetry.read_campaign(campaign_dir)
     validate.run(campaign_dir, paths, campaign, snakemake.params.block_s)
     ids = preprocess.run(campaign_dir, paths, processes=snakemake.threads, campaign=campaign)
-    classic.run(paths, ids)
+    classic.run(paths, ids, snakemake.params.noise)
 common.finish()

@@ -185,17 +185,20 @@ def correction_check(effect_table: pd.DataFrame) -> Finding:
 
 
 def checks(model: str, calibrations: dict, spec, sampler: dict, diagnostics: dict, comparison: pd.DataFrame,
-             effect_table: pd.DataFrame, cfg: dict) -> list:
+             effect_table: pd.DataFrame, cfg: dict, prior_conflict: Finding | None = None) -> list:
     """Every check behind the verdict on the reviewed ``model``, in the order of ``verdict.json``.
 
     ``calibrations`` maps every model to its ``calibration.csv`` (the others' for the
     model-sensitivity check), ``comparison`` is ``model_comparison.csv``, ``effect_table``
-    the reviewed model's `estimate_effect` and ``cfg`` the whole config.
+    the reviewed model's `estimate_effect`, ``cfg`` the whole config and ``prior_conflict`` the
+    reviewed model's `gyrocal.criticism.priorconflict.conflict_check` (after the misfit check).
     """
     calibration, rcfg = calibrations[model], cfg["report"]
     classified = modelchoice.typed(comparison)
+    conflict = [] if prior_conflict is None else [prior_conflict]
     return [convergence_check(calibration, spec, sampler, cfg["convergence"]),
             misfit_check(diagnostics, cfg["diagnostics"]["structure_log10_p_min"]),
+            *conflict,
             informed_check(spec),
             interval_check(calibration, spec, rcfg),
             bounds_check(calibration, spec, rcfg),

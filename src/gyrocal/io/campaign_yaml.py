@@ -13,12 +13,14 @@ import numpy as np
 
 from gyrocal.io.yamlfile import TelemetryError, check_schema, read_yaml
 from gyrocal.model.channels import Channel, channel_sets
+from gyrocal.model.sensorclass import SENSOR_CLASSES
 from gyrocal.model.units import AXES
 
 __all__ = [
     "CHANNEL_PATTERN",
     "DEFAULT_NOISE_GROUP",
     "DIRECTIONS",
+    "GYRO_KEYS",
     "NAME_PATTERN",
     "NORM_REFUSE_TOL",
     "RESERVED_NAMES",
@@ -43,6 +45,10 @@ DIRECTIONS = ("+", "-", "both")
 """A maneuver turns one way, the other, or both (several turns each way, no inertial holds)."""
 DEFAULT_NOISE_GROUP = "all"
 """The noise group of a maneuver that names none: one group, one noise level, for the campaign."""
+
+GYRO_KEYS = {"arw_deg_sqrt_h", "range_deg_s", "rate_hz", "sensor_class"}
+"""What ``campaign.yaml``'s ``gyro:`` may hold: its noise, its range, its sampling rate and its sensor class
+(`gyrocal.model.sensorclass`, whose default priors the fit takes)."""
 
 
 @dataclass(frozen=True)
@@ -179,8 +185,10 @@ def read_meta(directory) -> dict:
             fail(cpath, f"{key}: must be a mapping of its noise knowledge (e.g. {key}: "
                          f"{{{'arw_deg_sqrt_h' if key == 'gyro' else 'sigma_cross_arcsec'}: ...}}), got {meta[key]!r}")
     gyro = meta.get("gyro") or {}
-    if set(gyro) - {"arw_deg_sqrt_h", "range_deg_s", "rate_hz"}:
-        fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - {'arw_deg_sqrt_h', 'range_deg_s', 'rate_hz'})}")
+    if set(gyro) - GYRO_KEYS:
+        fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - GYRO_KEYS)}")
+    if "sensor_class" in gyro and gyro["sensor_class"] not in SENSOR_CLASSES:
+        fail(cpath, f"gyro.sensor_class: one of {sorted(SENSOR_CLASSES)}, got {gyro['sensor_class']!r}")
     for key in ("arw_deg_sqrt_h", "range_deg_s", "rate_hz"):
         if key in gyro and not _positive_number(gyro[key]):
             fail(cpath, f"gyro.{key}: must be a positive number")

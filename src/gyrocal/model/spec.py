@@ -15,6 +15,7 @@ import numpy as np
 
 from gyrocal.model import channels as ch
 from gyrocal.model import effects as fx
+from gyrocal.model.sensorclass import class_priors
 
 __all__ = ["CONFIG_PRIOR_KEYS", "ModelSpec", "ParameterSpec", "baseline"]
 
@@ -185,10 +186,29 @@ class ModelSpec:
                          self.effect_names + tuple(e.name for e in effects), self.correlated_noise,
                          {**self._effects, **{e.name: e for e in effects}})
 
+    def with_sensor_class(self, sensor_class: str | None) -> "ModelSpec":
+        """This model with the default priors of a gyro sensor class (`gyrocal.model.sensorclass`;
+        None: the declared ones, a DTG's); the config's ``priors:`` still override them."""
+        table = class_priors(sensor_class)
+        parameters = [replace(p, **table.get((p.effect, p.name), {})) for p in self.parameters]
+        return ModelSpec(self.model, self.channels, parameters, self.effect_names, self.correlated_noise,
+                         self._effects)
+
     def with_priors(self, priors: dict | None = None, earlier=None, source: str = "prior_from") -> "ModelSpec":
-        """Priors overridden by the config (`CONFIG_PRIOR_KEYS`) and by an earlier campaign's
+        """Priors overridden by the config (`CONFIG_PRIOR_KEYS`; ``priors.sd``, the prior sd of
+        ``<effect>.<parameter>`` in its declared unit) and by an earlier campaign's
         ``calibration.csv`` (its posterior mean and sd, where it holds the parameter)."""
         overrides = {}
+        for key, value in ((priors or {}).get("sd") or {}).items():
+            effect, _, name = key.partition(".")
+            if effect not in self.effect_names:
+                continue
+            matched = [p for p in self.parameters if p.effect == effect and p.name == name]
+            if not matched:
+                known = sorted({f"{p.effect}.{p.name}" for p in self.parameters if p.effect == effect})
+                raise ValueError(f"priors.sd.{key}: {effect} has no parameter {name!r}; it has {known}")
+            for p in matched:
+                overrides.setdefault(p.label, {})["prior_sd"] = float(value)
         for key, value in (priors or {}).items():
             if key not in CONFIG_PRIOR_KEYS:
                 continue

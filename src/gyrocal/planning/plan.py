@@ -248,7 +248,7 @@ def plan(scenario: dict, cfg: dict, model: str = "baseline", name: str = "") -> 
     plugins = {k: e for k, e in known.items() if k not in effects.LIBRARY}
     maneuvers = planned_maneuvers(scenario)
     spec = ModelSpec.build(model, effects.resolve(model, cfg["models"][model], plugins), maneuvers[0].channels)
-    spec = spec.with_priors(cfg["priors"])
+    spec = spec.with_sensor_class((scenario.get("gyro") or {}).get("sensor_class")).with_priors(cfg["priors"])
     spec = spec.with_prior_only(identification.unflown(maneuvers, spec))
     stated = stated_noise(scenario, cfg["noise"])
     candidates, skipped = [], {}

@@ -160,8 +160,8 @@ def classic_rows(work, channels) -> pd.DataFrame:
     maneuver's bias estimated from its holds, per channel parameter, in the parameters' units."""
     maneuvers = load_maneuvers(sorted((Path(work) / "preprocess").glob("*.npz")))
     base = spec.baseline(channels)
-    paper = classic.classic_table(maneuvers, base).set_index(["channel", "parameter"])["value"]
-    holds = classic.classic_table(maneuvers, base, bias_from_holds=True).set_index(["channel", "parameter"])["value"]
+    paper = classic.classic_table(maneuvers, base, "trusted").set_index(["channel", "parameter"])["value"]
+    holds = classic.classic_table(maneuvers, base, "holds").set_index(["channel", "parameter"])["value"]
     return pd.DataFrame({"classic_paper": paper, "classic_holds": holds}).reset_index()
 
 

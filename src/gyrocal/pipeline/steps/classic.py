@@ -1,15 +1,27 @@
-"""Step ``classic``, the last of the preprocess rule's job: the paper's method over every maneuver."""
+"""Step ``classic``, the last of the preprocess rule's job: the paper's method over every maneuver,
+each maneuver's bias from its holds where they allow, each value with its sd from the stated noise."""
+
+import logging
 
 from gyrocal.inference import classic
+from gyrocal.inference.noise import noise_knowledge
 from gyrocal.io.outputs import write_csv
 from gyrocal.model import spec
 from gyrocal.pipeline.paths import CampaignPaths
-from gyrocal.pipeline.steps.common import load_maneuvers
+from gyrocal.pipeline.steps.common import load_maneuvers, read_json
 
 __all__ = ["run"]
 
+log = logging.getLogger("gyrocal")
 
-def run(paths: CampaignPaths, maneuver_ids):
-    """The paper's method over every maneuver, once per campaign."""
+
+def run(paths: CampaignPaths, maneuver_ids, noise: dict):
+    """The paper's method over every maneuver, once per campaign; ``noise``: the config's noise
+    knowledge, where ``campaign.yaml`` (as ``input.json`` records it) is silent."""
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
-    write_csv(classic.classic_table(maneuvers, spec.baseline(maneuvers[0].channels)), paths.classic)
+    stated = noise_knowledge(read_json(paths.input_json), noise)
+    table = classic.classic_table(maneuvers, spec.baseline(maneuvers[0].channels), "auto", stated,
+                                  classic.PIPELINE_ITERATIONS)
+    for note in dict.fromkeys(n for n in table["note"] if n):
+        log.warning("classic: %s", note)
+    write_csv(table, paths.classic)

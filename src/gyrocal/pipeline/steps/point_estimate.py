@@ -19,14 +19,16 @@ log = logging.getLogger("gyrocal")
 
 
 def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PointEstimateSettings):
-    """The full-trajectory WLS of one model, started from the classic estimate; saved
+    """The full-trajectory WLS of one model, started from the classic estimate, with the default
+    priors of the campaign's gyro sensor class (``campaign.yaml``'s ``gyro.sensor_class``); saved
     with the model's specification, the noise knowledge it used and its linearisation. The classic
     start is computed here, for the model's own specification (a tenth of a second). A variant whose
     added parameters are all prior-only is skipped (`check_variant_informed`) before it is saved."""
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
     fx = effects.resolve(model, settings.effects, effects.load_plugins(settings.plugins or []))
-    model_spec = ModelSpec.build(model, fx, maneuvers[0].channels)
-    stated = noise_knowledge(read_json(paths.input_json), settings.noise)
+    info = read_json(paths.input_json)
+    model_spec = ModelSpec.build(model, fx, maneuvers[0].channels).with_sensor_class(info["gyro"].get("sensor_class"))
+    stated = noise_knowledge(info, settings.noise)
     est = point_estimate(maneuvers, model_spec, stated, classic.classic_start(maneuvers, model_spec),
                          settings.noise["estimate_scales"])
     for p in est.spec.parameters:

@@ -4,7 +4,7 @@ import arviz as az
 import pandas as pd
 import xarray as xr
 
-from gyrocal.criticism import verdict
+from gyrocal.criticism import priorconflict, verdict
 from gyrocal.inference.estimate import PointEstimate
 from gyrocal.io.outputs import write_json, write_text
 from gyrocal.pipeline.paths import CampaignPaths
@@ -35,7 +35,10 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
     est = PointEstimate.load(files.point_estimate, linearizations=False)
     info, diagnostics, sampler = read_json(paths.input_json), read_json(files.diagnostics), read_json(files.sampler)
     effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases)
-    findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg)
+    earlier = pd.read_csv(cfg["prior_from"]) if cfg.get("prior_from") else None
+    used = est.spec.with_priors(cfg["priors"], earlier, str(cfg.get("prior_from")))
+    conflict = priorconflict.conflict_check(priorconflict.conflict_table(used, est.theta, est.cov, calibrations[model]))
+    findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg, conflict)
     # its posterior group alone (the predictive draws are 100 MB at 10x), in memory: forked processes draw
     with xr.open_dataset(files.posterior, group="posterior", engine="h5netcdf") as group:
         posterior = az.InferenceData(posterior=group.load())
