@@ -11,6 +11,7 @@ import yaml
 
 from gyrocal.checks.fit import VariantSkipped, check_variant_informed
 from gyrocal.errors import InputError
+from gyrocal.inference.calibration import parameter_rows
 from gyrocal.model import effects
 from gyrocal.model.channels import MOM_CHANNELS, Channel
 from gyrocal.model.spec import ModelSpec
@@ -130,8 +131,13 @@ def test_a_refused_variant_is_recorded_and_the_others_are_compared_and_reviewed(
 
 def test_the_symmetric_model_writes_one_sf_per_channel_and_the_same_correction_both_ways(variants_run):
     out, _ = variants_run
-    table = pd.read_csv(out / "symmetric" / "calibration.csv")
+    full = pd.read_csv(out / "symmetric" / "calibration.csv")
+    table = parameter_rows(full)
     assert set(table.loc[table["unit"] == "ppm", "parameter"]) == {"sf"} and (table["parameter"] == "sf").sum() == 6
+    derived = full.drop(table.index)  # sf_mean is sf itself; a symmetric model has no sf_asym
+    assert set(derived["parameter"]) == {"sf_mean"}
+    sf = table[table["parameter"] == "sf"].set_index("channel")["mean"]
+    assert derived.set_index("channel")["mean"].loc[sf.index].to_numpy() == pytest.approx(sf.to_numpy(), rel=1e-12)
     for s in json.loads((out / "symmetric" / "correction.json").read_text())["sets"]:
         assert s["scale_correction_pos"] == s["scale_correction_neg"] and s["matrix_pos"] == s["matrix_neg"]
 
