@@ -19,6 +19,7 @@ from gyrocal.inference.estimate import trust_region
 from gyrocal.inference.likelihood import Stats, campaign_stats
 from gyrocal.inference.noise import variances
 from gyrocal.inference.noisegrid import RatioGrid
+from gyrocal.inference.posterior import StudentProposal, start_covariance
 from gyrocal.inference.trustregion import TERMINATION_MESSAGES
 
 M, SETS, P, CHANNELS = 30, 2, 4, 3
@@ -237,6 +238,26 @@ def test_ratio_grid_over_a_flat_profile_stays_where_the_covariance_can_be_factor
     assert grid.start == pytest.approx(center - 8.0) and grid.step == pytest.approx(np.full(2, 16.0 / 6))
     narrow = RatioGrid([nz], center, np.full(2, 0.1), 7, 8.0)
     assert narrow.start == pytest.approx(center - 0.8) and np.isfinite(narrow.values).all()
+
+
+def test_posterior_start_lands_on_a_grid_whose_span_is_capped():
+    """A Gauss-Markov share and tau the data hardly tell (REML profile sd 17 and 34 on RepoIMU at
+    1 s): the grid's span is capped at e^8, and the start draws spread as far as the grid does,
+    not as the profile: most land inside it (with the profile's sd, 2 % did and the run stopped)."""
+    nz = noise.build(tiny_linearization(), BORESIGHT)
+    center = np.array([-2.5, -1.7])
+    grid = RatioGrid([nz], center, np.array([17.0, 34.0]), 7, 8.0)
+    assert grid.sd == pytest.approx([1.0, 1.0])
+    rng = np.random.default_rng(3)
+
+    def inside_share(ratio_sd):
+        mean = np.concatenate([[0.0, -6.0], -6.0 + center])
+        start = StudentProposal(mean, start_covariance(np.eye(1) * 1e-6, 100, ratio_sd), dof=5.0, inflate=2.0)
+        draws = start.draw(rng.standard_normal((4000, 4)), rng.chisquare(5.0, 4000))
+        return grid.weights(noise.ratios_of(draws[:, 1:]))[1].mean()
+
+    assert inside_share(grid.sd) > 0.85
+    assert inside_share(np.array([17.0, 34.0])) < 0.1
 
 
 def test_ratio_grid_interpolation_converges_at_fourth_order_to_the_direct_statistics():

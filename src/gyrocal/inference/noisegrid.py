@@ -70,6 +70,8 @@ class RatioGrid:
         self.groups = None if groups is None or np.max(groups) == 0 else np.asarray(groups)
         self.n_groups = 1 if self.groups is None else int(self.groups.max()) + 1
         half_width = np.minimum(half_width_sd * np.asarray(sd, dtype=float), MAX_HALF_WIDTH_LOG_RATIO)
+        self.sd = half_width / half_width_sd
+        """The ratios' sd that the grid spans ``half_width_sd`` of: ``sd``, or less where the span is capped."""
         self.start = center - half_width
         self.step = 2 * half_width / (nodes - 1)
         self.values = None
