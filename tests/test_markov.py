@@ -164,3 +164,20 @@ def test_reml_recovers_the_gauss_markov_sd_and_correlation_time(tau_s, gm_arcsec
     assert fitted[0] == pytest.approx(np.hypot(10.0, gm_arcsec), rel=0.1)  # the tracker's total sd
     assert fitted[3] == pytest.approx(gm_arcsec**2 / (100 + gm_arcsec**2), abs=0.08)  # its Gauss-Markov share
     assert fitted[4] == pytest.approx(tau_s, rel=0.4)
+
+
+def test_reml_profile_streams_the_maneuvers_to_the_same_bits():
+    """The correlated REML and the grid's curvature build each maneuver's noise structure, sum it and
+    drop it (memory of one maneuver, not all): the same profile, to the bit, as from a list."""
+    from gyrocal.inference import noisefit
+    from gyrocal.inference.noisegrid import NoiseShapes
+
+    lins = [_tiny(m=9, seed=s) for s in (3, 4, 5)]
+    ratios = np.array([1.2, -3.0, 0.4, np.log(6.0)])
+    listed = noisefit.profile_reml([noise.build(lin, [0, 0, 1], 6.0) for lin in lins], ratios)
+    streamed = noisefit.profile_reml((noise.build(lin, [0, 0, 1], 6.0) for lin in lins), ratios)
+    assert streamed == listed
+    assert NoiseShapes(None, lins, [0, 0, 1]).profile(ratios) == listed[0]
+    grouped = noisefit.profile_reml((noise.build(lin, [0, 0, 1], 6.0) for lin in lins), ratios, np.array([0, 1, 1]))
+    assert np.array_equal(grouped[1], noisefit.profile_reml(
+        [noise.build(lin, [0, 0, 1], 6.0) for lin in lins], ratios, np.array([0, 1, 1]))[1])
