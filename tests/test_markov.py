@@ -167,3 +167,20 @@ def test_walk_between_gyro_samples_matches_the_interpolated_walk(tau):
         t[idx[6:], idx[:-6]] = t2[:-6]
     var_only = {"cross": 0.0, "about": 0.0, "walk": 1.0, "gm_cross": 0.0, "gm_about": 0.0}
     np.testing.assert_allclose(band_to_dense(nz.covariance(var_only)), t @ dense @ t.T, atol=1e-12)
+
+
+def test_reml_profile_streams_the_maneuvers_to_the_same_bits():
+    """The correlated REML and the grid's curvature build each maneuver's noise structure, sum it and
+    drop it (memory of one maneuver, not all): the same profile, to the bit, as from a list."""
+    from gyrocal.inference import noisefit
+    from gyrocal.inference.noisegrid import NoiseShapes
+
+    lins = [_tiny(m=9, seed=s) for s in (3, 4, 5)]
+    ratios = np.array([1.2, -3.0, 0.4, np.log(6.0)])
+    listed = noisefit.profile_reml([noise.build(lin, [0, 0, 1], 6.0) for lin in lins], ratios)
+    streamed = noisefit.profile_reml((noise.build(lin, [0, 0, 1], 6.0) for lin in lins), ratios)
+    assert streamed == listed
+    assert NoiseShapes(None, lins, [0, 0, 1]).profile(ratios) == listed[0]
+    grouped = noisefit.profile_reml((noise.build(lin, [0, 0, 1], 6.0) for lin in lins), ratios, np.array([0, 1, 1]))
+    assert np.array_equal(grouped[1], noisefit.profile_reml(
+        [noise.build(lin, [0, 0, 1], 6.0) for lin in lins], ratios, np.array([0, 1, 1]))[1])

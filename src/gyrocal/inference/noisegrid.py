@@ -45,7 +45,10 @@ class NoiseShapes:
 
     def profile(self, ratios) -> float:
         """The REML profile's negative log-likelihood at ``ratios`` (`noisefit.profile_reml`)."""
-        return profile_reml(self.at(ratios), ratios, self.groups)[0]
+        if not self.correlated:
+            return profile_reml(self.noises, ratios, self.groups)[0]
+        tau = float(np.exp(ratios[-1]))  # built, summed and dropped one maneuver at a time
+        return profile_reml((noise.build(lin, self.boresight, tau) for lin in self.lins), ratios, self.groups)[0]
 
 
 def _lagrange(f):
