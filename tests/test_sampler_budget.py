@@ -82,7 +82,7 @@ def yaw_only(tmp_path_factory, short_chains):
     paths.mkdirs(["baseline"])
     validate.run(out / "sim" / "campaign", paths, None, cfg["sampler"]["block_s"])
     ids = preprocess.run(out / "sim" / "campaign", paths, False)
-    classic.run(paths, ids)
+    classic.run(paths, ids, cfg["noise"])
     point_estimate.run(paths, ids, "baseline", PointEstimateSettings.of(cfg, "baseline"))
     return paths, ids, cfg
 
@@ -117,7 +117,7 @@ def run_posterior(campaign_dir, out, cfg):
     paths.mkdirs(["baseline"])
     validate.run(campaign_dir, paths, None, cfg["sampler"]["block_s"])
     ids = preprocess.run(campaign_dir, paths, False)
-    classic.run(paths, ids)
+    classic.run(paths, ids, cfg["noise"])
     point_estimate.run(paths, ids, "baseline", PointEstimateSettings.of(cfg, "baseline"))
     try:
         posterior.run(paths, ids, "baseline", PosteriorSettings.of(cfg))

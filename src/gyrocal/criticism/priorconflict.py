@@ -39,8 +39,8 @@ def widen_key(p) -> str:
     """The key under the config's ``priors:`` that sets parameter ``p``'s prior sd (a
     `gyrocal.model.spec.ParameterSpec`): ``sf_sd_ppm``, ``mis_sd_arcsec``, else
     ``sd.<effect>.<parameter>`` (``priors: {sd: {<effect>.<parameter>: value}}``)."""
-    for key, (effect, field) in CONFIG_PRIOR_KEYS.items():
-        if effect == p.effect and field == "prior_sd":
+    for key, (effects, field) in CONFIG_PRIOR_KEYS.items():
+        if p.effect in effects and field == "prior_sd":
             return key
     return f"sd.{p.effect}.{p.name}"
 

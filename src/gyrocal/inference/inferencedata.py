@@ -73,7 +73,7 @@ def posterior_dataset(draws, theta_hat, spec, noise_groups=()) -> az.InferenceDa
     posterior = {"channel_param": values, **{s.key: noise[..., i] for i, s in enumerate(scales)}}
     coords, dims = {"parameter": spec.labels}, {"channel_param": ["parameter"]}
     if len(noise_groups) > 1:
-        posterior["noise_group_level"] = np.exp(draws[..., p + k:-1])
+        posterior["noise_group_level"] = np.exp(draws[..., p + k:-1] - draws[..., p:p + 1])
         posterior["noise_group_sd"] = np.exp(draws[..., -1])
         coords["noise_group"] = list(noise_groups)
         dims["noise_group_level"] = ["noise_group"]
@@ -164,7 +164,7 @@ def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
     flat = kept.reshape(-1, kept.shape[-1])
     k = len(post.estimate.log_sigma)
     dtheta, ratios, scale2 = predictive.split_draws(flat, p, k)
-    offsets = flat[:, p + k:-1] if post.group_index is not None else None
+    offsets = flat[:, p + k:-1] - flat[:, p:p + 1] if post.group_index is not None else None
     n_pred = min(sampler_cfg["predictive_draws"], n_draw)
     pred_rows = (np.arange(n_chain)[:, None] * n_draw + np.arange(n_pred)[None]).ravel()
     rng = np.random.default_rng([seed, 99])

@@ -86,9 +86,12 @@ class LogPosterior:
     """Vectorised log posterior of ``x = [dtheta (P), log sigma_cross, log sigma_about, log arw]``
     (and ``logit st_gm_fraction, log tau`` with correlated noise).
 
-    With noise groups, each group's ``log sigma_cross`` offsets and the log of their sd follow:
-    the offsets are partially pooled (normal about zero with that sd, a hierarchical prior), so a
-    quiet group keeps its own level where its data tell it, and borrows the others' where not.
+    With noise groups, each group's own ``log sigma_cross`` and the log of their sd follow; the
+    campaign's ``log sigma_cross`` is then their mean, and they are partially pooled about it
+    (normal with that sd, a hierarchical prior), so a quiet group keeps its own level where its
+    data tell it, and borrows the others' where not. Sampling the groups' levels themselves, which
+    their data pin down, rather than their offsets from the mean, which only the prior separates
+    from it, leaves no ridge for the chains to crawl along.
     """
 
     def __init__(self, grid: RatioGrid, theta_hat: np.ndarray, priors: Priors):
@@ -110,8 +113,9 @@ class LogPosterior:
             loglik = -0.5 * (quad / scale + logdet + self.grid.n * (np.log(scale) + LOG_2PI))
             logprior = 0.0
         else:
-            offsets, log_sd = x[:, p + k:-1], x[:, -1]
-            log_scale = 2 * (log_sigma[:, :1] + offsets)
+            levels, log_sd = x[:, p + k:-1], x[:, -1]  # each group's own log sigma_cross, what its data tell
+            offsets = levels - log_sigma[:, :1]
+            log_scale = 2 * levels
             quad = np.einsum("wi,wgij,wj->wg", d, A, d) - 2 * np.einsum("wgi,wi->wg", b, d) + c
             loglik = -0.5 * np.sum(quad * np.exp(-log_scale) + logdet + self.grid.n * (log_scale + LOG_2PI), axis=1)
             logprior = (-0.5 * np.sum(offsets**2, axis=1) * np.exp(-2 * log_sd) - offsets.shape[1] * log_sd
@@ -384,7 +388,7 @@ def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dic
     start_cov = start_covariance(cov, stats.n, grid.sd)
     if index is not None:
         offsets = estimate.group_offsets
-        start_mean = np.concatenate([start_mean, offsets, [np.log(max(np.std(offsets), 0.1))]])
+        start_mean = np.concatenate([start_mean, estimate.log_sigma[0] + offsets, [np.log(max(np.std(offsets), 0.1))]])
         spread = np.concatenate([0.5 / np.asarray(grid.n, dtype=float), [GROUP_SD_START_VARIANCE]])
         start_cov = np.block([[start_cov, np.zeros((len(start_cov), len(spread)))],
                               [np.zeros((len(spread), len(start_cov))), np.diag(spread)]])
