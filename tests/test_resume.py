@@ -47,7 +47,7 @@ def interrupted(tiny, work, sig, whole_group):
     while not started.exists():
         assert run.poll() is None and time.monotonic() < deadline, "the run ended before its posterior job started"
         time.sleep(0.05)
-    time.sleep(0.5)  # the job is in its sampler
+    time.sleep(0.05)  # the job has started (on tiny with short chains its sampler takes well under a second)
     if whole_group:
         os.killpg(run.pid, sig)
     else:
