@@ -13,7 +13,7 @@ import subprocess
 import time
 
 import pytest
-from test_workflow import SHORT_CHAINS, SNAKEMAKE
+from test_workflow import SNAKEMAKE
 
 TARGET = "results/tiny/baseline/calibration.csv"
 """The run stops at the baseline model's posterior job (preprocess, point estimate, posterior): the
@@ -24,8 +24,7 @@ COMPARED = ("calibration.csv", "posterior_summary.csv", "fit.csv", "elpd_blocks.
 
 
 def plain(tiny, work):
-    return SNAKEMAKE + [TARGET, "--cores", "2", "-d", str(work), "--configfile", SHORT_CHAINS,
-                        "--config", f"telemetry={tiny[0]}"]
+    return SNAKEMAKE + [TARGET, "--cores", "2", "-d", str(work), "--config", f"telemetry={tiny[0]}"]
 
 
 @pytest.fixture(scope="module")
@@ -47,7 +46,8 @@ def interrupted(tiny, work, sig, whole_group):
     while not started.exists():
         assert run.poll() is None and time.monotonic() < deadline, "the run ended before its posterior job started"
         time.sleep(0.05)
-    time.sleep(0.05)  # the job has started (on tiny with short chains its sampler takes well under a second)
+    time.sleep(0.5)  # the job is in its sampler (the default chains: several seconds on tiny, where short
+    # chains ended within the wait on a quiet machine and nothing was interrupted)
     if whole_group:
         os.killpg(run.pid, sig)
     else:
