@@ -35,12 +35,19 @@ def uninterrupted(tiny, tmp_path_factory):
     return work / "results" / "tiny" / "baseline"
 
 
+def _default_sigint():
+    """A terminal's Ctrl-C reaches Snakemake with SIGINT's default disposition; a pytest-xdist worker
+    ignores SIGINT, and an ignored signal stays ignored in its children (Python then installs no
+    KeyboardInterrupt handler), so the test restores the default in the child."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def interrupted(tiny, work, sig, whole_group):
     """The plain command, stopped by ``sig`` once the posterior job has started: sent to Snakemake
     alone (``kill -INT PID``) or to its whole process group (Ctrl-C in a terminal, a batch system's
     kill), then waited for until every process of the run has ended."""
     run = subprocess.Popen(plain(tiny, work), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                           start_new_session=True)
+                           start_new_session=True, preexec_fn=_default_sigint)
     started = work / "logs" / "tiny" / "baseline" / "posterior.log"
     deadline = time.monotonic() + 120
     while not started.exists():
