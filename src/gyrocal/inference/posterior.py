@@ -36,7 +36,7 @@ __all__ = [
     "GROUP_SD_PRIOR_LOG_SD",
     "GROUP_SD_PRIOR_MEDIAN",
     "GROUP_SD_START_VARIANCE",
-    "NOISE_NAMES",
+
     "START_REDRAWS",
     "TAU_PRIOR_CENTER_S",
     "TAU_PRIOR_LOG_SD",
@@ -54,7 +54,6 @@ __all__ = [
     "start_covariance"
 ]
 
-NOISE_NAMES = ("sigma_cross", "sigma_about", "arw")
 
 GM_FRACTION_LOGIT_SD = 2.0
 """Correlated star-tracker noise: sd of the logit of its Gauss-Markov share (12 % to 88 % within one sd)."""

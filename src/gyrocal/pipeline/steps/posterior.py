@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 
 from gyrocal.checks.fit import check_blocks, check_identified, check_noise, check_physical, sampling_stopped
-from gyrocal.inference import inferencedata, posterior
+from gyrocal.inference import inferencedata, noise, posterior
 from gyrocal.inference.budget import SamplingStopped
 from gyrocal.inference.estimate import PointEstimate
 from gyrocal.io.outputs import atomic, write_csv, write_json
@@ -41,7 +41,9 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSetti
     try:
         post = posterior.sample(maneuvers, est, priors, s.sampler, s.grid, s.seed, before=identified)
     except SamplingStopped as stopped:
-        labels = list(est.spec.labels) + [f"noise.{n}" for n in posterior.NOISE_NAMES]
+        labels = list(est.spec.labels) + noise.noise_labels(est.spec.correlated_noise)
+        if est.group_offsets is not None:
+            labels += [f"noise.level.{g}" for g in est.noise_groups] + ["noise.group_sd"]
         raise sampling_stopped(stopped, est, notes[0] if notes else "", labels) from None
     idata, summary, fit, record = inferencedata.assemble(post, maneuvers, s.sampler, s.convergence, s.seed)
     with atomic(out.posterior) as tmp:
