@@ -49,11 +49,14 @@ GM_SHARE = 0.5
 LEVELS = {50: 0.674489750196, 90: 1.644853626951, 95: 1.959963984540}
 
 
-def scenario_for(tau_s: float, index: int, truth: dict) -> dict:
-    """The base campaign flown with ``truth``, white plus Gauss-Markov star-tracker noise of correlation time ``tau_s``."""
+def scenario_for(tau_s: float, index: int, truth: dict, gap_s=None) -> dict:
+    """The base campaign flown with ``truth``, white plus Gauss-Markov star-tracker noise of correlation time
+    ``tau_s``; ``gap_s``, the time between maneuvers (the base campaign's 20 s where None)."""
     from gyrocal.simulation.simulate import load_scenario
 
     base = load_scenario(BASE)
+    if gap_s is not None:
+        base["maneuver_defaults"]["gap_s"] = float(gap_s)
     ratio = np.sqrt(GM_SHARE / (1 - GM_SHARE)) if tau_s > 0 else 0.0  # tau 0: white noise alone (the control)
     base["star_tracker"].update(gm_sigma_cross_arcsec=WHITE_ARCSEC[0] * ratio,
                                 gm_sigma_about_arcsec=WHITE_ARCSEC[1] * ratio, gm_tau_s=float(tau_s),
@@ -81,7 +84,7 @@ def intervals(spec, theta, cov) -> dict:
     return {"mean": spec.to_unit(theta).tolist(), "sd": (np.sqrt(np.diag(cov)) / spec.si_per_unit).tolist()}
 
 
-def one(tau_s: float, index: int, cfg: dict, sampled: bool, baseline_every: int = 1) -> dict:
+def one(tau_s: float, index: int, cfg: dict, sampled: bool, baseline_every: int = 1, gap_s=None) -> dict:
     from gyrocal import checks
     from gyrocal.criticism import diagnostics
     from gyrocal.inference import classic, preprocess
@@ -99,7 +102,7 @@ def one(tau_s: float, index: int, cfg: dict, sampled: bool, baseline_every: int 
     rng = np.random.default_rng([int(tau_s * 1000), index])
     channels = simulate.scenario_channels(simulate.load_scenario(BASE))
     truth = draw_truth(prior_spec(channels, cfg["priors"]), rng)
-    scenario = scenario_for(tau_s, index, truth)
+    scenario = scenario_for(tau_s, index, truth, gap_s)
     record = {"tau_s": tau_s, "index": index, "true_log_sigma": true_log_sigma(scenario).tolist()}
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="gyrocal-gm-") as tmp:
@@ -183,7 +186,7 @@ def run(args):
         path = out / f"tau{args.tau:g}_{index:04d}.json"
         if path.exists():
             continue
-        record = one(args.tau, index, cfg, args.sampled, args.baseline_every)
+        record = one(args.tau, index, cfg, args.sampled, args.baseline_every, args.gap_s)
         tmp = path.with_suffix(".tmp")
         tmp.write_text(json.dumps(record))
         tmp.replace(path)
@@ -199,6 +202,7 @@ def main():
     r.add_argument("--first", type=int, default=0)
     r.add_argument("--sampled", action="store_true", help="also run the full sampler and diagnostics")
     r.add_argument("--baseline-every", type=int, default=1, help="fit the white model on every k-th campaign")
+    r.add_argument("--gap-s", type=float, default=None, help="time between maneuvers (s); the base campaign's 20 s if not given")
     r.add_argument("--out", required=True)
     s = sub.add_parser("summary", help="print the tables of the records in the given folders")
     s.add_argument("folders", nargs="+")

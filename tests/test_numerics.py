@@ -375,34 +375,19 @@ def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time(
     assert np.isnan(times[1]) and np.isfinite(times[[0, 2]]).all()
 
 
-def test_fitted_proposal_with_the_exact_conditional_covariance_is_the_sample_covariance():
-    from gyrocal.inference.posterior import fitted_proposal
+def test_fitted_noise_proposal_is_the_draws_mean_and_covariance_and_refuses_scales_that_never_moved():
+    from gyrocal.inference.posterior import SamplingError, fitted_noise_proposal
 
-    rng = np.random.default_rng(4)
-    mix = rng.standard_normal((7, 7))
-    draws = rng.standard_normal((5000, 7)) @ mix.T + np.arange(7)
-    full = np.cov(draws.T)
-    p = 4
-    conditional = full[:p, :p] - full[:p, p:] @ np.linalg.solve(full[p:, p:], full[p:, :p])
-    proposal = fitted_proposal(draws, conditional, inflate=1.0)
+    draws = np.random.default_rng(5).standard_normal((4000, 3)) @ np.array([[1, 0, 0], [0.5, 2, 0], [0, 1, 0.1]])
+    proposal = fitted_noise_proposal(draws, inflate=1.0)
     np.testing.assert_allclose(proposal.mean, draws.mean(axis=0), rtol=1e-12)
-    np.testing.assert_allclose(proposal.chol @ proposal.chol.T, full, rtol=1e-10, atol=1e-12)
-    doubled = fitted_proposal(draws, 2 * conditional, inflate=1.0)
-    np.testing.assert_allclose((doubled.chol @ doubled.chol.T)[:p, :p] - full[:p, :p], conditional, rtol=1e-10,
-                               atol=1e-12)
-    np.testing.assert_allclose((doubled.chol @ doubled.chol.T)[p:], full[p:], rtol=1e-10, atol=1e-12)
-
-
-def test_fitted_proposal_refuses_noise_scales_that_never_moved():
-    from gyrocal.inference.posterior import SamplingError, fitted_proposal
-
-    draws = np.random.default_rng(5).standard_normal((400, 6))
-    draws[:, 4] = 0.3
+    np.testing.assert_allclose(proposal.chol @ proposal.chol.T, np.cov(draws.T), rtol=1e-10)
+    draws[:, 1] = 0.3
     with pytest.raises(SamplingError, match="did not move during burn-in"):
-        fitted_proposal(draws, np.eye(3))
-    draws[:, 4] = 2 * draws[:, 3]
+        fitted_noise_proposal(draws)
+    draws[:, 1] = 2 * draws[:, 0]
     with pytest.raises(SamplingError, match="singular"):
-        fitted_proposal(draws, np.eye(3))
+        fitted_noise_proposal(draws)
 
 
 def _exponential(t, y):

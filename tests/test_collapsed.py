@@ -1,0 +1,84 @@
+"""The collapsed move: channel offsets drawn from their exact Gaussian conditional given the noise.
+
+Checked against the log posterior itself: minus the conditional's log density it is flat in the
+offsets (so only the noise's marginal is left in the acceptance), its finite-difference Hessian is
+the conditional's precision, and the offsets the move draws have the conditional's mean and covariance.
+"""
+
+import numpy as np
+from test_numerics import BORESIGHT, P, tiny_linearization
+
+from gyrocal.inference import noise
+from gyrocal.inference.noisegrid import RatioGrid
+from gyrocal.inference.posterior import CollapsedProposal, LogPosterior, Priors, StudentProposal
+
+LOG_SIGMA = np.log([1e-4, 3e-4, 2e-6])
+
+
+def tiny_posterior():
+    nz = [noise.build(tiny_linearization(seed), BORESIGHT) for seed in (0, 1)]
+    grid = RatioGrid(nz, noise.ratios_of(LOG_SIGMA), np.array([0.3, 0.3]), 7, 8.0)
+    priors = Priors(mean=np.full(P, 0.02), sd=np.full(P, 0.05), bound=np.full(P, 10.0),
+                    log_sigma_center=LOG_SIGMA, log_sigma_sd=np.ones(3))
+    return LogPosterior(grid, np.full(P, 0.01), priors)
+
+
+def log_normal(d, mean, chol):
+    r = np.einsum("ji,wj->wi", chol, d - mean)
+    return np.sum(np.log(np.diag(chol))) - 0.5 * np.sum(r**2, axis=1)
+
+
+def test_log_posterior_minus_the_conditional_is_flat_in_the_offsets():
+    logpost = tiny_posterior()
+    noise_x = np.concatenate([LOG_SIGMA + [0.05, -0.1, 0.2]])[None]
+    mean, chol, ok = logpost.conditional(noise_x)
+    assert ok.all()
+    d = mean + np.random.default_rng(1).normal(0, 0.02, (20, P))
+    rest = logpost(np.hstack([d, np.repeat(noise_x, 20, axis=0)])) - log_normal(d, mean[0], chol[0])
+    assert np.ptp(rest) < 1e-7 * np.abs(rest).max()
+
+
+def test_conditional_precision_is_the_log_posteriors_hessian_and_its_mean_the_mode():
+    logpost = tiny_posterior()
+    noise_x = LOG_SIGMA[None] + 0.02
+    mean, chol, _ = logpost.conditional(noise_x)
+    h, step, eye = np.zeros((P, P)), 1e-3, np.eye(P)
+    f = lambda d: logpost(np.concatenate([d, noise_x[0]])[None])[0]
+    for i in range(P):
+        for j in range(P):
+            h[i, j] = (f(mean[0] + step * (eye[i] + eye[j])) - f(mean[0] + step * (eye[i] - eye[j]))
+                       - f(mean[0] - step * (eye[i] - eye[j])) + f(mean[0] - step * (eye[i] + eye[j]))) / (4 * step**2)
+    np.testing.assert_allclose(-h, chol[0] @ chol[0].T, rtol=1e-5)
+    grad = [(f(mean[0] + step * eye[i]) - f(mean[0] - step * eye[i])) / (2 * step) for i in range(P)]
+    assert np.max(np.abs(grad)) < 1e-6 * np.max(np.abs(h))
+
+
+def test_collapsed_move_draws_the_offsets_from_their_conditional():
+    logpost = tiny_posterior()
+    eta = LOG_SIGMA + [0.05, -0.1, 0.2]
+    narrow = StudentProposal(eta, np.eye(3) * 1e-20)
+    move = CollapsedProposal(logpost.conditional, P, narrow)
+    x = np.tile(np.concatenate([np.zeros(P), eta]), (20000, 1))
+    new, ratio = move(x, np.random.RandomState(2))
+    mean, chol, _ = logpost.conditional(eta[None])
+    cov = np.linalg.inv(chol[0] @ chol[0].T)
+    sd = np.sqrt(np.diag(cov))
+    np.testing.assert_allclose(new[:, :P].mean(axis=0), mean[0], atol=4 * sd.max() / np.sqrt(20000))
+    np.testing.assert_allclose(np.cov(new[:, :P].T), cov, atol=0.05 * sd.max() ** 2)
+    # the ratio: the proposal's density of the old point over the new one's, noise and offsets
+    expected = (narrow.log_density(x[:, P:]) - narrow.log_density(new[:, P:])
+                + log_normal(x[:, :P], mean[0], chol[0]) - log_normal(new[:, :P], mean[0], chol[0]))
+    np.testing.assert_allclose(ratio, expected, rtol=1e-6, atol=1e-6)
+
+
+def test_collapsed_move_rejects_noise_where_the_conditional_has_no_precision():
+    """Where the interpolated statistics are not positive definite (far off the grid, an extrapolation
+    can be anything; here every node's gram negated) the move stays put: a rejected proposal."""
+    logpost = tiny_posterior()
+    logpost.priors.sd[:] = 1e12
+    logpost.grid.values[:, :P * P] *= -1
+    move = CollapsedProposal(logpost.conditional, P, StudentProposal(LOG_SIGMA, np.eye(3) * 1e-20))
+    x = np.tile(np.concatenate([np.zeros(P), LOG_SIGMA]), (3, 1))
+    assert not logpost.conditional(x[:, P:])[2].any()
+    new, ratio = move(x, np.random.RandomState(0))
+    assert np.all(new == x) and np.all(ratio == -np.inf)
