@@ -1,6 +1,7 @@
 """The simulator's star-tracker Gauss-Markov part and its noise levels per maneuver (issue 30)."""
 
 import numpy as np
+import pytest
 import yaml
 
 from gyrocal.inference import preprocess
@@ -84,6 +85,10 @@ def test_the_gauss_markov_part_is_reproducible_and_declared_in_the_truth(tmp_pat
     assert np.array_equal(a.gyro_columns["dtg1_roll"], white.gyro_columns["dtg1_roll"])  # the gyros' draws unmoved
     assert not np.array_equal(a.st_quat, white.st_quat)
     assert truth["noise"]["gm_tau_s"] == 30.0 and truth["noise"]["gm_sigma_about_arcsec"] == 15.0
+    # campaign.yaml states the total, as a data sheet does: white 5 / 20 and GM 4 / 15 arcsec
+    assert a.star_tracker["sigma_cross_arcsec"] == pytest.approx(np.hypot(5.0, 4.0))
+    assert a.star_tracker["sigma_about_arcsec"] == pytest.approx(np.hypot(20.0, 15.0))
+    assert white.star_tracker["sigma_about_arcsec"] == pytest.approx(20.0)
 
 
 def test_walk_steps_match_the_walk_a_gyro_interpolated_between_its_samples_has():

@@ -32,8 +32,18 @@ from gyrocal.model.units import (
     rad_s_to_deg_h,
 )
 
-__all__ = ["ManeuverProfile", "build_profiles", "gauss_markov", "maneuver_scale", "run", "scenario_channels", "simulate",
-           "star_tracker_noise", "truth_parameters"]
+__all__ = [
+    "ManeuverProfile",
+    "build_profiles",
+    "gauss_markov",
+    "maneuver_scale",
+    "run",
+    "scenario_channels",
+    "simulate",
+    "star_tracker_noise",
+    "stated_star_tracker",
+    "truth_parameters",
+]
 
 
 @dataclass
@@ -255,7 +265,7 @@ def simulate(scenario: dict, seed=None):
     campaign = Campaign(
         name=scenario["name"],
         channels=channels,
-        star_tracker={k: st_cfg[k] for k in ("sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body")},
+        star_tracker=stated_star_tracker(st_cfg),
         gyro={"arw_deg_sqrt_h": gyro_cfg["arw_deg_sqrt_h"],
               **({"sensor_class": gyro_cfg["sensor_class"]} if gyro_cfg.get("sensor_class") else {})},
         maneuvers=tuple(Maneuver(p.id, p.axis, "+" if p.sign > 0 else "-", p.t_start, p.t_end,
@@ -288,6 +298,15 @@ def maneuver_scale(profiles, times, closed_start: bool) -> np.ndarray:
             start = (times > p.t_start) if closed_start else (times >= p.t_start)
             scale[start & (times <= p.t_end)] = p.noise_scale
     return scale
+
+
+def stated_star_tracker(st_cfg: dict) -> dict:
+    """The star tracker as ``campaign.yaml`` states it: its total sd across and about the boresight,
+    as a data sheet gives it (the white part and the Gauss-Markov part added in quadrature)."""
+    gm = st_cfg.get("gm_tau_s", 0.0) > 0
+    total = {k: float(np.hypot(st_cfg[k], st_cfg.get(f"gm_{k}", 0.0) if gm else 0.0))
+             for k in ("sigma_cross_arcsec", "sigma_about_arcsec")}
+    return {**total, "boresight_body": st_cfg["boresight_body"]}
 
 
 def gauss_markov(white, dt_s, tau_s) -> np.ndarray:
