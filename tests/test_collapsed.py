@@ -82,3 +82,17 @@ def test_collapsed_move_rejects_noise_where_the_conditional_has_no_precision():
     assert not logpost.conditional(x[:, P:])[2].any()
     new, ratio = move(x, np.random.RandomState(0))
     assert np.all(new == x) and np.all(ratio == -np.inf)
+
+
+def test_collapsed_move_reuses_the_last_calls_conditionals_to_the_bit():
+    """A walker's own noise is usually the last call's proposal (accepted) or its own (kept): the move
+    takes those conditionals from the last call, with the numbers a fresh computation gives."""
+    logpost = tiny_posterior()
+    noise_proposal = StudentProposal(LOG_SIGMA, np.eye(3) * 1e-4)
+    x = np.tile(np.concatenate([np.zeros(P), LOG_SIGMA]), (8, 1))
+    cached = CollapsedProposal(logpost.conditional, P, noise_proposal)
+    first, _ = cached(x, np.random.RandomState(3))
+    mixed = np.where(np.arange(8)[:, None] % 2 == 0, first, x)  # half accepted, half kept
+    again, ratio = cached(mixed, np.random.RandomState(4))
+    fresh, fresh_ratio = CollapsedProposal(logpost.conditional, P, noise_proposal)(mixed, np.random.RandomState(4))
+    assert np.array_equal(again, fresh) and np.array_equal(ratio, fresh_ratio)

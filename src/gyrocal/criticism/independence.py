@@ -8,6 +8,8 @@ parameters both inform have errors correlated in a way the model does not know, 
 intervals come out too narrow (docs/validation.md, "Correlated star-tracker noise").
 """
 
+import itertools
+
 import numpy as np
 
 from gyrocal.checks.finding import Finding, Status
@@ -25,7 +27,7 @@ def gaps(maneuvers) -> list:
     """``(earlier id, later id, gap in s)`` of consecutive maneuvers in time: from the last
     reference sample of one to the first of the next."""
     ordered = sorted(maneuvers, key=lambda d: d.st_time[0])
-    return [(a.id, b.id, float(b.st_time[0] - a.st_time[-1])) for a, b in zip(ordered, ordered[1:])]
+    return [(a.id, b.id, float(b.st_time[0] - a.st_time[-1])) for a, b in itertools.pairwise(ordered)]
 
 
 def gap_check(maneuvers, tau_s: float | None) -> Finding | None:

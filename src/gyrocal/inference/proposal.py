@@ -67,19 +67,43 @@ class CollapsedProposal:
 
     def __init__(self, conditional, n_params: int, noise: StudentProposal):
         self.conditional, self.n_params, self.noise = conditional, n_params, noise
+        self._last = None
 
     def _log_conditional(self, d, mean, chol):
         """log N(d | mean, precision L L^T), up to the constant both sides share."""
         r = np.einsum("wji,wj->wi", chol, d - mean)
         return np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1) - 0.5 * np.sum(r**2, axis=1)
 
+    def _conditionals(self, eta_new, eta_old):
+        """`conditional` at the proposed noise and at the walkers' own, in one call; a walker's own is
+        the last call's (proposed and accepted, or kept) wherever its noise is one of them."""
+        rows = np.concatenate([eta_new, eta_old])
+        need = np.ones(len(rows), dtype=bool)
+        out = None
+        if self._last is not None:
+            keys, *cached = self._last
+            match = np.all(eta_old[:, None, :] == keys[None], axis=2)
+            hit = match.any(axis=1)
+            need[len(eta_new):] = ~hit
+            out = [np.empty((len(rows),) + c.shape[1:], dtype=c.dtype) for c in cached]
+            for o, c in zip(out, cached):
+                o[len(eta_new):][hit] = c[match.argmax(axis=1)[hit]]
+        fresh = self.conditional(rows[need])
+        if out is None:
+            out = list(fresh)
+        else:
+            for o, f in zip(out, fresh):
+                o[need] = f
+        self._last = (rows, *out)
+        n = len(eta_new)
+        return [o[:n] for o in out], [o[n:] for o in out]
+
     def __call__(self, x, random):
         n, p = len(x), self.n_params
         eta = self.noise.draw(random.standard_normal((n, x.shape[1] - p)), random.chisquare(self.noise.dof, n))
-        mean, chol, ok = self.conditional(eta)
+        (mean, chol, ok), (old_mean, old_chol, old_ok) = self._conditionals(eta, x[:, p:])
         z = random.standard_normal((n, p))
         d = mean + np.linalg.solve(np.swapaxes(chol, 1, 2), z[..., None])[..., 0]  # (L^T)^-1 z: precision L L^T
-        old_mean, old_chol, old_ok = self.conditional(x[:, p:])
         ratio = (self.noise.log_density(x[:, p:]) + self._log_conditional(x[:, :p], old_mean, old_chol)
                  - self.noise.log_density(eta) - self._log_conditional(d, mean, chol))
         new = np.concatenate([d, eta], axis=1)
