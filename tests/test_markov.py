@@ -184,18 +184,3 @@ def test_reml_profile_streams_the_maneuvers_to_the_same_bits():
     grouped = noisefit.profile_reml((noise.build(lin, [0, 0, 1], 6.0) for lin in lins), ratios, np.array([0, 1, 1]))
     assert np.array_equal(grouped[1], noisefit.profile_reml(
         [noise.build(lin, [0, 0, 1], 6.0) for lin in lins], ratios, np.array([0, 1, 1]))[1])
-
-
-def test_grid_spans_the_prior_of_a_gauss_markov_share_whose_reml_sits_on_its_bound(caplog):
-    """A share on `GM_LOGIT_BOUND` (the white part negligible) takes its fallback sd, and says so; off
-    the bound it does not."""
-    from gyrocal.inference.noisefit import GM_LOGIT_BOUND
-    from gyrocal.inference.noisegrid import NoiseShapes, ratio_curvature
-
-    shapes = NoiseShapes(None, [_tiny(m=40, seed=s) for s in (3, 4)], [0, 0, 1])
-    fallback = np.array([2.1, 2.1, 2.0, 2.0])
-    on_bound = ratio_curvature(shapes, np.array([1.2, -3.0, GM_LOGIT_BOUND, np.log(6.0)]), fallback)
-    assert on_bound[2] == 2.0 and "sits on its bound" in caplog.text
-    caplog.clear()
-    ratio_curvature(shapes, np.array([1.2, -3.0, 0.4, np.log(6.0)]), fallback)
-    assert "sits on its bound" not in caplog.text

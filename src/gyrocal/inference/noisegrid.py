@@ -14,7 +14,7 @@ import numpy as np
 
 from gyrocal.inference import noise
 from gyrocal.inference.likelihood import campaign_stats, maneuver_stats, total
-from gyrocal.inference.noisefit import GM_LOGIT_BOUND, profile_reml
+from gyrocal.inference.noisefit import profile_reml
 
 __all__ = ["MAX_HALF_WIDTH_LOG_RATIO", "NoiseShapes", "RatioGrid", "ratio_curvature"]
 
@@ -132,10 +132,7 @@ class RatioGrid:
 def ratio_curvature(noises, ratios, fallback_sd, step=0.02):
     """Standard deviations of the ratios from the REML profile's Hessian; where the profile is
     flat or not convex there (a noise scale the data cannot tell, as when the model misses
-    structure far above the noise), ``fallback_sd`` (their prior's), with a warning. A Gauss-Markov
-    share whose REML sits on `GM_LOGIT_BOUND` (the white part negligible, as in a reference that is
-    all correlated at 100 Hz) takes its fallback, the others their Hessian's given it: the profile
-    still rises there, and a grid spanning its curvature missed the posterior, which the prior holds."""
+    structure far above the noise), ``fallback_sd`` (their prior's), with a warning."""
     shapes = noises if isinstance(noises, NoiseShapes) else NoiseShapes(noises)
     ratios = np.asarray(ratios, dtype=float)
     k = len(ratios)
@@ -150,15 +147,9 @@ def ratio_curvature(noises, ratios, fallback_sd, step=0.02):
             h[i, j] = h[j, i] = (f(ratios + e[i] + e[j]) - f(ratios + e[i] - e[j])
                                  - f(ratios - e[i] + e[j]) + f(ratios - e[i] - e[j])) / (4 * step**2)
     fallback = np.broadcast_to(np.asarray(fallback_sd, dtype=float), (k,)).copy()
-    free = np.ones(k, dtype=bool)
-    if shapes.correlated and abs(ratios[2]) >= GM_LOGIT_BOUND - 1e-3:  # the share's REML sits on its bound
-        free[2] = False
-        logging.getLogger("gyrocal").warning(
-            "the REML of the Gauss-Markov share sits on its bound (logit %.3g): the grid spans its prior there", ratios[2])
-    h = h[np.ix_(free, free)]
     if not np.all(np.isfinite(h)) or np.any(np.linalg.eigvalsh(h) <= 0):
         logging.getLogger("gyrocal").warning(
             "the REML profile of the noise ratios is not convex at %s: the grid spans their prior instead", ratios)
         return fallback
-    fallback[free] = np.sqrt(np.clip(np.diag(np.linalg.inv(h)), 1e-10, None))
-    return fallback
+    cov = np.linalg.inv(h)
+    return np.sqrt(np.clip(np.diag(cov), 1e-10, None))
