@@ -168,6 +168,9 @@ def full_run(campaign_dir, work, cfg, index) -> dict:
     out = {}
     for model in models:
         d = Path(work) / model
+        if (d / "refused.json").exists():  # refused or stopped: its reason, in place of a posterior
+            out[model] = {"refused": json.loads((d / "refused.json").read_text())["reason"]}
+            continue
         summary = pd.read_csv(d / "posterior_summary.csv")
         diag = json.loads((d / "diagnostics.json").read_text())
         sampler = json.loads((d / "sampler.json").read_text())

@@ -137,7 +137,8 @@ def sampled_table(recs) -> pd.DataFrame:
     out = []
     for tau, rs in _by_tau([r for r in recs if "sampled" in r]):
         sd_ratio, shift, hit_s, hit_c, misfit_c, misfit_b, top2, conv = [], [], [], [], [], [], [], []
-        for r in rs:
+        refused = [r for r in rs if "refused" in r["sampled"][CORRELATED]]
+        for r in (r for r in rs if "refused" not in r["sampled"][CORRELATED]):
             m, s = r["models"][CORRELATED], r["sampled"][CORRELATED]
             summ = {row["label"]: row for row in s["summary"]}
             for i, label in enumerate(m["labels"]):
@@ -157,6 +158,7 @@ def sampled_table(recs) -> pd.DataFrame:
                     "mean shift / sd (max abs)": round(float(np.max(np.abs(shift))), 3),
                     "95 % coverage sampler / conditional": f"{100 * np.mean(hit_s):.1f} / {100 * np.mean(hit_c):.1f}",
                     "correlated model converged": f"{sum(conv)}/{len(rs)}",
+                    "correlated model stopped by the sampler's budget": f"{len(refused)}/{len(rs)}",
                     "correlated model misfit": f"{sum(misfit_c)}/{len(rs)}",
                     "baseline misfit": f"{sum(misfit_b)}/{len(rs)}",
                     "st_correlated_noise in baseline's top two": f"{sum(top2)}/{len(rs)}"})

@@ -13,13 +13,11 @@ class SamplingError(RuntimeError):
 
 
 class StudentProposal:
-    """Independence proposal from a multivariate Student-t: around the Laplace approximation to
-    start, then fitted to burn-in draws (`fitted_proposal`).
-
-    Used as an emcee ``MHMove``: the posterior of this linear-Gaussian model is close to
-    Gaussian, so independence proposals from its Laplace approximation (heavier-tailed
-    and wider) are accepted most of the time and decorrelate in a few steps, where the
-    differential-evolution moves need ~100 steps in 27 dimensions.
+    """A multivariate Student-t, wider than ``cov`` by ``inflate``: the start points' (about the Laplace
+    approximation), and the noise part of `CollapsedProposal` (about its block, then fitted to burn-in
+    draws, `fitted_noise_proposal`). Heavier-tailed than the posterior, so an independence sampler
+    from it does not stick in the tails, and it decorrelates in a few steps where differential-
+    evolution moves need ~100 in 27 dimensions.
     """
 
     def __init__(self, mean, cov, dof=5.0, inflate=1.2):
