@@ -10,7 +10,8 @@ from test_numerics import BORESIGHT, P, tiny_linearization
 
 from gyrocal.inference import noise
 from gyrocal.inference.noisegrid import RatioGrid
-from gyrocal.inference.posterior import CollapsedProposal, LogPosterior, Priors, StudentProposal
+from gyrocal.inference.posterior import LogPosterior, Priors
+from gyrocal.inference.proposal import CollapsedProposal, StudentProposal
 
 LOG_SIGMA = np.log([1e-4, 3e-4, 2e-6])
 
@@ -96,3 +97,19 @@ def test_collapsed_move_reuses_the_last_calls_conditionals_to_the_bit():
     again, ratio = cached(mixed, np.random.RandomState(4))
     fresh, fresh_ratio = CollapsedProposal(logpost.conditional, P, noise_proposal)(mixed, np.random.RandomState(4))
     assert np.array_equal(again, fresh) and np.array_equal(ratio, fresh_ratio)
+
+
+def test_local_collapsed_move_steps_about_the_walkers_noise_and_leaves_the_proposals_density_out():
+    """The local move's noise step is symmetric, so the ratio holds the offsets' conditionals alone."""
+    logpost = tiny_posterior()
+    noise_proposal = StudentProposal(LOG_SIGMA, np.eye(3) * 1e-4)
+    x = np.tile(np.concatenate([np.zeros(P), LOG_SIGMA + [0.01, 0.0, -0.01]]), (500, 1))
+    new, ratio = CollapsedProposal(logpost.conditional, P, noise_proposal, local_scale=0.5)(x, np.random.RandomState(6))
+    steps = (new[:, P:] - x[:, P:]) / 0.5
+    scale = noise_proposal.chol @ noise_proposal.chol.T
+    np.testing.assert_allclose(np.cov(steps.T), scale, atol=0.2 * scale.max())
+    old_mean, old_chol, _ = logpost.conditional(x[:, P:])
+    new_mean, new_chol, _ = logpost.conditional(new[:, P:])
+    expected = [log_normal(x[i:i + 1, :P], old_mean[i], old_chol[i])[0]
+                - log_normal(new[i:i + 1, :P], new_mean[i], new_chol[i])[0] for i in range(5)]
+    np.testing.assert_allclose(ratio[:5], expected, rtol=1e-6, atol=1e-6)

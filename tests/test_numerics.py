@@ -376,7 +376,7 @@ def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time(
 
 
 def test_fitted_noise_proposal_is_the_draws_mean_and_covariance_and_refuses_scales_that_never_moved():
-    from gyrocal.inference.posterior import SamplingError, fitted_noise_proposal
+    from gyrocal.inference.proposal import SamplingError, fitted_noise_proposal
 
     draws = np.random.default_rng(5).standard_normal((4000, 3)) @ np.array([[1, 0, 0], [0.5, 2, 0], [0, 1, 0.1]])
     proposal = fitted_noise_proposal(draws, inflate=1.0)

@@ -38,10 +38,11 @@ __all__ = [
     "GROUP_SD_PRIOR_LOG_SD",
     "GROUP_SD_PRIOR_MEDIAN",
     "GROUP_SD_START_VARIANCE",
+    "LOCAL_SCALE",
+    "LOCAL_SHARE",
     "START_REDRAWS",
     "TAU_PRIOR_CENTER_S",
     "TAU_PRIOR_LOG_SD",
-    "CollapsedProposal",
     "LogPosterior",
     "Posterior",
     "Priors",
@@ -49,7 +50,6 @@ __all__ = [
     "SamplingError",
     "StudentProposal",
     "absolute",
-    "fitted_noise_proposal",
     "leave_one_maneuver_out",
     "run_ensembles",
     "sample",
@@ -216,21 +216,26 @@ def _autocorr_times(chain) -> np.ndarray:
 
 
 DE_SHARE = 0.1
-"""Share of differential-evolution moves: local steps that keep every walker moving where the
-collapsed move's noise proposal fits the noise's marginal badly (a misfit model, a noise ratio at
-its grid's edge)."""
+LOCAL_SHARE = 0.2
+LOCAL_SCALE = 2.38
+"""Shares of differential-evolution moves and of the collapsed move's local steps (a random walk in the
+noise, ``LOCAL_SCALE / sqrt(k)`` times the fitted proposal's scale in k slots): they keep a walker moving
+where the independence proposal falls short (a misfit model, a ratio at its grid's edge, GM share and tau)."""
 
 
-def _sampler(logpost, walkers, dim, proposal, seed):
-    """An emcee sampler with its own random state, seeded: numpy's global state is untouched."""
-    moves = [(emcee.moves.MHMove(proposal), 1.0 - DE_SHARE), (emcee.moves.DEMove(), DE_SHARE)]
+def _sampler(logpost, walkers, dim, noise, seed):
+    """An emcee sampler with its own random state, seeded: numpy's global state is untouched. Moves: the
+    collapsed move about ``noise`` (`CollapsedProposal`), independent and local (`LOCAL_SHARE`), and DE."""
+    p = logpost.n_params
+    local = CollapsedProposal(logpost.conditional, p, noise, LOCAL_SCALE / np.sqrt(dim - p))
+    moves = [(emcee.moves.MHMove(CollapsedProposal(logpost.conditional, p, noise)), 1.0 - DE_SHARE - LOCAL_SHARE),
+             (emcee.moves.MHMove(local), LOCAL_SHARE), (emcee.moves.DEMove(), DE_SHARE)]
     sampler = emcee.EnsembleSampler(walkers, dim, logpost, vectorize=True, moves=moves)
     sampler.random_state = np.random.RandomState(seed).get_state()
     return sampler
 
 
-START_REDRAWS = 100
-"""Start points with zero posterior density are redrawn at most this often, then sampling stops."""
+START_REDRAWS = 100  # start points with zero posterior density are redrawn at most this often
 
 
 def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict, seed: int) -> SamplerResult:
@@ -265,11 +270,10 @@ def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict,
         p = logpost.n_params
         noise, state = StudentProposal(proposal_mean[p:], proposal_cov[p:, p:]), p0
         for _ in range(2):
-            warm = _sampler(logpost, walkers, dim, CollapsedProposal(logpost.conditional, p, noise), sampler_seed)
+            warm = _sampler(logpost, walkers, dim, noise, sampler_seed)
             state = warm.run_mcmc(state, burn // 2)
             noise = fitted_noise_proposal(warm.get_chain(discard=burn // 4, flat=True)[:, p:])
-        samplers.append([_sampler(logpost, walkers, dim, CollapsedProposal(logpost.conditional, p, noise), sampler_seed),
-                         state])
+        samplers.append([_sampler(logpost, walkers, dim, noise, sampler_seed), state])
     steps = 0
     while True:
         n_new = int(cfg["initial_steps"]) if steps == 0 else chunk

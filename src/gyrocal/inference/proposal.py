@@ -63,8 +63,12 @@ class CollapsedProposal:
     in 900, autocorrelation times 50-400 steps). The offsets are drawn afresh at every accepted step.
     """
 
-    def __init__(self, conditional, n_params: int, noise: StudentProposal):
+    def __init__(self, conditional, n_params: int, noise: StudentProposal, local_scale: float = 0.0):
         self.conditional, self.n_params, self.noise = conditional, n_params, noise
+        self.local_scale = local_scale
+        """0: the noise from ``noise`` (independence); else a random walk about the walker's own noise, with
+        ``noise``'s scale times this (symmetric, so ``noise``'s density drops out of the ratio): local steps
+        that free a walker where the independence proposal falls short of the posterior."""
         self._last = None
 
     def _log_conditional(self, d, mean, chol):
@@ -98,12 +102,16 @@ class CollapsedProposal:
 
     def __call__(self, x, random):
         n, p = len(x), self.n_params
-        eta = self.noise.draw(random.standard_normal((n, x.shape[1] - p)), random.chisquare(self.noise.dof, n))
+        if self.local_scale:
+            eta = x[:, p:] + self.local_scale * random.standard_normal((n, x.shape[1] - p)) @ self.noise.chol.T
+        else:
+            eta = self.noise.draw(random.standard_normal((n, x.shape[1] - p)), random.chisquare(self.noise.dof, n))
         (mean, chol, ok), (old_mean, old_chol, old_ok) = self._conditionals(eta, x[:, p:])
         z = random.standard_normal((n, p))
         d = mean + np.linalg.solve(np.swapaxes(chol, 1, 2), z[..., None])[..., 0]  # (L^T)^-1 z: precision L L^T
-        ratio = (self.noise.log_density(x[:, p:]) + self._log_conditional(x[:, :p], old_mean, old_chol)
-                 - self.noise.log_density(eta) - self._log_conditional(d, mean, chol))
+        ratio = self._log_conditional(x[:, :p], old_mean, old_chol) - self._log_conditional(d, mean, chol)
+        if not self.local_scale:
+            ratio += self.noise.log_density(x[:, p:]) - self.noise.log_density(eta)
         new = np.concatenate([d, eta], axis=1)
         bad = ~(ok & old_ok)  # no valid conditional there: stay (a rejected proposal)
         new[bad], ratio[bad] = x[bad], -np.inf
