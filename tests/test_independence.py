@@ -32,3 +32,13 @@ def test_a_gap_under_three_correlation_times_warns_naming_the_pair_and_the_spaci
     assert finding.figure == pytest.approx(np.exp(-20 / 30))
     assert finding.where == "a, b" and "1 of 2 gaps" in finding.why
     assert finding.action == "fly maneuvers at least 90 s apart (3 correlation times)"
+
+
+def test_maneuvers_of_different_noise_groups_are_separate_recordings_and_never_warn():
+    """`gyrocal import` puts each file in its own noise group, one sample after the last: no warning."""
+    trials = [SimpleNamespace(id=f"trial{k}", st_time=np.arange(100.0 * k, 100.0 * k + 99.0), noise_group=f"file{k}")
+              for k in range(3)]
+    assert gaps(trials) == []
+    assert gap_check(trials, 30.0).status is Status.PASS
+    same = [SimpleNamespace(**{**vars(t), "noise_group": "one"}) for t in trials]
+    assert gap_check(same, 30.0).status is Status.WARN

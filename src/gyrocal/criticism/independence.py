@@ -5,7 +5,7 @@ nuisance and its own Gauss-Markov start, `gyrocal.inference.markov`). A real sta
 slow error runs on through the gaps between maneuvers: where a gap is short against the
 fitted correlation time, the error at the end of one maneuver carries into the next, the
 parameters both inform have errors correlated in a way the model does not know, and their
-intervals come out too narrow (docs/validation.md, "Correlated star-tracker noise").
+intervals come out too narrow (docs/validation.md, "Gauss-Markov star-tracker noise").
 """
 
 import itertools
@@ -24,10 +24,13 @@ is short (gaps under 3 tau)."""
 
 
 def gaps(maneuvers) -> list:
-    """``(earlier id, later id, gap in s)`` of consecutive maneuvers in time: from the last
-    reference sample of one to the first of the next."""
+    """``(earlier id, later id, gap in s)`` of consecutive maneuvers in time, from the last reference
+    sample of one to the first of the next, within each noise group: maneuvers of different groups are
+    separate recordings or trials (`gyrocal import` makes a group per file and puts the files one
+    sample apart), whose errors are independent however close their times."""
     ordered = sorted(maneuvers, key=lambda d: d.st_time[0])
-    return [(a.id, b.id, float(b.st_time[0] - a.st_time[-1])) for a, b in itertools.pairwise(ordered)]
+    return [(a.id, b.id, float(b.st_time[0] - a.st_time[-1])) for a, b in itertools.pairwise(ordered)
+            if getattr(a, "noise_group", None) == getattr(b, "noise_group", None)]
 
 
 def gap_check(maneuvers, tau_s: float | None) -> Finding | None:
@@ -38,7 +41,7 @@ def gap_check(maneuvers, tau_s: float | None) -> Finding | None:
         return None
     pairs = gaps(maneuvers)
     if not pairs:
-        return Finding(CHECK, Status.PASS, "one maneuver: nothing to correlate")
+        return Finding(CHECK, Status.PASS, "no two consecutive maneuvers in one noise group: nothing to correlate")
     rho = np.exp(-np.array([g for *_, g in pairs]) / tau_s)
     close = [(a, b, g, r) for (a, b, g), r in zip(pairs, rho) if r > CORRELATION_MAX]
     if not close:
