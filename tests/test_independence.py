@@ -10,7 +10,7 @@ from gyrocal.criticism.independence import gap_check, gaps
 
 
 def maneuver(name, start, stop):
-    return SimpleNamespace(id=name, st_time=np.arange(start, stop + 1.0))
+    return SimpleNamespace(id=name, st_time=np.arange(start, stop + 1.0), noise_group="campaign")
 
 
 CAMPAIGN = [maneuver("b", 340, 640), maneuver("a", 0, 320), maneuver("c", 1040, 1340)]

@@ -30,7 +30,7 @@ def gaps(maneuvers) -> list:
     sample apart), whose errors are independent however close their times."""
     ordered = sorted(maneuvers, key=lambda d: d.st_time[0])
     return [(a.id, b.id, float(b.st_time[0] - a.st_time[-1])) for a, b in itertools.pairwise(ordered)
-            if getattr(a, "noise_group", None) == getattr(b, "noise_group", None)]
+            if a.noise_group == b.noise_group]
 
 
 def gap_check(maneuvers, tau_s: float | None) -> Finding | None:
