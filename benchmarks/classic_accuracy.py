@@ -32,10 +32,7 @@ def errors(seed: int, bias_sd: float, drift: float, drawn: bool) -> pd.DataFrame
     scenario["gyro"]["bias_sd_deg_h"] = bias_sd
     scenario["effects"]["bias_drift_deg_h_per_h"] = drift
     if drawn:
-        rng = np.random.default_rng(seed)
-        for values in scenario["truth"].values():
-            for key in values:
-                values[key] = float(rng.normal(0.0, 5000.0 if key.startswith("sf") else 1000.0))
+        simulate.scatter_truth(scenario, np.random.default_rng(seed), 5000.0, 1000.0)
     sim, truth = simulate.simulate(scenario)
     maneuvers = [preprocess.slice_maneuver(sim, m.id) for m in sim.maneuvers]
     stated = {**scenario["star_tracker"], "arw_deg_sqrt_h": scenario["gyro"]["arw_deg_sqrt_h"]}

@@ -91,10 +91,7 @@ def test_solving_again_about_the_estimate_removes_the_second_order_error_of_larg
     for seed in range(4):
         scenario = simulate.load_scenario(DATA / "tiny.yaml")
         scenario["seed"] = seed
-        rng = np.random.default_rng(seed)
-        for values in scenario["truth"].values():
-            for key in values:
-                values[key] = float(rng.normal(0.0, 5000.0 if key.startswith("sf") else 1000.0))
+        simulate.scatter_truth(scenario, np.random.default_rng(seed), 5000.0, 1000.0)
         sim, truth = simulate.simulate(scenario)
         maneuvers = [preprocess.slice_maneuver(sim, m.id) for m in sim.maneuvers]
         stated = {**scenario["star_tracker"], "arw_deg_sqrt_h": scenario["gyro"]["arw_deg_sqrt_h"]}

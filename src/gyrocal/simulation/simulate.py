@@ -38,6 +38,7 @@ __all__ = [
     "gauss_markov",
     "maneuver_scale",
     "run",
+    "scatter_truth",
     "scenario_channels",
     "simulate",
     "star_tracker_noise",
@@ -298,6 +299,15 @@ def maneuver_scale(profiles, times, closed_start: bool) -> np.ndarray:
             start = (times > p.t_start) if closed_start else (times >= p.t_start)
             scale[start & (times <= p.t_end)] = p.noise_scale
     return scale
+
+
+def scatter_truth(scenario: dict, rng, sf_sd_ppm: float, mis_sd_arcsec: float) -> None:
+    """Replace every channel's truth in ``scenario`` by zero-mean normal draws from ``rng`` (scale
+    factors with ``sf_sd_ppm``, misalignments with ``mis_sd_arcsec``), channel by channel and key by key
+    in the scenario's order: truths as wide as a prior, untruncated, for accuracy studies."""
+    for values in scenario["truth"].values():
+        for key in values:
+            values[key] = float(rng.normal(0.0, sf_sd_ppm if key.startswith("sf") else mis_sd_arcsec))
 
 
 def stated_star_tracker(st_cfg: dict) -> dict:
