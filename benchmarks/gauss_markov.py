@@ -87,7 +87,7 @@ def intervals(spec, theta, cov) -> dict:
 def one(tau_s: float, index: int, cfg: dict, sampled: bool, baseline_every: int = 1, gap_s=None) -> dict:
     from gyrocal import checks
     from gyrocal.criticism import diagnostics
-    from gyrocal.inference import classic, preprocess
+    from gyrocal.inference import classic, preprocess, segments
     from gyrocal.inference.estimate import linearize_all, point_estimate
     from gyrocal.inference.likelihood import campaign_stats, conditional_posterior
     from gyrocal.inference.noise import noise_knowledge, scales_in_units, variances
@@ -120,7 +120,9 @@ def one(tau_s: float, index: int, cfg: dict, sampled: bool, baseline_every: int 
             spec = est.spec.with_priors(cfg["priors"])
             priors = Priors.from_spec(spec, stated, cfg["priors"]["noise_log_sd"])
             lins, noises = linearize_all(maneuvers, est)
-            stats = campaign_stats(noises, variances(est.log_sigma))
+            chained = segments.Chains.of(maneuvers)  # the likelihood the posterior samples (its grid)
+            parts = chained.noises(lins, est.boresight, est.correlation_time_s) if spec.correlated_noise else noises
+            stats = campaign_stats(parts, variances(est.log_sigma))
             mean, cov = conditional_posterior(stats, priors.mean - est.theta, priors.sd)
             true = np.array([truth[p.owner][p.name] if p.core else 0.0 for p in spec.parameters])
             out = {"labels": list(spec.labels), "core": [bool(p.core) for p in spec.parameters],
@@ -128,10 +130,8 @@ def one(tau_s: float, index: int, cfg: dict, sampled: bool, baseline_every: int 
                    "log_sigma": est.log_sigma.tolist(), "scales": scales_in_units(est.log_sigma).tolist(),
                    **intervals(spec, est.theta + mean, cov)}
             if model == "st_correlated_noise":
-                from gyrocal.inference import noise as noise_mod
-
                 true_ls = true_log_sigma(scenario)
-                true_noises = [noise_mod.build(lin, est.boresight, float(np.exp(true_ls[4]))) for lin in lins]
+                true_noises = chained.noises(lins, est.boresight, float(np.exp(true_ls[4])))
                 at_truth = campaign_stats(true_noises, variances(true_ls))
                 out["crlb_sd"] = (crlb_sd(at_truth.A, spec.free, spec.prior_sd_si) / spec.si_per_unit).tolist()
                 mean_t, cov_t = conditional_posterior(at_truth, priors.mean - est.theta, priors.sd)

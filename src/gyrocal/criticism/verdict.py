@@ -185,19 +185,17 @@ def correction_check(effect_table: pd.DataFrame) -> Finding:
 
 
 def checks(model: str, calibrations: dict, spec, sampler: dict, diagnostics: dict, comparison: pd.DataFrame,
-             effect_table: pd.DataFrame, cfg: dict, prior_conflict: Finding | None = None,
-             independence: Finding | None = None) -> list:
+             effect_table: pd.DataFrame, cfg: dict, prior_conflict: Finding | None = None) -> list:
     """Every check behind the verdict on the reviewed ``model``, in the order of ``verdict.json``.
 
     ``calibrations`` maps every model to its ``calibration.csv`` (the others' for the
     model-sensitivity check), ``comparison`` is ``model_comparison.csv``, ``effect_table``
     the reviewed model's `estimate_effect`, ``cfg`` the whole config and ``prior_conflict`` the
-    reviewed model's `gyrocal.criticism.priorconflict.conflict_check` (after the misfit check), ``independence``
-    its `gyrocal.criticism.independence.gap_check` (a warning at most; after that).
+    reviewed model's `gyrocal.criticism.priorconflict.conflict_check` (after the misfit check).
     """
     calibration, rcfg = calibrations[model], cfg["report"]
     classified = modelchoice.typed(comparison)
-    conflict = [f for f in (prior_conflict, independence) if f is not None]
+    conflict = [] if prior_conflict is None else [prior_conflict]
     return [convergence_check(calibration, spec, sampler, cfg["convergence"]),
             misfit_check(diagnostics, cfg["diagnostics"]["structure_log10_p_min"]),
             *conflict,

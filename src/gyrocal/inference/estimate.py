@@ -12,7 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import sparse
 
-from gyrocal.inference import errormodel, identification, noise, noisefit
+from gyrocal.inference import errormodel, identification, noise, noisefit, segments
 from gyrocal.inference.likelihood import campaign_stats
 from gyrocal.inference.noise import variances
 from gyrocal.inference.preprocess import noise_groups
@@ -298,7 +298,8 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     if spec.correlated_noise:
         noises = None
         tau0 = noisefit.correlation_time(lins) or noisefit.TAU_START_INTERVALS * noisefit.st_step(lins)
-        log_sigma, offsets = noisefit.estimate_correlated_noise(lins, start.boresight, log_sigma, tau0, index)
+        log_sigma, offsets = noisefit.estimate_correlated_noise(lins, start.boresight, log_sigma, tau0, index,
+                                                                  segments.Chains.of(maneuvers))
         tau = float(np.exp(log_sigma[4]))
     elif estimate_scales:
         log_sigma, offsets = noisefit.estimate_noise(noises, log_sigma, index)

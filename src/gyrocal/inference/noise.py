@@ -24,8 +24,9 @@ from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
 __all__ = [
     "COMPONENTS", "CORRELATED_SCALES", "NOISE_LABELS", "NOISE_SCALES", "ManeuverNoise", "NoiseScale", "build",
-    "difference", "log_sigma_of", "noise_knowledge", "noise_labels", "noise_scales", "nuisance_design", "ratios_of",
-    "scales_in_units", "stated_scales", "stated_si", "transformed", "unit_variances", "variances", "whiten"
+    "difference", "filtered", "log_sigma_of", "noise_knowledge", "noise_labels", "noise_scales", "nuisance_design",
+    "ratios_of", "scales_in_units", "stated_scales", "stated_si", "transformed", "unit_variances", "untransformed",
+    "variances", "whiten"
 ]
 
 COMPONENTS = ("cross", "about", "walk")
@@ -159,6 +160,11 @@ def transformed(series: np.ndarray, filt) -> np.ndarray:
     return difference(series) if filt is None else filt.apply(series)
 
 
+def untransformed(series: np.ndarray, filt) -> np.ndarray:
+    """`transformed`'s inverse along the first axis: cumulative sums, or the filter's inverse."""
+    return np.cumsum(series, axis=0) if filt is None else filt.invert(series)
+
+
 @dataclass
 class ManeuverNoise:
     """Banded covariance components and the transformed (differenced, or Gauss-Markov filtered)
@@ -196,7 +202,7 @@ class ManeuverNoise:
 
     def untransform(self, transformed: np.ndarray) -> np.ndarray:
         """`transform`'s inverse along the first axis."""
-        return np.cumsum(transformed, axis=0) if self.filter is None else self.filter.invert(transformed)
+        return untransformed(transformed, self.filter)
 
     def factor(self, variances: dict) -> np.ndarray:
         return cholesky_banded(self.covariance(variances), lower=True)
@@ -229,27 +235,43 @@ def nuisance_design(lin: Linearization) -> np.ndarray:
     return np.concatenate([chi0, lin.bias_design], axis=3)
 
 
+def _body_shapes(boresight_body) -> dict:
+    """The star tracker's noise shapes across and about its boresight (body axes)."""
+    b = np.asarray(boresight_body, dtype=float)
+    b = b / np.linalg.norm(b)
+    return {"cross": np.eye(3) - np.outer(b, b), "about": np.outer(b, b)}
+
+
+def filtered(maneuver: str, z, design, nuisance, st_matrix, walk, st_dt, walk_lag1, boresight_body,
+             correlation_time_s: float) -> ManeuverNoise:
+    """A `ManeuverNoise` of star-tracker noise with a Gauss-Markov part (`markov`): its exact filter,
+    two samples deep, and two more components; from the arrays of one series (`build`, or maneuvers
+    chained by `segments`): ``z`` (M, S, 3), ``design`` and ``nuisance`` (M, S, 3, .), ``walk`` (M, S, S, 3, 3)."""
+    m_samples, n_sets = z.shape[:2]
+    n = m_samples * 3 * n_sets
+    blocks, filt = markov.covariance_blocks(st_matrix, _body_shapes(boresight_body), walk, st_dt, correlation_time_s,
+                                            n_sets, walk_lag1)
+    components = {k: _banded_lower(v[0], [v[1][1:], v[2][2:]], 2) for k, v in blocks.items()}
+    rhs = np.asfortranarray(np.concatenate([filt.apply(design).reshape(n, -1), filt.apply(nuisance).reshape(n, -1),
+                                            filt.apply(z).reshape(n, 1)], axis=1))
+    return ManeuverNoise(maneuver, components, rhs, design.shape[-1], nuisance.shape[-1], filt)
+
+
 def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -> ManeuverNoise:
     """Covariance components and transformed right-hand sides of a linearised maneuver.
 
     White star-tracker noise: first differences, the covariance one sample deep. With
     ``correlation_time_s`` > 0 the star-tracker noise has a first-order Gauss-Markov part too
-    (`markov`): its exact filter, two samples deep, and two more components.
+    (`filtered`).
     """
     m_samples, n_sets = lin.z.shape[:2]
     block = 3 * n_sets
-    b = np.asarray(boresight_body, dtype=float)
-    b = b / np.linalg.norm(b)
-    shapes = {"cross": np.eye(3) - np.outer(b, b), "about": np.outer(b, b)}
     nuis = nuisance_design(lin)
     n = m_samples * block
     if correlation_time_s > 0:
-        blocks, filt = markov.covariance_blocks(lin.st_matrix, shapes, lin.random_walk(), lin.st_dt,
-                                                correlation_time_s, n_sets, lin.walk_lag1_or_none())
-        components = {k: _banded_lower(v[0], [v[1][1:], v[2][2:]], 2) for k, v in blocks.items()}
-        rhs = np.asfortranarray(np.concatenate([filt.apply(lin.design).reshape(n, -1), filt.apply(nuis).reshape(n, -1),
-                                                filt.apply(lin.z).reshape(n, 1)], axis=1))
-        return ManeuverNoise(lin.maneuver, components, rhs, lin.design.shape[-1], nuis.shape[-1], filt)
+        return filtered(lin.maneuver, lin.z, lin.design, nuis, lin.st_matrix, lin.random_walk(), lin.st_dt,
+                        lin.walk_lag1_or_none(), boresight_body, correlation_time_s)
+    shapes = _body_shapes(boresight_body)
     R = lin.st_matrix
     ones = np.ones((n_sets, n_sets))
     diag, lower = {}, {}

@@ -10,7 +10,7 @@ part's sd and correlation time, its filter rebuilt at each tau tried.
 import numpy as np
 from scipy.optimize import minimize
 
-from gyrocal.inference import noise
+from gyrocal.inference import noise, segments
 from gyrocal.inference.likelihood import campaign_stats, maneuver_stats, total
 
 __all__ = [
@@ -137,29 +137,35 @@ GM_LOGIT_BOUND = 8.0
 0.03 % and 99.97 %): beyond it either part is negligible, and the profile is flat."""
 
 
-def estimate_correlated_noise(lins, boresight, log_sigma0, tau0_s, groups=None):
+def estimate_correlated_noise(lins, boresight, log_sigma0, tau0_s, groups=None, chained=None):
     """REML of ``[log sigma_cross, log sigma_about, log arw, logit st_gm_fraction, log tau_s]``:
     star-tracker noise white plus first-order Gauss-Markov (`markov`), the filter rebuilt at each
     tau tried, from an even split; the simplex starts wide (a factor 1.35 in the ratios, 2 in tau)
     and stops at 1 % (the posterior's grid refines it). Tau is kept between half the star
-    tracker's interval and ten times the longest maneuver. Returns them and the groups' offsets
-    (`estimate_noise`)."""
+    tracker's interval and ten times the longest maneuver. ``chained`` (`segments.Chains`): the
+    error runs on between consecutive maneuvers of a group; None: the maneuvers apart. Returns the
+    scales and the groups' offsets (`estimate_noise`)."""
     log_sigma0 = np.asarray(log_sigma0, dtype=float)
     step = st_step(lins)
     longest = max(float(np.sum(lin.st_dt)) for lin in lins)
     log_tau_bounds = np.log([0.5 * step, 10.0 * longest])
+    chained = segments.Chains.apart(len(lins)) if chained is None else chained
+    groups = chained.groups(groups)
+
+    def structures(tau):
+        return chained.noises(lins, boresight, tau)
     start = np.concatenate([log_sigma0[1:3] - log_sigma0[0], [0.0, np.clip(np.log(tau0_s), *log_tau_bounds)]])
 
     def negative(r):
         if abs(r[2]) > GM_LOGIT_BOUND or not log_tau_bounds[0] <= r[3] <= log_tau_bounds[1]:
             return np.inf
-        # one maneuver's noise structure at a time: each is built, summed into the statistics and
-        # dropped (a list of them all held 5 GB at 100x the default campaign; the same sums)
-        return profile_reml((noise.build(lin, boresight, float(np.exp(r[3]))) for lin in lins), r, groups)[0]
+        # one noise structure at a time: each is built, summed into the statistics and dropped (a
+        # list of them all held 5 GB at 100x the default campaign; the same sums)
+        return profile_reml(structures(float(np.exp(r[3]))), r, groups)[0]
 
     simplex = start + np.vstack([np.zeros(4), np.diag([0.3, 0.3, 1.0, 0.7])])
     opt = minimize(negative, start, method="Nelder-Mead",
                    options={"xatol": 1e-2, "fatol": 1e-2, "initial_simplex": simplex})
-    noises = [noise.build(lin, boresight, float(np.exp(opt.x[3]))) for lin in lins]
+    noises = list(structures(float(np.exp(opt.x[3]))))
     log_cross, offsets = campaign_level(profile_reml(noises, opt.x, groups)[1], noises, groups)
     return np.array([log_cross, log_cross + opt.x[0], log_cross + opt.x[1], opt.x[2], opt.x[3]]), offsets

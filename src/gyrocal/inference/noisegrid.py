@@ -12,7 +12,7 @@ import logging
 
 import numpy as np
 
-from gyrocal.inference import noise
+from gyrocal.inference import noise, segments
 from gyrocal.inference.likelihood import campaign_stats, maneuver_stats, total
 from gyrocal.inference.noisefit import profile_reml
 
@@ -26,29 +26,38 @@ noise): where the ratios' profile is flat and the grid falls back on their prior
 
 
 class NoiseShapes:
-    """Each maneuver's noise structure at a noise shape: fixed for white noise, rebuilt at each
-    correlation time for Gauss-Markov noise (its filter depends on tau); ``groups`` (each
-    maneuver's noise group) gives the REML profile one level per group."""
+    """The likelihood's noise structures at a noise shape: each maneuver's, fixed, for white noise;
+    for Gauss-Markov noise each chain's (`segments.Chains`: the error runs on between consecutive
+    maneuvers of a group), rebuilt at each correlation time (its filter depends on tau). ``groups``
+    (each maneuver's noise group) gives the REML profile one level per group; `groups_of_parts` is
+    the structures' own."""
 
-    def __init__(self, noises, lins=None, boresight=None, groups=None):
+    def __init__(self, noises, lins=None, boresight=None, groups=None, chained=None):
+        """``chained``: a `segments.Chains` (None: every maneuver apart)."""
         self.noises, self.lins, self.boresight, self.groups = noises, lins, boresight, groups
+        self.chained = segments.Chains.apart(len(lins)) if chained is None and lins is not None else chained
 
     @property
     def correlated(self) -> bool:
         return self.lins is not None
 
+    @property
+    def groups_of_parts(self):
+        """Each structure's noise group (None: one group)."""
+        return self.chained.groups(self.groups) if self.correlated else self.groups
+
+    def _built(self, ratios):
+        return self.chained.noises(self.lins, self.boresight, float(np.exp(ratios[-1])))
+
     def at(self, ratios) -> list:
-        """The maneuvers' `noise.ManeuverNoise` for ``ratios`` (only ``log tau``, the last, matters)."""
-        if not self.correlated:
-            return self.noises
-        return [noise.build(lin, self.boresight, float(np.exp(ratios[-1]))) for lin in self.lins]
+        """The `noise.ManeuverNoise` structures for ``ratios`` (only ``log tau``, the last, matters)."""
+        return list(self._built(ratios)) if self.correlated else self.noises
 
     def profile(self, ratios) -> float:
-        """The REML profile's negative log-likelihood at ``ratios`` (`noisefit.profile_reml`)."""
-        if not self.correlated:
-            return profile_reml(self.noises, ratios, self.groups)[0]
-        tau = float(np.exp(ratios[-1]))  # built, summed and dropped one maneuver at a time
-        return profile_reml((noise.build(lin, self.boresight, tau) for lin in self.lins), ratios, self.groups)[0]
+        """The REML profile's negative log-likelihood at ``ratios`` (`noisefit.profile_reml`); Gauss-Markov
+        structures are built, summed and dropped one at a time."""
+        parts = self._built(ratios) if self.correlated else self.noises
+        return profile_reml(parts, ratios, self.groups_of_parts)[0]
 
 
 def _lagrange(f):
@@ -63,13 +72,15 @@ class RatioGrid:
     At each node the statistics are computed with ``sigma_cross = 1``. The grid spans
     ``half_width_sd`` sd either way, at most `MAX_HALF_WIDTH_LOG_RATIO`. ``noises`` is the
     maneuvers' noise structures, or a `NoiseShapes` where they change with the ratios; ``groups``,
-    each maneuver's noise group, tabulates each group's statistics apart (they scale apart).
+    each maneuver's noise group where ``noises`` is a list (a `NoiseShapes` has its own), tabulates
+    each group's statistics apart (they scale apart).
     """
 
     def __init__(self, noises, center, sd, nodes: int, half_width_sd: float, groups=None):
-        shapes = noises if isinstance(noises, NoiseShapes) else NoiseShapes(noises)
+        shapes = noises if isinstance(noises, NoiseShapes) else NoiseShapes(noises, groups=groups)
         center = np.asarray(center, dtype=float)
         self.nodes, self.dims = nodes, len(center)
+        groups = shapes.groups_of_parts
         self.groups = None if groups is None or np.max(groups) == 0 else np.asarray(groups)
         self.n_groups = 1 if self.groups is None else int(self.groups.max()) + 1
         half_width = np.minimum(half_width_sd * np.asarray(sd, dtype=float), MAX_HALF_WIDTH_LOG_RATIO)
@@ -78,6 +89,8 @@ class RatioGrid:
         self.start = center - half_width
         self.step = 2 * half_width / (nodes - 1)
         self.values = None
+        self._last = None
+        """The last `stats` call's ratios, interpolated rows and inside mask (`_interpolated`)."""
         inner = (nodes,) * (self.dims - 1) if shapes.correlated else (nodes,) * self.dims
         outer = range(nodes) if shapes.correlated else [None]
         for last in outer:  # Gauss-Markov: tau (the last ratio) outermost, each filter built once
@@ -117,11 +130,27 @@ class RatioGrid:
         np.put_along_axis(weights, flat, product, axis=1)
         return weights, inside
 
+    def _interpolated(self, ratios):
+        """``weights @ values`` and the inside mask per row of ``ratios``, taking the rows of the last call
+        whose ratios are the same to the bit: the collapsed move's conditional and emcee's log posterior of
+        the point it proposes ask for the same rows, one after the other."""
+        need = np.ones(len(ratios), dtype=bool)
+        v, inside = np.empty((len(ratios), self.values.shape[1])), np.empty(len(ratios), dtype=bool)
+        last = self._last
+        if last is not None:
+            n = min(len(ratios), len(last[0]))
+            need[:n] = np.any(ratios[:n] != last[0][:n], axis=1)
+            v[:n][~need[:n]], inside[:n][~need[:n]] = last[1][:n][~need[:n]], last[2][:n][~need[:n]]
+        if need.any():
+            weights, inside[need] = self.weights(ratios[need])
+            v[need] = weights @ self.values
+        self._last = (ratios.copy(), v.copy(), inside.copy())
+        return v, inside
+
     def stats(self, ratios: np.ndarray):
         """Interpolated unit-scale ``A, b, c, logdet`` per row of ``ratios``; with noise groups, per
         row and group (a group axis after the rows')."""
-        weights, inside = self.weights(np.atleast_2d(ratios))
-        v = weights @ self.values
+        v, inside = self._interpolated(np.atleast_2d(np.asarray(ratios, dtype=float)))
         p = self.n_params
         if self.groups is None:
             return v[:, :p * p].reshape(-1, p, p), v[:, p * p:p * p + p], v[:, -2], v[:, -1], inside

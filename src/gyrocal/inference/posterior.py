@@ -17,6 +17,7 @@ import arviz as az
 import emcee
 import numpy as np
 
+from gyrocal.inference import segments
 from gyrocal.inference.budget import SamplingBudget
 from gyrocal.inference.estimate import linearize_all
 from gyrocal.inference.likelihood import (
@@ -29,31 +30,19 @@ from gyrocal.inference.likelihood import (
 from gyrocal.inference.noise import log_sigma_of, ratios_of, variances
 from gyrocal.inference.noisegrid import NoiseShapes, RatioGrid, ratio_curvature
 from gyrocal.inference.preprocess import noise_groups
-from gyrocal.inference.proposal import CollapsedProposal, SamplingError, StudentProposal, fitted_noise_proposal
+from gyrocal.inference.proposal import (
+    CollapsedProposal,
+    ConditionalCache,
+    SamplingError,
+    StudentProposal,
+    fitted_noise_proposal,
+)
 
 __all__ = [
-    "AUTOCORR_WINDOW_C",
-    "DE_SHARE",
-    "GM_FRACTION_LOGIT_SD",
-    "GROUP_SD_PRIOR_LOG_SD",
-    "GROUP_SD_PRIOR_MEDIAN",
-    "GROUP_SD_START_VARIANCE",
-    "LOCAL_SCALE",
-    "LOCAL_SHARE",
-    "START_REDRAWS",
-    "TAU_PRIOR_CENTER_S",
-    "TAU_PRIOR_LOG_SD",
-    "LogPosterior",
-    "Posterior",
-    "Priors",
-    "SamplerResult",
-    "SamplingError",
-    "StudentProposal",
-    "absolute",
-    "leave_one_maneuver_out",
-    "run_ensembles",
-    "sample",
-    "start_covariance"
+    "AUTOCORR_WINDOW_C", "DE_SHARE", "GM_FRACTION_LOGIT_SD", "GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDIAN",
+    "GROUP_SD_START_VARIANCE", "LOCAL_SCALE", "LOCAL_SHARE", "START_REDRAWS", "TAU_PRIOR_CENTER_S",
+    "TAU_PRIOR_LOG_SD", "LogPosterior", "Posterior", "Priors", "SamplerResult", "SamplingError", "StudentProposal",
+    "absolute", "leave_one_maneuver_out", "run_ensembles", "sample", "start_covariance"
 ]
 
 
@@ -120,11 +109,13 @@ class LogPosterior:
         self.n_params = len(theta_hat)
         self.n_noise = len(priors.log_sigma_center)
 
-    def conditional(self, noise_x):
+    def conditional(self, noise_x, z=None):
         """The channel offsets' Gaussian conditional given the noise slots ``noise_x`` (W, dim - P), as its
-        mean (W, P) and the lower Cholesky factor of its precision (W, P, P), the bounds aside: the
+        mean (W, P) and the lower Cholesky factor ``L`` of its precision (W, P, P), the bounds aside: the
         likelihood is Gaussian in ``dtheta`` at any noise, and so is its prior (`CollapsedProposal`).
-        ``ok`` (W,) is False where that precision is not positive definite (far off the grid)."""
+        ``ok`` (W,) is False where that precision is not positive definite (far off the grid). Last, draws
+        ``mean + L^-T z`` for standard normals ``z`` (W, P) (zeros: the mean), from the same solve as the
+        mean (``L^-T z = (L L^T)^-1 L z``)."""
         k, pr = self.n_noise, self.priors
         log_sigma = noise_x[:, :k] if self.grid.n_groups == 1 else absolute(noise_x[:, :k])
         A, b = self.grid.stats(ratios_of(log_sigma))[:2]
@@ -144,8 +135,9 @@ class LogPosterior:
             ok = np.all(np.linalg.eigvalsh(precision) > 0, axis=1)
             precision[~ok] = np.diag(pr.sd**-2.0)
             chol = np.linalg.cholesky(precision)
-        mean = np.linalg.solve(precision, linear[..., None])[..., 0]
-        return mean, chol, ok
+        shift = np.zeros_like(linear) if z is None else np.einsum("wij,wj->wi", chol, z)
+        both = np.linalg.solve(precision, np.stack([linear, linear + shift], axis=-1))
+        return both[..., 0], chol, ok, both[..., 1]
 
     def __call__(self, x):
         x = np.atleast_2d(x)
@@ -227,8 +219,9 @@ def _sampler(logpost, walkers, dim, noise, seed):
     """An emcee sampler with its own random state, seeded: numpy's global state is untouched. Moves: the
     collapsed move about ``noise`` (`CollapsedProposal`), independent and local (`LOCAL_SHARE`), and DE."""
     p = logpost.n_params
-    local = CollapsedProposal(logpost.conditional, p, noise, LOCAL_SCALE / np.sqrt(dim - p))
-    moves = [(emcee.moves.MHMove(CollapsedProposal(logpost.conditional, p, noise)), 1.0 - DE_SHARE - LOCAL_SHARE),
+    shared = ConditionalCache(logpost.conditional)
+    local = CollapsedProposal(shared, p, noise, LOCAL_SCALE / np.sqrt(dim - p))
+    moves = [(emcee.moves.MHMove(CollapsedProposal(shared, p, noise)), 1.0 - DE_SHARE - LOCAL_SHARE),
              (emcee.moves.MHMove(local), LOCAL_SHARE), (emcee.moves.DEMove(), DE_SHARE)]
     sampler = emcee.EnsembleSampler(walkers, dim, logpost, vectorize=True, moves=moves)
     sampler.random_state = np.random.RandomState(seed).get_state()
@@ -371,7 +364,7 @@ def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dic
     index = noise_groups(maneuvers)[1] if estimate.group_offsets is not None else None
     shapes = NoiseShapes(noises, groups=index)
     if estimate.spec.correlated_noise:
-        shapes = NoiseShapes(noises, lins, estimate.boresight, index)
+        shapes = NoiseShapes(noises, lins, estimate.boresight, index, segments.Chains.of(maneuvers))
         fallback = np.concatenate([[fallback, fallback], priors.log_sigma_sd[3:]])
     ratio_sd = ratio_curvature(shapes, ratios, fallback)
     grid = RatioGrid(shapes, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"], index)

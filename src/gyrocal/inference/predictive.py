@@ -12,7 +12,7 @@ import numpy as np
 from scipy.linalg import cho_solve_banded, solve_triangular
 
 from gyrocal.inference.errormodel import Linearization
-from gyrocal.inference.noise import ManeuverNoise, nuisance_design, ratios_of, unit_variances
+from gyrocal.inference.noise import ManeuverNoise, nuisance_design, ratios_of, unit_variances, untransformed
 from gyrocal.inference.selectedinverse import inverse_windows, recursion_bounds
 
 __all__ = [
@@ -59,11 +59,8 @@ def undifference_body(lin: Linearization, differenced: np.ndarray, nz: ManeuverN
     """(D, M, S, 3) body-axis series from transformed inertial series (D, n): first differences,
     or the Gauss-Markov filter of ``nz``."""
     m, s = lin.z.shape[:2]
-    series = differenced.reshape(len(differenced), m, s, 3)
-    if nz is None or nz.filter is None:
-        inertial = np.cumsum(series, axis=1)
-    else:
-        inertial = np.moveaxis(nz.untransform(np.moveaxis(series, 1, 0)), 0, 1)
+    series = np.moveaxis(differenced.reshape(len(differenced), m, s, 3), 1, 0)
+    inertial = np.moveaxis(untransformed(series, None if nz is None else nz.filter), 0, 1)
     return inertial @ lin.st_matrix[None]
 
 

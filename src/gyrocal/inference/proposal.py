@@ -5,7 +5,7 @@ Gaussian conditional given them."""
 
 import numpy as np
 
-__all__ = ["CollapsedProposal", "SamplingError", "StudentProposal", "fitted_noise_proposal"]
+__all__ = ["CollapsedProposal", "ConditionalCache", "SamplingError", "StudentProposal", "fitted_noise_proposal"]
 
 
 class SamplingError(RuntimeError):
@@ -51,10 +51,47 @@ def fitted_noise_proposal(noise_draws, dof=10.0, inflate=1.1) -> StudentProposal
     return StudentProposal(mean, cov, dof=dof, inflate=inflate)
 
 
+class ConditionalCache:
+    """The offsets' conditionals (`posterior.LogPosterior.conditional`) of each walker's last proposed noise and
+    its own, shared by the collapsed moves: a walker's own noise is, after either move, one of the two (its
+    proposal accepted or kept), so only a walker that another move (DE) has shifted costs a fresh conditional.
+    Taken only where the noise is equal to the bit, so the numbers are those a fresh computation gives."""
+
+    def __init__(self, conditional):
+        self.conditional = conditional
+        self._keys = None
+        """(2, W, k): each walker's last proposed and own noise."""
+        self._values = None
+        """Their ``(mean, chol, ok)``, each with the same two leading axes."""
+
+    def __call__(self, eta_new, eta_old, z):
+        """``(mean, chol, ok, draw)`` at the proposed noise (draws ``mean + L^-T z``) and ``(mean, chol, ok)`` at
+        the walkers' own, computing only what the last call does not hold."""
+        n = len(eta_new)
+        need = np.ones(n, dtype=bool)
+        old = None
+        if self._keys is not None and self._keys.shape[1:] == eta_old.shape:
+            match = np.all(self._keys == eta_old[None], axis=2)
+            need = ~match.any(axis=0)
+            which = match.argmax(axis=0)
+            old = [v[which, np.arange(n)] for v in self._values]
+        fresh = self.conditional(np.concatenate([eta_new, eta_old[need]]),
+                                 np.concatenate([z, np.zeros((need.sum(), z.shape[1]))]))
+        new = [f[:n] for f in fresh]
+        if old is None:
+            old = [f[n:] for f in fresh[:3]]
+        else:
+            for o, f in zip(old, fresh[:3]):
+                o[need] = f[n:]
+        self._keys = np.stack([eta_new, eta_old])
+        self._values = [np.stack([a, b]) for a, b in zip(new[:3], old)]
+        return new, old
+
+
 class CollapsedProposal:
     """emcee ``MHMove`` proposal that draws the noise slots from an independence proposal ``noise``
     (`StudentProposal`) and the channel offsets from their exact Gaussian conditional given them
-    (``conditional``, `posterior.LogPosterior.conditional`).
+    (``conditionals``, a `ConditionalCache` over `posterior.LogPosterior.conditional`).
 
     The log proposal ratio then leaves in the acceptance only the noise scales' marginal posterior
     against ``noise``: a few dimensions, however many channel parameters there are. A proposal over
@@ -63,42 +100,18 @@ class CollapsedProposal:
     in 900, autocorrelation times 50-400 steps). The offsets are drawn afresh at every accepted step.
     """
 
-    def __init__(self, conditional, n_params: int, noise: StudentProposal, local_scale: float = 0.0):
-        self.conditional, self.n_params, self.noise = conditional, n_params, noise
+    def __init__(self, conditionals: ConditionalCache, n_params: int, noise: StudentProposal, local_scale: float = 0.0):
+        self.conditionals, self.n_params, self.noise = conditionals, n_params, noise
         self.local_scale = local_scale
         """0: the noise from ``noise`` (independence); else a random walk about the walker's own noise, with
         ``noise``'s scale times this (symmetric, so ``noise``'s density drops out of the ratio): local steps
         that free a walker where the independence proposal falls short of the posterior."""
-        self._last = None
 
-    def _log_conditional(self, d, mean, chol):
+    @staticmethod
+    def _log_conditional(d, mean, chol):
         """log N(d | mean, precision L L^T), up to the constant both sides share."""
         r = np.einsum("wji,wj->wi", chol, d - mean)
-        return np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1) - 0.5 * np.sum(r**2, axis=1)
-
-    def _conditionals(self, eta_new, eta_old):
-        """`conditional` at the proposed noise and at the walkers' own, in one call; a walker's own is
-        the last call's (proposed and accepted, or kept) wherever its noise is one of them."""
-        rows = np.concatenate([eta_new, eta_old])
-        need = np.ones(len(rows), dtype=bool)
-        out = None
-        if self._last is not None:
-            keys, *cached = self._last
-            match = np.all(eta_old[:, None, :] == keys[None], axis=2)
-            hit = match.any(axis=1)
-            need[len(eta_new):] = ~hit
-            out = [np.empty((len(rows),) + c.shape[1:], dtype=c.dtype) for c in cached]
-            for o, c in zip(out, cached):
-                o[len(eta_new):][hit] = c[match.argmax(axis=1)[hit]]
-        fresh = self.conditional(rows[need])
-        if out is None:
-            out = list(fresh)
-        else:
-            for o, f in zip(out, fresh):
-                o[need] = f
-        self._last = (rows, *out)
-        n = len(eta_new)
-        return [o[:n] for o in out], [o[n:] for o in out]
+        return _log_diagonal(chol) - 0.5 * np.sum(r**2, axis=1)
 
     def __call__(self, x, random):
         n, p = len(x), self.n_params
@@ -106,13 +119,18 @@ class CollapsedProposal:
             eta = x[:, p:] + self.local_scale * random.standard_normal((n, x.shape[1] - p)) @ self.noise.chol.T
         else:
             eta = self.noise.draw(random.standard_normal((n, x.shape[1] - p)), random.chisquare(self.noise.dof, n))
-        (mean, chol, ok), (old_mean, old_chol, old_ok) = self._conditionals(eta, x[:, p:])
         z = random.standard_normal((n, p))
-        d = mean + np.linalg.solve(np.swapaxes(chol, 1, 2), z[..., None])[..., 0]  # (L^T)^-1 z: precision L L^T
-        ratio = self._log_conditional(x[:, :p], old_mean, old_chol) - self._log_conditional(d, mean, chol)
+        (_, chol, ok, d), (old_mean, old_chol, old_ok) = self.conditionals(eta, x[:, p:], z)
+        # the draw's own density: L^T (d - mean) = z
+        ratio = self._log_conditional(x[:, :p], old_mean, old_chol) - (_log_diagonal(chol) - 0.5 * np.sum(z**2, axis=1))
         if not self.local_scale:
             ratio += self.noise.log_density(x[:, p:]) - self.noise.log_density(eta)
         new = np.concatenate([d, eta], axis=1)
         bad = ~(ok & old_ok)  # no valid conditional there: stay (a rejected proposal)
         new[bad], ratio[bad] = x[bad], -np.inf
         return new, ratio
+
+
+def _log_diagonal(chol):
+    """sum log diag L per walker: log det of the precision L L^T, halved."""
+    return np.sum(np.log(np.diagonal(chol, axis1=1, axis2=2)), axis=1)

@@ -1,0 +1,103 @@
+"""Maneuvers whose star-tracker Gauss-Markov error runs on between them, as one likelihood.
+
+A star tracker's slow error does not stop between maneuvers: where one follows another within a
+few correlation times their errors are correlated, and a likelihood that takes them as independent
+makes the intervals of the parameters both inform too narrow (docs/validation.md: 92.3 % at
+tau 30 s with 20 s gaps). Consecutive maneuvers of one noise group (`chains`) are therefore one
+series here, the Gauss-Markov filter (`markov`) running on across each gap with the gap's ``phi``.
+
+The gyros' walk restarts at each maneuver (the propagation starts afresh from the star tracker).
+In the chained series it is taken as running on, and each channel set's difference (its walk at
+the end of the earlier maneuvers, a constant over the later one) is taken up by a free offset per
+set, which for every later maneuver stands where the initial attitude error, one for all sets,
+stood: the same span and more. The likelihood is then exact for a model that forgets only that the
+sets restart together (with one set, it forgets nothing), and stays banded two samples deep.
+"""
+
+import itertools
+
+import numpy as np
+
+from gyrocal.inference import noise
+
+__all__ = ["Chains", "build", "chains", "gaps_s"]
+
+
+def chains(maneuvers) -> list:
+    """The maneuvers (indices into ``maneuvers``) that make one series each: consecutive in time
+    within one noise group, in time order. Groups are separate recordings or trials (`gyrocal import`
+    makes a group per file), whose errors are independent however close their times."""
+    order = sorted(range(len(maneuvers)), key=lambda m: maneuvers[m].st_time[0])
+    by_group = {}
+    for m in order:
+        by_group.setdefault(maneuvers[m].noise_group, []).append(m)
+    return sorted(by_group.values(), key=lambda c: c[0])
+
+
+def gaps_s(maneuvers, chain) -> np.ndarray:
+    """(len(chain) - 1,) the time from the last star-tracker sample of each maneuver to the first of the next (s)."""
+    return np.array([maneuvers[b].st_time[0] - maneuvers[a].st_time[-1] for a, b in itertools.pairwise(chain)],
+                    dtype=float)
+
+
+def _set_offsets(m_samples: int, n_sets: int) -> np.ndarray:
+    """(M, S, 3, 3 S): a constant error per channel set."""
+    out = np.zeros((m_samples, n_sets, 3, 3 * n_sets))
+    for s in range(n_sets):
+        out[:, s, :, 3 * s:3 * s + 3] = np.eye(3)
+    return out
+
+
+def build(lins, gaps, boresight_body, correlation_time_s: float) -> noise.ManeuverNoise:
+    """One `noise.ManeuverNoise` for maneuvers flown one after another (``lins`` in time order,
+    ``gaps`` between them, s) with Gauss-Markov star-tracker noise of ``correlation_time_s``: the
+    filter runs on across the gaps; the nuisance is each maneuver's own (its biases; the first its
+    initial attitude error, the later ones an offset per set)."""
+    if len(lins) == 1:
+        return noise.build(lins[0], boresight_body, correlation_time_s)
+    n_sets = lins[0].z.shape[1]
+    parts = [noise.nuisance_design(lin) for lin in lins]
+    parts[1:] = [np.concatenate([_set_offsets(len(lin.z), n_sets), nuis[..., 3:]], axis=3)
+                 for lin, nuis in zip(lins[1:], parts[1:])]
+    widths = np.cumsum([0] + [p.shape[3] for p in parts])
+    rows = np.cumsum([0] + [len(lin.z) for lin in lins])
+    nuisance = np.zeros((rows[-1], n_sets, 3, widths[-1]))
+    for k, part in enumerate(parts):
+        nuisance[rows[k]:rows[k + 1], ..., widths[k]:widths[k + 1]] = part
+    st_dt = np.concatenate([lin.st_dt for lin in lins])
+    st_dt[rows[1:-1]] = gaps
+    lag1 = [lin.walk_lag1_or_none() for lin in lins]
+    lag1 = None if all(x is None for x in lag1) else np.concatenate(
+        [np.zeros(len(lin.z)) if x is None else x for lin, x in zip(lins, lag1)])
+    return noise.filtered(
+        "+".join(lin.maneuver for lin in lins), np.concatenate([lin.z for lin in lins]),
+        np.concatenate([lin.design for lin in lins]), nuisance, np.concatenate([lin.st_matrix for lin in lins]),
+        np.concatenate([lin.random_walk() for lin in lins]), st_dt, lag1, boresight_body, correlation_time_s)
+
+
+class Chains:
+    """A campaign's chains (`chains`) and their gaps: what the likelihood of correlated star-tracker
+    noise needs of the maneuvers beyond their linearisations."""
+
+    def __init__(self, members: list, gaps: list):
+        self.members, self.gaps = members, gaps
+
+    @classmethod
+    def of(cls, maneuvers) -> "Chains":
+        """The chains of ``maneuvers`` (`chains`)."""
+        members = chains(maneuvers)
+        return cls(members, [gaps_s(maneuvers, c) for c in members])
+
+    @classmethod
+    def apart(cls, n_maneuvers: int) -> "Chains":
+        """Every maneuver a chain of its own: their errors independent."""
+        return cls([[m] for m in range(n_maneuvers)], [np.zeros(0)] * n_maneuvers)
+
+    def groups(self, index):
+        """Each chain's noise group from each maneuver's (``index``; None stays None)."""
+        return None if index is None else np.asarray(index)[[c[0] for c in self.members]]
+
+    def noises(self, lins, boresight_body, correlation_time_s: float):
+        """The chains' `build`, one at a time (a generator: each is summed and dropped by its caller)."""
+        for chain, gap in zip(self.members, self.gaps):
+            yield build([lins[m] for m in chain], gap, boresight_body, correlation_time_s)
