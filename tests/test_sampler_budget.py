@@ -157,3 +157,20 @@ def test_the_repoimu_z_trial_converges_or_stops_with_why_in_bounded_time(tmp_pat
         assert "Slowest:" in record or "do not identify" in record, record
     else:
         assert record["converged"], record
+
+
+def test_a_gauss_markov_share_fitted_at_its_bound_is_named_with_what_to_do():
+    """At 100 Hz the REML puts RepoIMU's reference noise all in the Gauss-Markov part (share 0.9997): the
+    stop names it and the longer reference interval; inside the bounds, or with white noise, nothing."""
+    from gyrocal.checks.fit import share_at_bound
+    from gyrocal.inference.noisefit import GM_LOGIT_BOUND
+
+    at_top = np.log([1e-3, 1e-3, 1e-5, 1.0, 0.65])
+    at_top[3] = GM_LOGIT_BOUND - 0.01
+    note = share_at_bound(at_top)
+    assert "share 0.9997" in note and "tau 0.65 s" in note and "--reference-interval" in note
+    at_top[3] = -at_top[3]
+    assert "fits as white" in share_at_bound(at_top) and "share 0.00034" in share_at_bound(at_top)
+    at_top[3] = GM_LOGIT_BOUND - 0.5
+    assert share_at_bound(at_top) == ""
+    assert share_at_bound(np.log([1e-3, 1e-3, 1e-5])) == ""

@@ -14,8 +14,9 @@ from gyrocal.inference.likelihood import maneuver_stats
 from gyrocal.inference.noise import variances
 from gyrocal.model import units
 
-__all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "NOISE_RATIOS", "EstimateError", "VariantSkipped", "check_blocks",
-           "check_identified", "check_noise", "check_physical", "check_variant_informed", "sampling_stopped"]
+__all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "NOISE_RATIOS", "SHARE_BOUND_MARGIN", "EstimateError", "VariantSkipped",
+           "check_blocks", "check_identified", "check_noise", "check_physical", "check_variant_informed",
+           "sampling_stopped", "share_at_bound"]
 
 
 class EstimateError(InputError):
@@ -129,6 +130,9 @@ def check_blocks(maneuvers, block_s: float):
             f"{'; '.join(short)}. Lengthen its holds, or make sampler.block_s shorter than the maneuver")
 
 
+SHARE_BOUND_MARGIN = 0.05
+"""A fitted ``logit st_gm_fraction`` this close to its bound is at it (`share_at_bound`)."""
+
 NOISE_RATIOS = ("log(sigma_about / sigma_cross)", "log(arw / sigma_cross)", "logit st_gm_fraction", "log st_gm_tau_s")
 """The noise ratios the posterior's grid spans (`noisegrid.RatioGrid`, `noise.ratios_of`), in its
 order: two, and two more with correlated star-tracker noise."""
@@ -165,7 +169,24 @@ def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_
     if flat:
         notes.append(f"the data hardly tell the noise ratio(s) {', '.join(flat)} (their profile is as wide as "
                      "the prior): a longer maneuver, or holds, separate the gyro walk from the reference noise")
+    notes += [note] if (note := share_at_bound(est.log_sigma)) else []
     return "; ".join(notes)
+
+
+def share_at_bound(log_sigma) -> str:
+    """What a Gauss-Markov share fitted at its bound (`noisefit.GM_LOGIT_BOUND`) says of the reference's
+    noise, in words; "" where it is inside, or the noise white. At the upper bound the posterior lies
+    beyond the grid, where the sampler cannot follow it."""
+    if len(log_sigma) < 5 or abs(log_sigma[3]) < noisefit.GM_LOGIT_BOUND - SHARE_BOUND_MARGIN:
+        return ""
+    share = noise.stated_scales(log_sigma)["st_gm_fraction"]
+    if log_sigma[3] < 0:
+        return (f"the reference's noise fits as white (Gauss-Markov share {share:.2g}, at its bound): the model "
+                "without st_correlated_noise holds it")
+    return (f"the reference's noise fits as all Gauss-Markov (share {share:.4g}, at its bound, tau "
+            f"{np.exp(log_sigma[4]):.3g} s): it has no white part at this sampling, and one Gauss-Markov part may be "
+            "standing in for errors on two time scales; import the reference every few correlation times "
+            "(gyrocal import --reference-interval), where its fast error is white")
 
 
 def sampling_stopped(stopped, est: PointEstimate, notes: str, labels) -> EstimateError:
