@@ -54,7 +54,7 @@ def steps(k: int, model: str, whole: bool, diagnostics_max: int, linearise_max: 
     """Time (s) and allocation peak (MB) of each step on the default campaign flown ``k`` times over."""
     from gyrocal import checks
     from gyrocal.criticism import diagnostics
-    from gyrocal.inference import classic, noise, preprocess
+    from gyrocal.inference import classic, noise, preprocess, segments
     from gyrocal.inference.estimate import point_estimate
     from gyrocal.inference.likelihood import campaign_stats
     from gyrocal.inference.noisefit import profile_reml
@@ -79,7 +79,9 @@ def steps(k: int, model: str, whole: bool, diagnostics_max: int, linearise_max: 
     from gyrocal.inference.estimate import PointEstimate
 
     est1 = PointEstimate.load(reference, effects.known([]), linearizations=False)
-    maneuvers = [dataclasses.replace(m, id=f"{m.id}_{i}") for i in range(k) for m in one]
+    span = max(m.st_time[-1] for m in one) - min(m.gyro_time[0] for m in one) + 60.0
+    maneuvers = [dataclasses.replace(m, id=f"{m.id}_{i}", gyro_time=m.gyro_time + i * span,
+                                     st_time=m.st_time + i * span) for i in range(k) for m in one]  # flown k times
     est = dataclasses.replace(est1, biases=np.tile(est1.biases, (k, 1)))
     tau = est.correlation_time_s
     out = {"samples": sum(len(m.st_time) for m in maneuvers), "tau_s": tau}
@@ -101,8 +103,10 @@ def steps(k: int, model: str, whole: bool, diagnostics_max: int, linearise_max: 
         lins = [est.linearize(one, m) for m in range(len(one))] * k
     ratios = noise.ratios_of(est.log_sigma)
 
-    if tau > 0:  # as the correlated REML evaluates it: each maneuver built, summed and dropped
-        timed("REML profile, one evaluation", lambda: NoiseShapes(None, lins, est.boresight).profile(ratios))
+    if tau > 0:  # as the correlated REML evaluates it: each chain of maneuvers built, summed and dropped
+        chained = segments.Chains.of(maneuvers)
+        timed("REML profile, one evaluation",
+              lambda: NoiseShapes(None, lins, est.boresight, chained=chained).profile(ratios))
     noises = timed("noise structures (the white REML's, or the grid's at one tau)",
                    lambda: [noise.build(lin, est.boresight, tau) for lin in lins])
     if tau == 0:

@@ -104,8 +104,8 @@ def test_with_one_set_and_the_error_forgotten_across_the_gap_the_chain_is_its_ma
 
 
 class _Maneuver:
-    def __init__(self, start, group):
-        self.st_time, self.noise_group = np.array([start, start + 10.0]), group
+    def __init__(self, start, group, name="m"):
+        self.st_time, self.noise_group, self.id = np.array([start, start + 10.0]), group, name
 
 
 def test_chains_are_each_noise_groups_maneuvers_in_time_order_with_their_gaps():
@@ -114,3 +114,18 @@ def test_chains_are_each_noise_groups_maneuvers_in_time_order_with_their_gaps():
     assert chained == [[1, 3, 0], [2, 4]]
     np.testing.assert_allclose(segments.gaps_s(flown, chained[0]), [20.0, 10.0])
     np.testing.assert_allclose(segments.gaps_s(flown, chained[1]), [85.0])
+
+
+def test_a_long_run_of_maneuvers_is_cut_at_its_longest_gaps_into_chains_of_at_most_max_chain():
+    starts = [0, 20, 40, 200, 220, 240, 260, 900, 920]  # gaps 10, 10, 150, 10, 10, 10, 630, 10
+    flown = [_Maneuver(t, "a") for t in starts]
+    assert segments.chains(flown, max_members=4) == [[0, 1, 2], [3, 4, 5, 6], [7, 8]]
+    assert segments.chains(flown, max_members=9) == [list(range(9))]
+    evenly = segments.chains([_Maneuver(30 * i, "b") for i in range(20)])
+    assert sorted(m for c in evenly for m in c) == list(range(20)) and max(len(c) for c in evenly) == segments.MAX_CHAIN
+
+
+def test_maneuvers_that_overlap_in_time_are_refused_by_name():
+    flown = [_Maneuver(0, "a", "first"), _Maneuver(5, "a", "second")]
+    with pytest.raises(ValueError, match="first and second of noise group 'a' overlap"):
+        segments.chains(flown)

@@ -348,9 +348,10 @@ class Posterior:
 def leave_one_maneuver_out(post: Posterior, priors: Priors) -> np.ndarray:
     """Exact ``log p(maneuver m | all others)`` per maneuver, the parameters refitted without it.
 
-    The maneuvers are independent given the parameters (each has its own nuisance), and the
-    linearised model is Gaussian given the noise scales (held at the point estimate's), so
-    each refit is a ratio of two closed-form evidences: no importance sampling.
+    The maneuvers are taken as independent given the parameters (each has its own nuisance; with
+    correlated noise the posterior's grid chains them, `segments`, and this leaves that out), and the
+    linearised model is Gaussian given the noise scales (held at the point estimate's), so each refit
+    is a ratio of two closed-form evidences: no importance sampling.
     """
     return leave_one_out_log_evidence(post.parts, priors.mean - post.estimate.theta, priors.sd)
 

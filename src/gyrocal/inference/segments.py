@@ -20,24 +20,49 @@ import numpy as np
 
 from gyrocal.inference import noise
 
-__all__ = ["Chains", "build", "chains", "gaps_s"]
+__all__ = ["MAX_CHAIN", "Chains", "build", "chains", "gaps_s"]
 
 
-def chains(maneuvers) -> list:
+MAX_CHAIN = 6
+"""At most this many maneuvers make one series. A chain's nuisance columns (each maneuver's own) all
+enter its whitened right-hand sides, so a chain of m maneuvers costs m times a maneuver's columns over
+all its rows: unbounded, the cost would grow with the square of the campaign. A longer run of
+maneuvers is cut at its longest gaps, where the error has forgotten most, and the cut maneuvers are
+taken as independent, as all were before."""
+
+
+def _split(run: list, gaps: np.ndarray, max_members: int) -> list:
+    """``run`` (time-ordered) cut at its longest gaps into pieces of at most ``max_members``."""
+    if len(run) <= max_members:
+        return [run]
+    cut = int(np.argmax(gaps)) + 1
+    return _split(run[:cut], gaps[:cut - 1], max_members) + _split(run[cut:], gaps[cut:], max_members)
+
+
+def chains(maneuvers, max_members: int = MAX_CHAIN) -> list:
     """The maneuvers (indices into ``maneuvers``) that make one series each: consecutive in time
-    within one noise group, in time order. Groups are separate recordings or trials (`gyrocal import`
-    makes a group per file), whose errors are independent however close their times."""
+    within one noise group, in time order, at most ``max_members`` (`MAX_CHAIN`) to a series. Groups are
+    separate recordings or trials (`gyrocal import` makes a group per file), whose errors are independent
+    however close their times."""
     order = sorted(range(len(maneuvers)), key=lambda m: maneuvers[m].st_time[0])
     by_group = {}
     for m in order:
         by_group.setdefault(maneuvers[m].noise_group, []).append(m)
-    return sorted(by_group.values(), key=lambda c: c[0])
+    pieces = [p for run in by_group.values() for p in _split(run, gaps_s(maneuvers, run), max_members)]
+    return sorted(pieces, key=lambda c: c[0])
 
 
 def gaps_s(maneuvers, chain) -> np.ndarray:
-    """(len(chain) - 1,) the time from the last star-tracker sample of each maneuver to the first of the next (s)."""
-    return np.array([maneuvers[b].st_time[0] - maneuvers[a].st_time[-1] for a, b in itertools.pairwise(chain)],
+    """(len(chain) - 1,) the time from the last star-tracker sample of each maneuver to the first of the next
+    (s); a maneuver that does not start after the one before it is refused (they would share samples)."""
+    gaps = np.array([maneuvers[b].st_time[0] - maneuvers[a].st_time[-1] for a, b in itertools.pairwise(chain)],
                     dtype=float)
+    if np.any(gaps <= 0):
+        k = int(np.argmin(gaps))
+        raise ValueError(f"maneuvers {maneuvers[chain[k]].id} and {maneuvers[chain[k + 1]].id} of noise group "
+                         f"{maneuvers[chain[k]].noise_group!r} overlap in time ({gaps[k]:g} s apart): their "
+                         "star-tracker errors cannot be chained")
+    return gaps
 
 
 def _set_offsets(m_samples: int, n_sets: int) -> np.ndarray:
