@@ -375,6 +375,9 @@ def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dic
     else:
         parts = [maneuver_stats(nz, estimate.maneuver_variances(m, g)) for m, (nz, g) in enumerate(zip(noises, index))]
     stats = total(parts)
+    if shapes.correlated:  # the information the posterior has: the maneuvers chained (`segments`)
+        levels = np.zeros(len(shapes.chained.members), dtype=int) if index is None else shapes.groups_of_parts
+        stats = total([maneuver_stats(nz, estimate.maneuver_variances(0, g)) for nz, g in zip(shapes.at(ratios), levels)])
     if before is not None:
         before(stats, ratio_sd)
     mean, cov = conditional_posterior(stats, priors.mean - estimate.theta, priors.sd)
