@@ -55,7 +55,7 @@ class ConditionalCache:
     """The offsets' conditionals (`posterior.LogPosterior.conditional`) of each walker's last proposed noise and
     its own, shared by the collapsed moves: a walker's own noise is, after either move, one of the two (its
     proposal accepted or kept), so only a walker that another move (DE) has shifted costs a fresh conditional.
-    Taken only where the noise is equal to the bit, so the numbers are those a fresh computation gives."""
+    Taken only where the noise is equal to the bit: a walker's conditional is the one computed at its very noise."""
 
     def __init__(self, conditional):
         self.conditional = conditional
