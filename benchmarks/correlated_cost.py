@@ -107,8 +107,9 @@ def steps(k: int, model: str, whole: bool, diagnostics_max: int, linearise_max: 
         chained = segments.Chains.of(maneuvers)
         timed("REML profile, one evaluation",
               lambda: NoiseShapes(None, lins, est.boresight, chained=chained).profile(ratios))
-    noises = timed("noise structures (the white REML's, or the grid's at one tau)",
-                   lambda: [noise.build(lin, est.boresight, tau) for lin in lins])
+    noises = timed("noise structures (the white REML's, or the grid's at one tau: the chains')",
+                   lambda: [noise.build(lin, est.boresight, tau) for lin in lins] if tau == 0
+                   else list(chained.noises(lins, est.boresight, tau)))
     if tau == 0:
         timed("REML profile, one evaluation", lambda nz=noises: profile_reml(nz, ratios)[0])
     timed("posterior grid, one node", lambda nz=noises: campaign_stats(nz, noise.unit_variances(ratios)))
