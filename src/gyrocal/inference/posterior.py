@@ -228,7 +228,8 @@ def _sampler(logpost, walkers, dim, noise, seed):
     return sampler
 
 
-START_REDRAWS = 100  # start points with zero posterior density are redrawn at most this often
+START_REDRAWS = 100
+"""Start points with zero posterior density are redrawn at most this often, then sampling stops."""
 
 
 def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict, seed: int) -> SamplerResult:
@@ -368,16 +369,17 @@ def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dic
         shapes = NoiseShapes(noises, lins, estimate.boresight, index, segments.Chains.of(maneuvers))
         fallback = np.concatenate([[fallback, fallback], priors.log_sigma_sd[3:]])
     ratio_sd = ratio_curvature(shapes, ratios, fallback)
-    grid = RatioGrid(shapes, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"], index)
+    grid = RatioGrid(shapes, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"])
     logpost = LogPosterior(grid, estimate.theta, priors)
     if index is None:
         parts = [maneuver_stats(nz, variances(estimate.log_sigma)) for nz in noises]
     else:
         parts = [maneuver_stats(nz, estimate.maneuver_variances(m, g)) for m, (nz, g) in enumerate(zip(noises, index))]
-    stats = total(parts)
     if shapes.correlated:  # the information the posterior has: the maneuvers chained (`segments`)
         levels = np.zeros(len(shapes.chained.members), dtype=int) if index is None else shapes.groups_of_parts
         stats = total([maneuver_stats(nz, estimate.maneuver_variances(0, g)) for nz, g in zip(shapes.at(ratios), levels)])
+    else:
+        stats = total(parts)
     if before is not None:
         before(stats, ratio_sd)
     mean, cov = conditional_posterior(stats, priors.mean - estimate.theta, priors.sd)
