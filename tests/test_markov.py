@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
-from test_numerics import BORESIGHT, band_to_dense, dense_covariance
+from test_numerics import BORESIGHT, band_to_dense, dense_covariance, transform_matrix
 
 from gyrocal.inference import likelihood, markov, noise
 from gyrocal.inference.errormodel import Linearization
@@ -26,34 +26,64 @@ VAR = {"cross": 1.0, "about": 4.0, "walk": 0.3, "gm_cross": 2.5, "gm_about": 10.
 def test_filtered_covariance_is_the_filter_applied_to_the_dense_covariance(tau):
     lin = _tiny()
     nz = noise.build(lin, BORESIGHT, tau)
-    m, s = lin.z.shape[:2]
-    width = 3 * s
-    t_dense = np.eye(m * width)
-    t1, t2 = nz.filter.row_coefficients(width)
-    idx = np.arange(m * width)
-    t_dense[idx[width:], idx[:-width]] = t1[:-width]
-    t_dense[idx[2 * width:], idx[:-2 * width]] = t2[:-2 * width]
-    expected = t_dense @ dense_covariance(lin, VAR, tau) @ t_dense.T
-    np.testing.assert_allclose(band_to_dense(nz.covariance(VAR)), expected, rtol=1e-10, atol=1e-10)
+    t_dense = transform_matrix(nz, lin.z.shape[0], 3 * lin.z.shape[1])
+    dense = dense_covariance(lin, VAR, tau)
+    expected = t_dense @ dense @ t_dense.T
+    # random attitudes at tau = 300 dt make the filter's entries ~600: round-off scales with |T| |C| |T'|
+    scale = (np.abs(t_dense) @ np.abs(dense) @ np.abs(t_dense).T).max()
+    np.testing.assert_allclose(band_to_dense(nz.covariance(VAR)), expected, rtol=1e-10, atol=1e-15 * scale)
 
 
-def test_filter_ends_the_memory_of_walk_and_gauss_markov_for_irregular_sampling():
-    rng = np.random.default_rng(0)
-    dt = rng.uniform(0.2, 3.0, 12)
-    alpha, beta, phi = markov.coefficients(dt, 4.0)
-    # the walk: 1 + alpha + beta = 0; the GM: (phi_j + alpha_j) phi_(j-1) + beta_j = 0, from the third sample
-    np.testing.assert_allclose((1 + alpha + beta)[2:], 0, atol=1e-14)
-    np.testing.assert_allclose(((phi[2:] + alpha[2:]) * phi[1:-1] + beta[2:]), 0, atol=1e-14)
+def _coefficients(dt, tau, seed=0):
+    """The filter's coefficients for random attitudes, and the ``R`` and ``phi`` they came from."""
+    R = Rotation.random(len(dt), random_state=seed).as_matrix()
+    a, b, phi = markov.coefficients(dt, tau, R)
+    return a, b, phi, R
 
 
-def test_filter_inverse_and_transpose_match_dense():
-    alpha, beta, _ = markov.coefficients(np.array([1.0, 0.5, 2.0, 1.0, 0.1]), 3.0)
-    filt = markov.Filter(alpha, beta)
-    x = np.random.default_rng(1).normal(size=(5, 4))
-    t = np.eye(5) + np.diag(alpha[1:], -1) + np.diag(beta[2:], -2)
-    np.testing.assert_allclose(filt.apply(x), t @ x, atol=1e-14)
-    np.testing.assert_allclose(filt.transpose(x), t.T @ x, atol=1e-14)
-    np.testing.assert_allclose(filt.invert(t @ x), x, atol=1e-12)
+def test_filter_ends_the_memory_of_walk_and_gauss_markov_for_irregular_sampling_and_turning_attitude():
+    dt = np.random.default_rng(0).uniform(0.2, 3.0, 12)
+    a, b, phi, R = _coefficients(dt, 4.0)
+    # the walk: I + A + B = 0; the GM in the tracker frame: (phi_j R_j + A_j R_(j-1)) phi_(j-1) + B_j R_(j-2) = 0
+    np.testing.assert_allclose((np.eye(3) + a + b)[1:], 0, atol=1e-13)
+    memory = (phi[2:, None, None] * R[2:] + a[2:] @ R[1:-1]) * phi[1:-1, None, None] + b[2:] @ R[:-2]
+    np.testing.assert_allclose(memory, 0, atol=1e-12)
+
+
+@pytest.mark.parametrize("tau, rtol", [(3.0, 1e-12), (1e5, 1e-8)])
+def test_filter_at_a_held_attitude_is_the_scalar_second_order_filter(tau, rtol):
+    """While the attitude holds, ``A_j = -(1 - phi_j phi_(j-1)) / (1 - phi_(j-1))``. At tau = 1e7 dt,
+    ``1 - phi`` is 1e-7: the attitudes' own round-off (1e-16) over it bounds the agreement at 1e-9."""
+    dt = np.array([1.0, 0.5, 2.0, 1.0, 0.1]) * (0.01 if tau > 10 else 1.0)
+    held = np.repeat(Rotation.random(random_state=2).as_matrix()[None], 5, axis=0)
+    a, _, phi = markov.coefficients(dt, tau, held)
+    om = -np.expm1(-dt / tau)
+    alpha = -(om[2:] + phi[2:] * om[1:-1]) / om[1:-1]
+    np.testing.assert_allclose(a[2:], alpha[:, None, None] * np.eye(3), rtol=rtol, atol=rtol)
+    np.testing.assert_allclose(a[1], -np.eye(3))
+
+
+def test_filter_apply_transpose_inverse_and_columns_match_dense():
+    m, n_sets = 5, 2
+    a, b, _, _ = _coefficients(np.array([1.0, 0.5, 2.0, 1.0, 0.1]), 3.0, seed=4)
+    filt = markov.Filter(a, b, n_sets)
+    width = 3 * n_sets
+    t = np.eye(m * width)
+    for j in range(1, m):
+        for lag, c in ((1, a), (2, b)):
+            if j >= lag:
+                for s in range(n_sets):
+                    r, k = j * width + 3 * s, (j - lag) * width + 3 * s
+                    t[r:r + 3, k:k + 3] = c[j]
+    x = np.random.default_rng(1).normal(size=(m, width, 4))
+    flat = x.reshape(m * width, 4)
+    np.testing.assert_allclose(filt.apply(x).reshape(-1, 4), t @ flat, atol=1e-13)
+    np.testing.assert_allclose(filt.apply(x.reshape(m, n_sets, 3, 4)).reshape(-1, 4), t @ flat, atol=1e-13)
+    np.testing.assert_allclose(filt.transpose(x).reshape(-1, 4), t.T @ flat, atol=1e-13)
+    np.testing.assert_allclose(filt.invert((t @ flat).reshape(x.shape)), x, atol=1e-11)
+    for (start, stop), end in (((0, 4), 18), ((7, 13), 30), ((20, 30), 30)):
+        np.testing.assert_allclose(filt.columns(start, stop), t[start:end, start:stop], atol=1e-15)
+        assert np.count_nonzero(t[end:, start:stop]) == 0
 
 
 def test_likelihood_statistics_equal_the_dense_generalised_least_squares():
@@ -89,7 +119,7 @@ def test_vanishing_gauss_markov_part_gives_the_white_likelihood():
 
 def _simulated(tau_s, gm_arcsec, m=1200, n_man=4, seed=0):
     """Maneuvers whose errors are drawn process by process: white tracker noise (10/40 arcsec),
-    a Gauss-Markov part in the inertial frame, and each set's own gyro walk; a slow turn."""
+    a Gauss-Markov part in the tracker's frame, and each set's own gyro walk; a slow turn."""
     from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
     rng = np.random.default_rng(seed)
@@ -104,10 +134,10 @@ def _simulated(tau_s, gm_arcsec, m=1200, n_man=4, seed=0):
         R = Rotation.from_rotvec(np.outer(np.linspace(0, 1.5, m), np.eye(3)[k % 3])).as_matrix()
         phi = np.exp(-st_dt / tau_s)
         g = np.zeros((m, 3))
-        g[0] = R[0] @ gm_chol @ rng.normal(size=3)
+        g[0] = gm_chol @ rng.normal(size=3)
         for j in range(1, m):
-            g[j] = phi[j] * g[j - 1] + np.sqrt(1 - phi[j] ** 2) * R[j] @ gm_chol @ rng.normal(size=3)
-        st = np.einsum("jab,jb->ja", R, rng.normal(size=(m, 3)) @ white_chol.T) + g
+            g[j] = phi[j] * g[j - 1] + np.sqrt(1 - phi[j] ** 2) * gm_chol @ rng.normal(size=3)
+        st = np.einsum("jab,jb->ja", R, rng.normal(size=(m, 3)) @ white_chol.T + g)
         walk = np.cumsum(arw * rng.normal(size=(m, 2, 3)), axis=0)
         z = st[:, None, :] + walk
         design = np.zeros((m, 2, 3, 1))
@@ -157,14 +187,7 @@ def test_walk_between_gyro_samples_matches_the_interpolated_walk(tau):
     walk = seen @ np.diag(dt) @ seen.T
     dense = np.kron(walk, np.eye(3))
     nz = noise.build(lin, [0, 0, 1], tau)
-    t = np.eye(3 * m)
-    if nz.filter is None:
-        t[3:, :-3] -= np.eye(3 * m)[3:, 3:]
-    else:
-        t1, t2 = nz.filter.row_coefficients(3)
-        idx = np.arange(3 * m)
-        t[idx[3:], idx[:-3]] = t1[:-3]
-        t[idx[6:], idx[:-6]] = t2[:-6]
+    t = transform_matrix(nz, m, 3)
     var_only = {"cross": 0.0, "about": 0.0, "walk": 1.0, "gm_cross": 0.0, "gm_about": 0.0}
     np.testing.assert_allclose(band_to_dense(nz.covariance(var_only)), t @ dense @ t.T, atol=1e-12)
 

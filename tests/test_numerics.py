@@ -41,8 +41,8 @@ def tiny_linearization(seed=0, m=M):
 def dense_covariance(lin, var, tau=0.0):
     """Undifferenced covariance of the stacked inertial errors, from the definitions: one
     star-tracker error shared by the sets (anisotropic about the boresight, rotated to
-    inertial; with tau > 0 plus a Gauss-Markov part, ``g_j = phi_j g_(j-1) + R_j eta_j``) plus
-    each set's own cumulative gyro walk."""
+    inertial; with tau > 0 plus a Gauss-Markov part in the tracker's frame, ``R_j g_j`` with
+    ``g_j = phi_j g_(j-1) + eta_j``, stationary) plus each set's own cumulative gyro walk."""
     m, s = lin.z.shape[:2]
     b = np.asarray(BORESIGHT) / np.linalg.norm(BORESIGHT)
     body = var["cross"] * (np.eye(3) - np.outer(b, b)) + var["about"] * np.outer(b, b)
@@ -54,9 +54,9 @@ def dense_covariance(lin, var, tau=0.0):
     for j in range(m):
         for k in range(m):
             block = (j == k) * lin.st_matrix[j] @ body @ lin.st_matrix[j].T
-            for i in range(min(j, k) + 1 if tau > 0 else 0):
-                reach = np.prod(phi[i + 1:j + 1]) * np.prod(phi[i + 1:k + 1]) * (1 - phi[i] ** 2)
-                block = block + reach * lin.st_matrix[i] @ gm @ lin.st_matrix[i].T
+            if tau > 0:
+                reach = np.prod(phi[min(j, k) + 1:max(j, k) + 1])
+                block = block + reach * lin.st_matrix[j] @ gm @ lin.st_matrix[k].T
             cov[j, :, :, k, :, :] += block[None, :, None, :]
             for u in range(s):
                 cov[j, u, :, k, u, :] += var["walk"] * t[min(j, k)] * np.eye(3)
@@ -67,12 +67,7 @@ def transform_matrix(nz, m, width):
     """The noise's transform T as a dense matrix: first differences, or its Gauss-Markov filter."""
     if nz.filter is None:
         return difference_matrix(m, width)
-    t = np.eye(m * width)
-    t1, t2 = nz.filter.row_coefficients(width)
-    idx = np.arange(m * width)
-    t[idx[width:], idx[:-width]] = t1[:-width]
-    t[idx[2 * width:], idx[:-2 * width]] = t2[:-2 * width]
-    return t
+    return nz.filter.apply(np.eye(m * width).reshape(m, width, -1)).reshape(m * width, -1)
 
 
 def difference_matrix(m, width):

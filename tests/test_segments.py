@@ -23,7 +23,8 @@ def one_set(lin):
 
 def dense_chain_covariance(lins, gaps, var, tau):
     """The raw chained series' covariance: white noise per sample and one Gauss-Markov error through
-    every sample and gap (both shared by the sets, anisotropic about the boresight, rotated to inertial),
+    every sample and gap (both shared by the sets, anisotropic about the boresight, the Gauss-Markov
+    error in the tracker's frame, both rotated to inertial),
     plus each set's walk, cumulative within its own maneuver and independent between maneuvers."""
     s = lins[0].z.shape[1]
     b = np.asarray(BORESIGHT) / np.linalg.norm(BORESIGHT)
@@ -43,9 +44,7 @@ def dense_chain_covariance(lins, gaps, var, tau):
     for j in range(m):
         for k in range(m):
             block = (j == k) * rot[j] @ white @ rot[j].T
-            for i in range(min(j, k) + 1):
-                reach = np.prod(phi[i + 1:j + 1]) * np.prod(phi[i + 1:k + 1]) * (1 - phi[i] ** 2)
-                block = block + reach * rot[i] @ gm @ rot[i].T
+            block = block + np.prod(phi[min(j, k) + 1:max(j, k) + 1]) * rot[j] @ gm @ rot[k].T
             cov[j, :, :, k, :, :] += block[None, :, None, :]
             if owner[j] == owner[k]:
                 for u in range(s):

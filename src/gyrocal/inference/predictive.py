@@ -139,7 +139,6 @@ def block_conditionals(lin: Linearization, whitened: WhitenedManeuver, block_of_
             return _undifference_transpose(solved, width)
         return noise.filter.transpose(solved.reshape(-1, width, solved.shape[1])).reshape(solved.shape)
 
-    filter_rows = None if noise.filter is None else noise.filter.row_coefficients(width)
     q_all = q_apply(noise.rhs)
     q_g = q_all[:, p:p + g]
     g_und = nuisance_design(lin).reshape(n, g)
@@ -156,8 +155,7 @@ def block_conditionals(lin: Linearization, whitened: WhitenedManeuver, block_of_
             if noise.filter is None:
                 q_bb = _undifferenced_block(z, rows.start - start, rows.stop - start, width, n - start)
             else:
-                q_bb = _filtered_block(z, rows.start - start, rows.stop - start, width, n - start,
-                                       [c[start:] for c in filter_rows])
+                q_bb = _filtered_block(z, rows.start - start, noise.filter.columns(rows.start, rows.stop))
             p_bb = q_bb - q_g[rows] @ gqg_inv @ q_g[rows].T
             factor = np.linalg.cholesky(p_bb)
             logdet = 2 * np.sum(np.log(np.diag(factor)))
@@ -185,17 +183,8 @@ def _undifferenced_block(z, i0, i1, width, n_local):
     return q
 
 
-def _filtered_block(z, i0, i1, width, n_local, rows):
-    """``(T' Z T)[i0:i1, i0:i1]`` for a Gauss-Markov filter T (`markov.Filter.row_coefficients`:
-    ``T[r + width, r] = rows[0][r]``, ``T[r + 2 width, r] = rows[1][r]``, local to the window ``z``,
-    which reaches two samples past ``i1`` or the series' end ``n_local``)."""
-    size = i1 - i0
-    coef = [np.ones(size), rows[0][i0:i1], rows[1][i0:i1]]
-    q = np.zeros((size, size))
-    for a in range(3):
-        va = int(np.clip(n_local - i0 - a * width, 0, size))
-        for b in range(3):
-            vb = int(np.clip(n_local - i0 - b * width, 0, size))
-            block = z[i0 + a * width:i0 + a * width + va, i0 + b * width:i0 + b * width + vb]
-            q[:va, :vb] += coef[a][:va, None] * coef[b][None, :vb] * block
-    return q
+def _filtered_block(z, i0, columns):
+    """``(T' Z T)[i0:i1, i0:i1]`` for a Gauss-Markov filter T, from its ``columns`` i0..i1 over every
+    row where they are not zero (`markov.Filter.columns`), which the window ``z`` reaches."""
+    span = slice(i0, i0 + len(columns))
+    return columns.T @ z[span, span] @ columns
