@@ -164,6 +164,21 @@ def test_reml_recovers_the_gauss_markov_sd_and_correlation_time(tau_s, gm_arcsec
     assert fitted[4] == pytest.approx(tau_s, rel=0.4)
 
 
+@pytest.mark.full
+def test_reml_started_far_from_the_correlation_time_finds_it_by_its_scan():
+    """Started at tau 100 s, 33 times the true 3 s, the descent alone ends on the plateau where a
+    Gauss-Markov part that long is an offset the nuisance takes (tau 95 s, share 0.94); the scan in
+    tau (`noisefit.TAU_SCAN`, the other ratios refitted at each) finds the true one."""
+    from gyrocal.inference import noisefit
+    from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
+
+    lins, b = _simulated(3.0, 15.0, m=300, n_man=3)
+    start = np.log([10 * ARCSEC_RAD, 40 * ARCSEC_RAD, 0.003 * DEG_SQRT_H_RAD_SQRT_S])
+    fitted = noise.scales_in_units(noisefit.estimate_correlated_noise(lins, b, start, 100.0)[0])
+    assert fitted[4] == pytest.approx(3.0, rel=0.3)
+    assert fitted[3] == pytest.approx(15.0**2 / (100 + 15.0**2), abs=0.08)
+
+
 @pytest.mark.parametrize("tau", [0.0, 4.0])
 def test_walk_between_gyro_samples_matches_the_interpolated_walk(tau):
     """Star-tracker samples inside gyro intervals see each interval's walk in part
