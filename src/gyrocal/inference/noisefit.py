@@ -140,10 +140,11 @@ GM_LOGIT_BOUND = 8.0
 
 TAU_SCAN = 6
 """After its descent the REML of correlated noise checks this many correlation times, evenly in
-``log tau`` across its bounds, at an even split and the optimum's other ratios; a descent from the residuals' correlation time can
-end on the share's bound in a local optimum (RepoIMU at 1 s: tau 360 s and no Gauss-Markov part,
-23 log-likelihood units below a share of 0.9 at 1 s), and where a point of the scan is better the
-descent starts again from it."""
+``log tau`` across its bounds, each from an even split with the other ratios briefly refitted
+(`SCAN_EVALUATIONS`). A descent from the residuals' correlation time can end on a plateau where the
+Gauss-Markov part is negligible or as long as an offset (RepoIMU at 1 s: share 0.0003 at tau 356 s,
+21.9 log-likelihood units below share 0.9997 at tau 0.98 s); where a point of the scan is better,
+the descent starts again from it."""
 
 SCAN_EVALUATIONS = 20
 """Profile evaluations per tau of the scan: the other three ratios refitted briefly, since at a
