@@ -164,6 +164,27 @@ def test_reml_recovers_the_gauss_markov_sd_and_correlation_time(tau_s, gm_arcsec
     assert fitted[4] == pytest.approx(tau_s, rel=0.4)
 
 
+def test_a_correlation_time_the_filter_cannot_hold_in_floating_point_is_out_of_the_remls_domain():
+    """Slewing 3 deg/s about x, then y, then z, a Gauss-Markov part of tau 1e5 s makes the 3x3 filter's
+    coefficients ~rate x tau: the banded Cholesky fails, and the REML's objective is inf there (the
+    scan tries the longest tau it allows), where at tau 30 s it is finite."""
+    from test_numerics import tiny_linearization
+
+    from gyrocal.inference import errormodel, noisefit
+
+    lin = tiny_linearization(seed=1, m=300)
+    turn = [Rotation.from_rotvec(np.deg2rad(3.0) * np.eye(3)[(j // 100) % 3]) for j in range(1, 300)]
+    attitudes = [Rotation.identity()]
+    for step in turn:
+        attitudes.append(attitudes[-1] * step)
+    lin.st_matrix = np.array([r.as_matrix() for r in attitudes])
+    lin.st_dt = np.ones(300)
+    lin.shared_walk = errormodel._shared_walk(2, lin.st_dt)
+    for tau, finite in ((30.0, True), (1e5, False)):
+        ratios = np.array([np.log(4.0), np.log(0.03), 0.0, np.log(tau)])
+        assert np.isfinite(noisefit.finite_profile([noise.build(lin, BORESIGHT, tau)], ratios)) == finite
+
+
 @pytest.mark.full
 def test_reml_started_far_from_the_correlation_time_finds_it_by_its_scan():
     """Started at tau 100 s, 33 times the true 3 s, the descent alone ends on the plateau where a

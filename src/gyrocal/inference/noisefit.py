@@ -15,8 +15,8 @@ from gyrocal.inference.likelihood import campaign_stats, maneuver_stats, total
 
 __all__ = [
     "GM_LOGIT_BOUND", "GROUP_ITERATIONS", "SCAN_EVALUATIONS", "SCAN_MARGIN", "TAU_SCAN", "TAU_START_INTERVALS",
-    "campaign_level", "correlation_time", "estimate_correlated_noise", "estimate_noise", "profile_group_levels",
-    "profile_reml", "st_step",
+    "campaign_level", "correlation_time", "estimate_correlated_noise", "estimate_noise", "finite_profile",
+    "profile_group_levels", "profile_reml", "st_step",
 ]
 
 
@@ -64,6 +64,16 @@ def profile_reml(noises, ratios, groups=None):
     scale = (stats.c - explained @ explained) / n
     negative = 0.5 * (n * np.log(scale) + stats.logdet + 2 * np.sum(np.log(np.diag(factor))))
     return negative, 0.5 * np.log(scale)
+
+
+def finite_profile(noises, ratios, groups=None) -> float:
+    """`profile_reml`'s negative log-likelihood, or inf where the filtered covariance is not positive
+    definite in floating point: a Gauss-Markov part far longer than the maneuvers while the attitude
+    turns about changing axes, whose 3x3 filter coefficients grow like rate x tau (`markov`)."""
+    try:
+        return profile_reml(noises, ratios, groups)[0]
+    except np.linalg.LinAlgError:
+        return np.inf
 
 
 GROUP_ITERATIONS = 100
@@ -179,7 +189,7 @@ def estimate_correlated_noise(lins, boresight, log_sigma0, tau0_s, groups=None, 
             return np.inf
         # one noise structure at a time: each is built, summed into the statistics and dropped (a
         # list of them all held 5 GB at 100x the default campaign; the same sums)
-        return profile_reml(structures(float(np.exp(r[3]))), r, groups)[0]
+        return finite_profile(structures(float(np.exp(r[3]))), r, groups)
 
     def descend(x0):
         simplex = x0 + np.vstack([np.zeros(4), np.diag([0.3, 0.3, 1.0, 0.7])])
