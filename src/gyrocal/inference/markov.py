@@ -31,7 +31,7 @@ axis that changes every 100 s), then positive definiteness, where the REML's obj
 import numpy as np
 from scipy.linalg import solve_banded
 
-__all__ = ["COMPONENTS", "Filter", "coefficients", "covariance_blocks"]
+__all__ = ["COMPONENTS", "Filter", "coefficients", "covariance_blocks", "over_sets"]
 
 COMPONENTS = ("cross", "about", "walk", "gm_cross", "gm_about")
 """The filtered covariance's components, each linear in its own variance: the white star-tracker
@@ -132,9 +132,12 @@ def _lagged(u: np.ndarray, k: int) -> np.ndarray:
     return out
 
 
-def _per_set(c: np.ndarray, n_sets: int) -> np.ndarray:
-    """(M, 3, 3) coefficients as the (M, 3 S, 3 S) block diagonal that filters every set alike."""
-    return np.einsum("st,jab->jsatb", np.eye(n_sets), c).reshape(len(c), 3 * n_sets, 3 * n_sets)
+def over_sets(pattern: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """(M, 3, 3) blocks laid over the channel sets as (M, 3 S, 3 S), set ``(s, t)`` getting
+    ``pattern[s, t]`` times the block: ones for the star tracker's error, shared by every pair of
+    sets; the identity for a filter that acts on every set alike."""
+    n_sets = len(pattern)
+    return np.einsum("st,jab->jsatb", pattern, u).reshape(len(u), 3 * n_sets, 3 * n_sets)
 
 
 def covariance_blocks(st_matrix: np.ndarray, body_shapes: dict, walk: np.ndarray, st_dt_s: np.ndarray,
@@ -150,11 +153,6 @@ def covariance_blocks(st_matrix: np.ndarray, body_shapes: dict, walk: np.ndarray
     ones = np.ones((n_sets, n_sets))
     a_t, b_t = _transposed(a), _transposed(b)
     a_prev_t = _lagged(a_t, 1)
-
-    def shared(u):
-        """3x3 blocks shared by every pair of channel sets (the star tracker's, one for all)."""
-        return np.einsum("st,jab->jsatb", ones, u).reshape(len(u), 3 * n_sets, 3 * n_sets)
-
     d = np.zeros_like(a)
     d[1:] = phi[1:, None, None] * r[1:] + a[1:] @ r[:-1]
     r_prev_t = _lagged(_transposed(r), 1)
@@ -166,15 +164,15 @@ def covariance_blocks(st_matrix: np.ndarray, body_shapes: dict, walk: np.ndarray
         diag = u + a @ u1 @ a_t + b @ u2 @ b_t
         lag1 = a @ u1 + b @ u2 @ a_prev_t
         lag2 = b @ u2
-        blocks[name] = tuple(shared(x) for x in (diag, lag1, lag2))
+        blocks[name] = tuple(over_sets(ones, x) for x in (diag, lag1, lag2))
         v = innovation * shape
         v1 = _lagged(v, 1)
         gm_diag = r @ v @ _transposed(r) + d @ v1 @ _transposed(d)
-        blocks[f"gm_{name}"] = tuple(shared(x) for x in (gm_diag, d @ v1 @ r_prev_t, np.zeros_like(v)))
+        blocks[f"gm_{name}"] = tuple(over_sets(ones, x) for x in (gm_diag, d @ v1 @ r_prev_t, np.zeros_like(v)))
     m = len(st_dt_s)
     w = walk.transpose(0, 1, 3, 2, 4).reshape(m, 3 * n_sets, 3 * n_sets)
     w1 = _lagged(w, 1)
-    c = _per_set(np.eye(3) + a, n_sets)
+    c = over_sets(np.eye(n_sets), np.eye(3) + a)
     c_t = _transposed(c)
     if walk_lag1 is None:
         blocks["walk"] = (w + c @ w1 @ c_t, c @ w1, np.zeros_like(w))

@@ -277,7 +277,7 @@ def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -
     diag, lower = {}, {}
     for name, body_cov in shapes.items():
         u = np.einsum("jab,jcb->jac", np.einsum("jab,bc->jac", R, body_cov), R)
-        u = np.einsum("st,jab->jsatb", ones, u).reshape(m_samples, block, block)
+        u = markov.over_sets(ones, u)
         # D_j = Z_j - Z_(j-1), D_0 = Z_0: Var D_j = U_j + U_(j-1), Cov(D_(k+1), D_k) = -U_k
         d0 = u.copy()
         d0[1:] += u[:-1]

@@ -205,9 +205,8 @@ def estimate_correlated_noise(lins, boresight, log_sigma0, tau0_s, groups=None, 
 
     opt = descend(start)
     best_value, best = min((at_tau(t) for t in np.linspace(*log_tau_bounds, TAU_SCAN)), key=lambda v: v[0])
-    if best_value < opt.fun - SCAN_MARGIN:
-        again = descend(best)
-        opt = again if again.fun < opt.fun else opt
+    if best_value < opt.fun - SCAN_MARGIN:  # the descent from ``best`` ends no worse than it
+        opt = descend(best)
     noises = list(structures(float(np.exp(opt.x[3]))))
     log_cross, offsets = campaign_level(profile_reml(noises, opt.x, groups)[1], noises, groups)
     return np.array([log_cross, log_cross + opt.x[0], log_cross + opt.x[1], opt.x[2], opt.x[3]]), offsets
