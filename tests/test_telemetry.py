@@ -184,3 +184,24 @@ def test_a_bad_noise_group_is_refused_naming_the_file_and_maneuver(campaign_copy
     expect(campaign_copy, r"campaign\.yaml.*maneuvers\[1\] \(yaw_neg\)\.noise_group")
     assert cli.main(["validate", str(campaign_copy)]) != 0
     assert "noise_group" in capsys.readouterr().err
+
+
+def test_a_reference_interval_keeps_every_kth_sample_and_counts_the_rest(tiny):
+    """``reference_interval_s`` keeps each maneuver's first star-tracker sample, every k-th after it
+    (k = interval / median step) and its last; the ones left out are counted, not dropped silently."""
+    from gyrocal.inference import preprocess
+
+    campaign = telemetry.read_campaign(tiny[0])
+    m = campaign.maneuvers[0].id
+    every = preprocess.slice_maneuver(campaign, m)
+    step = float(np.median(np.diff(every.st_time)))
+    thinned = preprocess.slice_maneuver(campaign, m, reference_interval_s=3 * step)
+    expected = np.r_[every.st_time[::3], every.st_time[-1:]] if (len(every.st_time) - 1) % 3 else every.st_time[::3]
+    np.testing.assert_array_equal(thinned.st_time, expected)
+    np.testing.assert_array_equal(thinned.st_quat, every.st_quat[np.isin(every.st_time, expected)])
+    assert thinned.counts["st_thinned"] == len(every.st_time) - len(expected) and every.counts["st_thinned"] == 0
+    assert thinned.counts["st_used"] + thinned.counts["st_thinned"] == every.counts["st_used"]
+    np.testing.assert_array_equal(thinned.increments, every.increments)
+    with pytest.raises(telemetry.TelemetryError, match=r"maneuver .* has only \d+ valid samples kept every "
+                                                       r"reference_interval_s = "):
+        preprocess.slice_maneuver(campaign, m, reference_interval_s=every.st_time[-1] - every.st_time[0])

@@ -22,6 +22,7 @@ rule preprocess:
         results=campaign_results,
         block_s=config["sampler"]["block_s"],  # validation refuses a maneuver too short for the posterior's blocks
         noise=_canonical(config["noise"]),  # the classic values' sd, where campaign.yaml states no noise
+        reference_interval_s=config["reference_interval_s"],  # star-tracker samples kept every this many seconds
     threads: 2  # its figures are drawn in parallel; it runs alone, before the models split the cores
     conda:
         "../envs/gyrocal.yaml"

@@ -7,6 +7,7 @@ common.start(snakemake.log[0])
 with common.refusal():
     campaign = telemetry.read_campaign(campaign_dir)
     validate.run(campaign_dir, paths, campaign, snakemake.params.block_s)
-    ids = preprocess.run(campaign_dir, paths, processes=snakemake.threads, campaign=campaign)
+    ids = preprocess.run(campaign_dir, paths, processes=snakemake.threads, campaign=campaign,
+                         reference_interval_s=snakemake.params.reference_interval_s)
     classic.run(paths, ids, snakemake.params.noise)
 common.finish()

@@ -1,6 +1,7 @@
 """Refusals before a posterior is sampled: a point estimate whose noise no sensor can have, one
-beyond the physical bounds, maneuvers too short for the leave-one-block-out predictive, or a
-parameter the data do not identify at the fitted noise; and a sampler stopped by its budget. Each
+beyond the physical bounds, maneuvers too short for the leave-one-block-out predictive, a
+parameter the data do not identify at the fitted noise, or a residual smoother than any noise model
+here (`check_representable`); and a sampler stopped by its budget. Each
 raises `EstimateError` with the parameter and the maneuver it concerns. A variant whose every added
 parameter is prior-only is skipped (`VariantSkipped`): the data cannot tell it from the model
 without them."""
@@ -8,15 +9,15 @@ without them."""
 import numpy as np
 
 from gyrocal.errors import InputError
-from gyrocal.inference import identification, noise, noisefit
+from gyrocal.inference import identification, noise, noisefit, smoothness
 from gyrocal.inference.estimate import PointEstimate, linearize_all
 from gyrocal.inference.likelihood import maneuver_stats
 from gyrocal.inference.noise import variances
 from gyrocal.model import units
 
 __all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "NOISE_RATIOS", "SHARE_BOUND_MARGIN", "EstimateError", "VariantSkipped",
-           "check_blocks", "check_identified", "check_noise", "check_physical", "check_variant_informed",
-           "sampling_stopped", "share_at_bound"]
+           "check_blocks", "check_identified", "check_noise", "check_physical", "check_representable",
+           "check_variant_informed", "sampling_stopped", "share_at_bound"]
 
 
 class EstimateError(InputError):
@@ -77,12 +78,27 @@ def _correlation_advice(lins, est: PointEstimate) -> str:
     errors, motion capture at 100 Hz) collapses a white-noise fit."""
     if est.spec.correlated_noise:
         return ""
+    smooth = smoothness.describe([smoothness.of_maneuver(lin) for lin in lins])
+    if smooth:
+        return f". And {smooth}"
     tau = noisefit.correlation_time(lins)
     if tau <= 0:
         return ""
     return (f". They are correlated in time (correlation time about {tau:.3g} s from their differences): add "
             "st_correlated_noise to the model (white plus Gauss-Markov reference noise), or import the reference at "
             "an interval longer than that (gyrocal import --reference-interval)")
+
+
+def check_representable(est: PointEstimate, measured):
+    """Stop before sampling where the Gauss-Markov share is fitted at its upper bound and the residual is
+    smooth at the sampling interval (``measured``: `smoothness.of_maneuver` of each maneuver): no noise
+    model here represents it, and the posterior lies beyond the share's bound, where the sampler's chains
+    drift (RepoIMU at 100 Hz: stopped unconverged after 750-800 steps, a minute per model)."""
+    if len(est.log_sigma) < 5 or est.log_sigma[3] < noisefit.GM_LOGIT_BOUND - SHARE_BOUND_MARGIN:
+        return
+    if smoothness.describe(measured):
+        raise EstimateError(f"point estimate of model {est.spec.model}: {share_at_bound(est.log_sigma, measured)}. "
+                            "Its posterior would lie beyond the share's bound, where the sampler cannot converge")
 
 
 def check_physical(maneuvers, est: PointEstimate, bound_si):
@@ -138,13 +154,14 @@ NOISE_RATIOS = ("log(sigma_about / sigma_cross)", "log(arw / sigma_cross)", "log
 order: two, and two more with correlated star-tracker noise."""
 
 
-def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_sd: float) -> str:
+def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_sd: float, measured=()) -> str:
     """Before sampling, at the fitted noise (``stats``: the data's information, the nuisance integrated
     out): refuse when a parameter the point estimate kept free carries less than
     `identification.INFORMATION_RATIO_MIN` of its prior's information, the others estimated with it
     (it was judged at the stated noise; a fitted noise far above it leaves less), naming it and what to
     fly. Otherwise return what is weakest, in words, for a sampler that does not converge: the least
-    informed parameters, directions only the prior holds, noise ratios the data do not tell."""
+    informed parameters, directions only the prior holds, noise ratios the data do not tell, a
+    Gauss-Markov share at its bound (``measured``: each maneuver's `smoothness.of_maneuver`)."""
     spec = est.spec
     index = np.flatnonzero(spec.free)
     joint = identification.joint_information(stats.A[np.ix_(index, index)], np.asarray(prior_sd)[index])
@@ -169,24 +186,28 @@ def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_
     if flat:
         notes.append(f"the data hardly tell the noise ratio(s) {', '.join(flat)} (their profile is as wide as "
                      "the prior): a longer maneuver, or holds, separate the gyro walk from the reference noise")
-    notes += [note] if (note := share_at_bound(est.log_sigma)) else []
+    notes += [note] if (note := share_at_bound(est.log_sigma, measured)) else []
     return "; ".join(notes)
 
 
-def share_at_bound(log_sigma) -> str:
+def share_at_bound(log_sigma, measured=()) -> str:
     """What a Gauss-Markov share fitted at its bound (`noisefit.GM_LOGIT_BOUND`) says of the reference's
     noise, in words; "" where it is inside, or the noise white. At the upper bound the posterior lies
-    beyond the grid, where the sampler cannot follow it."""
+    beyond the grid, where the sampler cannot follow it; where the residual is smooth (``measured``:
+    `smoothness.of_maneuver` of each maneuver) that is why, and the reference interval to use follows."""
     if len(log_sigma) < 5 or abs(log_sigma[3]) < noisefit.GM_LOGIT_BOUND - SHARE_BOUND_MARGIN:
         return ""
     share = noise.stated_scales(log_sigma)["st_gm_fraction"]
     if log_sigma[3] < 0:
         return (f"the reference's noise fits as white (Gauss-Markov share {share:.2g}, at its bound): the model "
                 "without st_correlated_noise holds it")
-    return (f"the reference's noise fits as all Gauss-Markov (share {share:.4g}, at its bound, tau "
-            f"{np.exp(log_sigma[4]):.3g} s): it has no white part at this sampling, and one Gauss-Markov part may be "
-            "standing in for errors on two time scales; import the reference every few correlation times "
-            "(gyrocal import --reference-interval), where its fast error is white")
+    head = (f"the reference's noise fits as all Gauss-Markov (share {share:.4g}, at its bound, tau "
+            f"{np.exp(log_sigma[4]):.3g} s): it has no white part at this sampling")
+    if words := smoothness.describe(measured):
+        return f"{head}, and {words}"
+    return (f"{head}, and one Gauss-Markov part may be standing in for errors on two time scales; import the "
+            "reference every few correlation times (gyrocal import --reference-interval), where its fast error "
+            "is white")
 
 
 def sampling_stopped(stopped, est: PointEstimate, notes: str, labels) -> EstimateError:

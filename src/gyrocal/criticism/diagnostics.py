@@ -15,7 +15,8 @@ from scipy.special import chdtr, chdtrc, gammaln
 
 from gyrocal.checks.finding import Finding
 from gyrocal.criticism.bands import band_findings
-from gyrocal.inference import errormodel, noise
+from gyrocal.criticism.increments import smoothness_finding
+from gyrocal.inference import errormodel, noise, smoothness
 from gyrocal.inference.estimate import PointEstimate
 from gyrocal.inference.likelihood import campaign_stats, maneuver_stats, total
 from gyrocal.inference.noise import CORRELATED_SCALES, NOISE_SCALES, ratios_of, variances
@@ -222,6 +223,14 @@ def linearized(maneuvers, estimate: PointEstimate):
         yield lin, noise.build(lin, estimate.boresight, estimate.correlation_time_s)
 
 
+def _measuring(pairs, measured: list):
+    """``pairs`` passed on, each linearisation's increment growth (`smoothness.of_maneuver`) appended to
+    ``measured`` on the way."""
+    for lin, nz in pairs:
+        measured.append(smoothness.of_maneuver(lin))
+        yield lin, nz
+
+
 def whiteness(maneuvers, pairs, estimate: PointEstimate):
     """Lag-1 autocorrelation of the standardised innovations at the fitted model, per
     maneuver and overall, with its z-score (``rho sqrt(n)``, N(0, 1) under the model).
@@ -311,7 +320,8 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
     residuals = fit[[f"residual_{a}" for a in AXES]].to_numpy()
     residual_rms = float(np.sqrt(np.mean(residuals**2)))
     noise_rms = noise_rms_arcsec(maneuvers, estimate.stated_noise)
-    white = whiteness(maneuvers, linearized(maneuvers, estimate), estimate)
+    measured = []
+    white = whiteness(maneuvers, _measuring(linearized(maneuvers, estimate), measured), estimate)
     ranking, detail = rank(maneuvers, estimate, list(maneuvers[0].extras), plugin_effects, white)
     keys = [s.key for s in NOISE_SCALES]
     noise_post = {s.key: float(summary.loc[f"noise.{s.key}", "mean"]) for s in CORRELATED_SCALES
@@ -319,6 +329,7 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
     checks = misfit_checks(residual_rms, noise_rms, white, ranking, noise_post, estimate.stated_noise, thresholds)
     groups = {d.id: d.noise_group for d in maneuvers}
     checks += [f.as_check() for f in band_findings(fit, groups, thresholds["band_outside_max"])]
+    checks.append(smoothness_finding(measured).as_check())
     per_maneuver = {}
     for (m, s), group in fit.groupby(["maneuver", "set"], sort=False):
         per_maneuver.setdefault(m, {})[f"set{s}"] = {

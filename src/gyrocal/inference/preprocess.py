@@ -8,6 +8,7 @@ import pandas as pd
 from scipy.spatial.transform import Rotation, Slerp
 
 from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP
+from gyrocal.io.importer import reference_rows
 from gyrocal.io.telemetry import Campaign, TelemetryError
 from gyrocal.model import channels as ch
 from gyrocal.model import kinematics
@@ -82,11 +83,13 @@ class ManeuverData:
                    str(z["noise_group"]) if "noise_group" in z.files else DEFAULT_NOISE_GROUP)
 
 
-def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=()) -> ManeuverData:
+def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=(), reference_interval_s: float = 0.0
+                   ) -> ManeuverData:
     """Cut one maneuver out of a campaign; invalid star-tracker samples and the outliers
-    (at ``outlier_times_s``, as `gyrocal.checks` lists them) are counted, not used. Only the
-    maneuver's rows are copied or rotated (the start attitude interpolates the two valid
-    samples around it), so cutting every maneuver costs the campaign's length once."""
+    (at ``outlier_times_s``, as `gyrocal.checks` lists them) are counted, not used, and so are the
+    samples between those kept every ``reference_interval_s`` seconds (`importer.reference_rows`;
+    0: every one). Only the maneuver's rows are copied or rotated (the start attitude interpolates
+    the two valid samples around it), so cutting every maneuver costs the campaign's length once."""
     m = campaign.maneuver(maneuver_id)
     g = campaign.gyro_time
     i0 = int(np.searchsorted(g, m.t_start, side="left"))
@@ -104,15 +107,20 @@ def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=()) -> 
     k = int(np.clip(np.searchsorted(campaign.st_time[st_idx], g[i0], side="right") - 1, 0, max(len(st_idx) - 2, 0)))
     keys = st_idx[k:k + 2]
     attitude0 = Slerp(campaign.st_time[keys], Rotation.from_quat(campaign.st_quat[keys]))([g[i0]])[0]
-    st_time = campaign.st_time[usable]
-    quat = campaign.st_quat[usable]
+    thinned = usable.copy()
+    if usable.sum() > 1:
+        thinned[usable] = reference_rows(campaign.st_time[usable], reference_interval_s)
+    st_time = campaign.st_time[thinned]
+    quat = campaign.st_quat[thinned]
     if len(st_time) < 10:
+        kept = f" kept every reference_interval_s = {reference_interval_s:g} s" if reference_interval_s else ""
         raise TelemetryError(f"{campaign.source}/star_tracker.csv: maneuver {m.id} has only "
-                             f"{len(st_time)} valid samples")
+                             f"{len(st_time)} valid samples{kept}")
     extras = {k: v[i0 + 1:i1 + 1] for k, v in campaign.extras().items()}
     counts = {"st_read": int(in_window.sum()), "st_invalid": int((in_window & (campaign.st_valid == 0)).sum()),
               "st_outliers": int((in_window & outlier).sum()),
-              "st_used": int(usable.sum()), "gyro_read": int(i1 - i0 + 1), "gyro_used": int(i1 - i0)}
+              "st_thinned": int(usable.sum() - thinned.sum()), "st_used": int(thinned.sum()),
+              "gyro_read": int(i1 - i0 + 1), "gyro_used": int(i1 - i0)}
     return ManeuverData(m.id, m.axis, m.direction, campaign.channels, m.in_loop, g[i0:i1 + 1].copy(),
                         campaign.increments(slice(i0 + 1, i1 + 1)), st_time, quat, attitude0.as_quat(),
                         extras, counts, m.noise_group)

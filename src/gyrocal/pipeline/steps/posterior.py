@@ -3,8 +3,9 @@
 import numpy as np
 import pandas as pd
 
+from gyrocal.checks import fit as checks
 from gyrocal.checks.fit import check_blocks, check_identified, check_noise, check_physical, sampling_stopped
-from gyrocal.inference import inferencedata, noise, posterior
+from gyrocal.inference import inferencedata, noise, posterior, smoothness
 from gyrocal.inference.budget import SamplingStopped
 from gyrocal.inference.estimate import PointEstimate
 from gyrocal.io.outputs import atomic, write_csv, write_json
@@ -35,9 +36,12 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSetti
     check_blocks(maneuvers, s.sampler["block_s"])
     check_noise(maneuvers, est)
     check_physical(maneuvers, est, priors.bound)
+    measured = [smoothness.of_maneuver(est.linearize(maneuvers, m)) for m in range(len(maneuvers))
+                if est.spec.correlated_noise]
+    checks.check_representable(est, measured)
     notes = []
     identified = lambda stats, ratio_sd: notes.append(
-        check_identified(est, priors.sd, stats, ratio_sd, np.sqrt(2.0) * priors.log_sigma_sd[0]))
+        check_identified(est, priors.sd, stats, ratio_sd, np.sqrt(2.0) * priors.log_sigma_sd[0], measured))
     try:
         post = posterior.sample(maneuvers, est, priors, s.sampler, s.grid, s.seed, before=identified)
     except SamplingStopped as stopped:

@@ -16,9 +16,11 @@ from gyrocal.report import figures as plots
 __all__ = ["run"]
 
 
-def run(campaign_dir, paths: CampaignPaths, figures=True, processes: int = 1, campaign=None) -> list:
+def run(campaign_dir, paths: CampaignPaths, figures=True, processes: int = 1, campaign=None,
+        reference_interval_s: float = 0.0) -> list:
     """Slice every maneuver of the campaign (in its order), leaving out the star-tracker outliers
-    that validation listed; propagate every channel set nominally; write ``<id>.npz``, ``<id>.csv``
+    that validation listed and the samples between those kept every ``reference_interval_s``
+    seconds (0: every one); propagate every channel set nominally; write ``<id>.npz``, ``<id>.csv``
     and (unless ``figures`` is false: the validation study reads none) ``<id>.png`` into
     ``paths.preprocess``, whole or not at all. The figures, most of the step's time, are drawn by
     ``processes`` processes (`plots.render_all`). ``campaign``: the directory's campaign as
@@ -33,7 +35,7 @@ def run(campaign_dir, paths: CampaignPaths, figures=True, processes: int = 1, ca
     with atomic_dir(paths.preprocess) as tmp:
         drawings = []
         for m in campaign.maneuvers:
-            data = preprocess.slice_maneuver(campaign, m.id, outliers)
+            data = preprocess.slice_maneuver(campaign, m.id, outliers, reference_interval_s)
             table = preprocess.error_table(data)
             data.save(tmp / f"{m.id}.npz")
             write_csv(table, tmp / f"{m.id}.csv")
