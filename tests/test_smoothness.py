@@ -1,5 +1,7 @@
 """The residual's increment growth (`gyrocal.inference.smoothness`) on series whose variogram is known."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from scipy.ndimage import gaussian_filter1d
@@ -8,6 +10,8 @@ from gyrocal.checks.fit import share_at_bound
 from gyrocal.criticism.increments import smoothness_finding
 from gyrocal.inference import smoothness
 from gyrocal.inference.noisefit import GM_LOGIT_BOUND
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def _measured(residual, interval_s=0.01, name="m"):
@@ -44,12 +48,67 @@ def test_a_sum_of_white_walk_and_gauss_markov_noise_is_never_beyond_the_models_r
     assert smoothness.describe([s]) == "" and smoothness.recommended_interval_s([s]) == 0.0
 
 
-def test_a_random_walk_is_called_smooth_rarely():
-    """The standard error errs against calling a residual smooth: 400 short walks (300 samples), the
-    model's fastest growth, are called smooth at most twice (3 se: 0.1 % if it were exact)."""
-    rng = np.random.default_rng(2)
-    calls = sum(_measured(np.cumsum(rng.normal(size=(300, 3)), axis=0)).smooth for _ in range(400))
-    assert calls <= 2
+def _at_truth(seed=1, **changes):
+    """Each maneuver's `smoothness.of_maneuver` on a simulated default campaign (``changes``: scenario
+    keys, ``section__key``), linearised at the true parameters and weighed at the true ARW: the
+    model's own noise, which must never be called smooth."""
+    import copy
+
+    from gyrocal.inference import errormodel, preprocess
+    from gyrocal.io.scenario import load_scenario
+    from gyrocal.model.spec import baseline
+    from gyrocal.model.units import deg_h_to_rad_s
+    from gyrocal.simulation.simulate import simulate
+
+    scenario = copy.deepcopy(load_scenario(ROOT / "config" / "scenarios" / "mom.yaml"))
+    for key, value in changes.items():
+        section, name = key.split("__")
+        (scenario if section == "top" else scenario[section])[name] = value
+    campaign, truth = simulate(scenario, seed)
+    spec = baseline(campaign.channels)
+    theta = spec.core_vector(spec.params_from_contract(scenario["truth"]))
+    biases = deg_h_to_rad_s(np.array([truth["parameters"][c.name]["bias_deg_h"] for c in spec.channels]))
+    walk = (np.radians(scenario["gyro"]["arw_deg_sqrt_h"]) / 60.0) ** 2
+    return [smoothness.of_maneuver(errormodel.linearize(preprocess.slice_maneuver(campaign, m.id), spec, theta,
+                                                        biases), walk) for m in campaign.maneuvers]
+
+
+def test_a_walk_fixed_inertially_seen_from_a_fast_slew_is_not_called_smooth():
+    """A large walk (0.3 deg/sqrt(h)) turning at 3 deg/s through four revolutions, seen every 2 s by a
+    2-arcsec tracker, grows as lag^1 in the tracker's frame (0.63-0.87 there, 5 of 6 maneuvers called
+    smooth before); in the inertial frame, where it is fixed, as lag^0.5."""
+    measured = _at_truth(top__star_tracker_hz=0.5, maneuver_defaults__rate_deg_s=3.0,
+                         maneuver_defaults__accel_deg_s2=0.5, maneuver_defaults__angle_deg=1440.0,
+                         gyro__arw_deg_sqrt_h=0.3, star_tracker__sigma_cross_arcsec=2.0,
+                         star_tracker__sigma_about_arcsec=2.0, maneuver_defaults__hold_s=100.0)
+    assert not any(s.smooth for s in measured), [s.exponent[0] for s in measured]
+
+
+@pytest.mark.parametrize("st_hz", [20.0, 7.0])
+def test_the_walk_interpolated_between_gyro_samples_is_not_called_smooth(st_hz):
+    """A 0.05-arcsec reference off the 10 Hz gyro grid sees the walk interpolated inside gyro intervals,
+    short of the lag by a third of an interval: convex, 0.76 at 20 Hz before its shortfall was added
+    back (6 of 6 called smooth), 0.49 with it."""
+    measured = _at_truth(top__star_tracker_hz=st_hz, star_tracker__sigma_cross_arcsec=0.05,
+                         star_tracker__sigma_about_arcsec=0.05, gyro__arw_deg_sqrt_h=0.03, gyro__pulse_arcsec=0.0,
+                         maneuver_defaults__hold_s=100.0)
+    assert not any(s.smooth for s in measured), [s.exponent[0] for s in measured]
+    assert all(abs(s.exponent[0] - 0.5) < 4 * s.se[0] for s in measured)
+
+
+def test_the_walks_shortfall_is_a_quarter_interval_for_samples_halfway_between_every_other():
+    """A reference at 20 Hz on gyros at 10 Hz: every other sample is halfway into a gyro interval, whose
+    interpolated walk has ``dt f (1 - f)`` = 0.025 s less variance there; each lag's pairs have one such
+    end on average, so the shortfall is 0.025 s at every lag."""
+    from gyrocal.inference.errormodel import walk_steps
+
+    gyro_time = np.arange(0.0, 20.0 + 1e-9, 0.1)
+    st_time = np.arange(0.05, 19.9, 0.05)
+    walk_var, walk_lag1 = walk_steps(gyro_time, st_time)
+    st_dt = np.diff(np.concatenate([[gyro_time[0]], st_time]))
+    shortfall = smoothness.walk_shortfall(st_dt, walk_var, np.concatenate([[0.0], walk_lag1]), [1, 2, 3, 8])
+    np.testing.assert_allclose(shortfall, 0.025, rtol=0.01)
+    np.testing.assert_allclose(smoothness.walk_shortfall(np.full(50, 0.1), None, None, [1, 4]), 0.0)
 
 
 def test_smoothed_noise_is_smooth_up_to_its_kernel_and_the_interval_is_five_knees():
@@ -120,7 +179,7 @@ def test_a_share_at_its_bound_on_a_smooth_residual_is_refused_before_sampling():
     est = lambda share_logit: SimpleNamespace(log_sigma=np.r_[log_sigma[:3], share_logit, log_sigma[4]],
                                               spec=SimpleNamespace(model="correlated"))
     with pytest.raises(EstimateError, match=r"model correlated: .*share 0\.9997.*smooth at the sampling interval on "
-                                            r"TStick.*reference_interval_s=1,.*cannot converge"):
+                                            r"TStick.*reference_interval_s=1;.*cannot converge"):
         check_representable(est(GM_LOGIT_BOUND - 0.01), [smooth])
     check_representable(est(GM_LOGIT_BOUND - 0.01), [white])
     check_representable(est(GM_LOGIT_BOUND - 1.0), [smooth])

@@ -68,17 +68,18 @@ def check_noise(maneuvers, est: PointEstimate):
         raise EstimateError(
             f"point estimate of model {est.spec.model}: the fitted noise is not a noise these sensors can have: "
             f"{listed}. The residuals hold structure far above the noise that the model lacks (RMS about roll, "
-            f"pitch, yaw, arcsec: {residuals}){_correlation_advice(lins, est)}; validate the campaign (gyrocal "
+            f"pitch, yaw, arcsec: {residuals}){_correlation_advice(maneuvers, lins, est)}; validate the campaign (gyrocal "
             "validate) and read its warnings, or add the effect they point to")
 
 
-def _correlation_advice(lins, est: PointEstimate) -> str:
+def _correlation_advice(maneuvers, lins, est: PointEstimate) -> str:
     """Where the residuals' differences are correlated in time and the model's reference noise is
     white, say so: a reference sampled faster than its noise is white (a star tracker's slow
     errors, motion capture at 100 Hz) collapses a white-noise fit."""
     if est.spec.correlated_noise:
         return ""
-    smooth = smoothness.describe([smoothness.of_maneuver(lin) for lin in lins])
+    walks = smoothness.fitted_walk_variances(maneuvers, est)
+    smooth = smoothness.describe([smoothness.of_maneuver(lin, walk) for lin, walk in zip(lins, walks)])
     if smooth:
         return f". And {smooth}"
     tau = noisefit.correlation_time(lins)

@@ -223,11 +223,11 @@ def linearized(maneuvers, estimate: PointEstimate):
         yield lin, noise.build(lin, estimate.boresight, estimate.correlation_time_s)
 
 
-def _measuring(pairs, measured: list):
-    """``pairs`` passed on, each linearisation's increment growth (`smoothness.of_maneuver`) appended to
-    ``measured`` on the way."""
-    for lin, nz in pairs:
-        measured.append(smoothness.of_maneuver(lin))
+def _measuring(walk_variances, pairs, measured: list):
+    """``pairs`` passed on, each linearisation's increment growth (`smoothness.of_maneuver`, at its fitted
+    walk) appended to ``measured`` on the way."""
+    for walk, (lin, nz) in zip(walk_variances, pairs):
+        measured.append(smoothness.of_maneuver(lin, walk))
         yield lin, nz
 
 
@@ -321,7 +321,8 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
     residual_rms = float(np.sqrt(np.mean(residuals**2)))
     noise_rms = noise_rms_arcsec(maneuvers, estimate.stated_noise)
     measured = []
-    white = whiteness(maneuvers, _measuring(linearized(maneuvers, estimate), measured), estimate)
+    walks = smoothness.fitted_walk_variances(maneuvers, estimate)
+    white = whiteness(maneuvers, _measuring(walks, linearized(maneuvers, estimate), measured), estimate)
     ranking, detail = rank(maneuvers, estimate, list(maneuvers[0].extras), plugin_effects, white)
     keys = [s.key for s in NOISE_SCALES]
     noise_post = {s.key: float(summary.loc[f"noise.{s.key}", "mean"]) for s in CORRELATED_SCALES

@@ -8,14 +8,26 @@ faster, nearly in proportion to the lag, is smooth at the sampling interval (an 
 correlated: a motion-capture system's pose-dependent error, a filtered reference), which the noise
 model cannot represent; the lag from which it grows no faster than the model allows (the knee) is
 where that smooth error has decorrelated.
+
+Two things of the model's own grow faster, and are kept out. A part fixed in one frame, seen from
+another that turns, changes by the turn (``|omega k dt|^2`` in the variance, convex): the walk and
+the initial attitude error are fixed in the inertial frame, the white and Gauss-Markov parts in the
+tracker's; so a residual is called smooth only where it is smooth in both frames (a fast slew with
+a large walk made the tracker frame's alone smooth on simulated campaigns whose model was right).
+And the gyro's walk seen between gyro samples is interpolated, so its variance over a lag falls short
+of the lag by up to a third of a gyro interval (`errormodel.walk_steps`): a negative constant that
+makes it convex; the model's own shortfall, at the fitted ARW, is added back before the growth is
+judged (a reference at 20 Hz, 0.05 arcsec, on gyros at 10 Hz was called smooth without it).
 """
 
 from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["KNEE_INTERVAL_FACTOR", "MIN_INCREMENTS", "SIGNIFICANCE_SE", "Smoothness", "describe", "growth", "of_maneuver",
-           "recommended_interval_s"]
+from gyrocal.inference.preprocess import noise_groups
+
+__all__ = ["KNEE_INTERVAL_FACTOR", "MIN_INCREMENTS", "SIGNIFICANCE_SE", "Smoothness", "describe",
+           "fitted_walk_variances", "growth", "of_maneuver", "recommended_interval_s", "walk_shortfall"]
 
 MODEL_EXPONENT_MAX = 0.5
 """The largest growth exponent a concave variogram allows (the random walk's)."""
@@ -27,13 +39,14 @@ MIN_INCREMENTS = 20
 """Lags with fewer independent increments than this (per axis) are not judged."""
 
 KNEE_INTERVAL_FACTOR = 5.0
-"""The reference interval recommended for a smooth error: this many knees, where consecutive samples of
-the smooth error correlate by under 2 %, whatever its shape between the two usual ones. A
-second-order Gauss-Markov error (correlation ``(1 + t/T) e^(-t/T)``) has its knee (growth exponent
-1/2) at 1.26 T, and 5 knees apart its samples correlate by 0.014 (by 0.18 at 2.5 knees); white noise
-through a Gaussian kernel of sd ``s``, knee 1.56 s, by 2e-7. RepoIMU at 100 Hz: knee 0.08 s; used
-every 0.2 s the ARW comes out twice the 1 s run's and the intervals up to twice as wide, every 0.5 s
-both agree with it and the intervals are narrower (`docs/real-data.md`, step 11)."""
+"""The reference interval recommended for a smooth error: this many knees (`Smoothness.knee_s`), where
+consecutive samples of the smooth error correlate by under 2 %, whatever its shape between the two
+usual ones. A second-order Gauss-Markov error (correlation ``(1 + t/T) e^(-t/T)``) has its exponent
+cross 1/2 at 1.26 T; its knee is 1 to 2 times that, and 5 knees apart its samples correlate by at
+most 0.014 (by 0.18 at 2.5 crossings); white noise through a Gaussian kernel (crossing at 1.56 kernel
+sd) by at most 2e-7. RepoIMU at 100 Hz: knee 0.08 s; used every 0.2 s the ARW comes out twice the
+1 s run's and the intervals up to twice as wide, every 0.5 s both agree with it and the intervals
+are narrower (`docs/real-data.md`, step 11)."""
 
 
 @dataclass(frozen=True)
@@ -63,36 +76,81 @@ class Smoothness:
     @property
     def knee_s(self) -> float:
         """The lag (s) where the growth that starts `beyond` the model's at the first lag ends, the smooth
-        error's decorrelation; 0 where the residual is not `smooth` (a growth beyond it at longer lags
-        only is structure of another kind)."""
+        error's decorrelation: the first doubled lag whose growth to twice it is not beyond, which is at
+        or past the lag where the exponent crosses 1/2, and within twice it; 0 where the residual is not
+        `smooth` (a growth beyond it at longer lags only is structure of another kind)."""
         run = int(np.argmin(np.append(self.beyond, False)))
         return float(self.lags[run - 1] * 2 * self.interval_s) if run else 0.0
 
 
-def growth(residual: np.ndarray):
-    """Lags (samples, doubling), growth exponents and their standard errors of a (M, 3) residual, the
-    increments' variance summed over the axes (their mean removed: a constant rate adds nothing). The
-    error treats each lag's increments as ``3 (M - k) / k`` independent ones, which overstates it for
-    increments that overlap (it errs against calling a residual smooth)."""
-    r = np.asarray(residual, dtype=float)
-    m = len(r)
+def _lags(m: int) -> np.ndarray:
+    """Lags (samples, doubling from one) with at least `MIN_INCREMENTS` independent increments to twice them."""
     lags = 2 ** np.arange(0, max(int(np.log2(max(m, 1))), 1))
-    lags = lags[3 * (m - 2 * lags) / (2 * lags) >= MIN_INCREMENTS]
-    var = np.array([np.sum(np.var(r[k:] - r[:-k], axis=0)) for k in np.concatenate([lags, 2 * lags[-1:]])])
-    exponent = 0.5 * np.log2(var[1:] / var[:-1])
+    return lags[3 * (m - 2 * lags) / (2 * lags) >= MIN_INCREMENTS]
+
+
+def _variogram(residual: np.ndarray, lags) -> np.ndarray:
+    """The increments' variance over each lag, summed over the axes (their mean removed: a constant
+    rate adds nothing)."""
+    return np.array([np.sum(np.var(residual[k:] - residual[:-k], axis=0)) for k in lags])
+
+
+def _exponents(variogram: np.ndarray) -> np.ndarray:
+    return 0.5 * np.log2(variogram[1:] / variogram[:-1])
+
+
+def _standard_errors(m: int, lags) -> np.ndarray:
+    """The growth exponent's error, each lag's increments taken as ``3 (M - k) / k`` independent ones:
+    2 to 3 times the true one for increments that overlap (it errs against calling a residual smooth)."""
     n = 3.0 * (m - lags) / lags
     n2 = 3.0 * (m - 2 * lags) / (2 * lags)
-    se = 0.5 / np.log(2.0) * np.sqrt(2.0 / n + 2.0 / n2)
-    return lags, exponent, se
+    return 0.5 / np.log(2.0) * np.sqrt(2.0 / n + 2.0 / n2)
 
 
-def of_maneuver(lin) -> Smoothness:
+def growth(residual: np.ndarray):
+    """Lags (samples, doubling), growth exponents and their standard errors of a (M, 3) residual."""
+    r = np.asarray(residual, dtype=float)
+    lags = _lags(len(r))
+    return lags, _exponents(_variogram(r, np.append(lags, 2 * lags[-1:]))), _standard_errors(len(r), lags)
+
+
+def walk_shortfall(st_dt_s, walk_var, walk_lag1, lags) -> np.ndarray:
+    """Per unit ARW^2 and axis, how far the interpolated walk's variance over each lag falls short of the
+    lag (s), averaged over the maneuver's samples: each step's shortfall ``st_dt - walk_var`` less twice
+    the covariance with the step before (`errormodel.walk_steps`); zeros on the gyro grid."""
+    st_dt_s = np.asarray(st_dt_s, dtype=float)
+    step = st_dt_s - (st_dt_s if walk_var is None else np.asarray(walk_var, dtype=float))
+    shared = np.zeros_like(step) if walk_lag1 is None else np.asarray(walk_lag1, dtype=float)
+    c_step, c_shared = np.concatenate([[0.0], np.cumsum(step)]), np.concatenate([[0.0], np.cumsum(shared)])
+    m = len(step)
+    out = []
+    for k in lags:
+        j = np.arange(m - k)
+        out.append(np.mean(c_step[j + k + 1] - c_step[j + 1] - 2.0 * (c_shared[j + k + 1] - c_shared[j + 2])))
+    return np.array(out)
+
+
+def fitted_walk_variances(maneuvers, estimate) -> list:
+    """Each maneuver's fitted ARW^2 (rad^2/s): the `estimate.PointEstimate`'s, at its noise group's level."""
+    index = noise_groups(maneuvers)[1]
+    return [float(estimate.maneuver_variances(m, index[m])["walk"]) for m in range(len(maneuvers))]
+
+
+def of_maneuver(lin, walk_variance: float = 0.0) -> Smoothness:
     """The growth of a linearised maneuver's residual (`errormodel.Linearization`, its first channel
-    set) seen in the tracker's frame, where its white and Gauss-Markov parts are defined."""
-    body = np.einsum("mji,mj->mi", lin.st_matrix, lin.z[:, 0])
+    set), the slower of its growths in the inertial frame and the tracker's, with the interpolated
+    walk's shortfall at the fitted ``walk_variance`` (ARW^2, rad^2/s) added back."""
     interval = float(np.median(lin.st_dt[1:])) if len(lin.st_dt) > 1 else 0.0
-    lags, exponent, se = growth(body) if len(body) >= 8 else (np.zeros(0, int), np.zeros(0), np.zeros(0))
-    return Smoothness(lin.maneuver, interval, lags, exponent, se)
+    inertial = np.asarray(lin.z[:, 0], dtype=float)
+    m = len(inertial)
+    lags = _lags(m) if m >= 8 else np.zeros(0, int)
+    if not len(lags):
+        return Smoothness(lin.maneuver, interval, lags, np.zeros(0), np.zeros(0))
+    every = np.append(lags, 2 * lags[-1:])
+    added = 3.0 * walk_variance * walk_shortfall(lin.st_dt, lin.walk_var, lin.walk_lag1, every)
+    tracker = np.einsum("mji,mj->mi", lin.st_matrix, inertial)
+    exponent = np.minimum(_exponents(_variogram(inertial, every) + added), _exponents(_variogram(tracker, every) + added))
+    return Smoothness(lin.maneuver, interval, lags, exponent, _standard_errors(m, lags))
 
 
 def recommended_interval_s(measured) -> float:
@@ -119,5 +177,5 @@ def describe(measured) -> str:
             f"(white noise, the gyro's walk and a Gauss-Markov part grow at most as lag^0.5), and faster than that "
             f"up to {max(s.knee_s for s in smooth):.3g} s. The reference's error, or an effect the model lacks, "
             f"changes slower than its samples come, and no noise model here can follow it: use the reference every "
-            f"{interval:.3g} s or more, where it does not (--config reference_interval_s={interval:.3g}, or "
-            f"gyrocal import --reference-interval {interval:.3g})")
+            f"{interval:.3g} s or more, where it does not (--config reference_interval_s={interval:.3g}; when "
+            f"importing, gyrocal import --reference-interval {interval:.3g})")

@@ -36,8 +36,8 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSetti
     check_blocks(maneuvers, s.sampler["block_s"])
     check_noise(maneuvers, est)
     check_physical(maneuvers, est, priors.bound)
-    measured = [smoothness.of_maneuver(est.linearize(maneuvers, m)) for m in range(len(maneuvers))
-                if est.spec.correlated_noise]
+    measured = [smoothness.of_maneuver(est.linearize(maneuvers, m), walk) for m, walk in
+                enumerate(smoothness.fitted_walk_variances(maneuvers, est)) if est.spec.correlated_noise]
     checks.check_representable(est, measured)
     notes = []
     identified = lambda stats, ratio_sd: notes.append(
