@@ -61,3 +61,37 @@ def test_a_field_along_the_vertical_is_refused_with_the_reason():
     extras.update({f"mag_{a}": np.array([0.0, 0.0, 1.0])[i] * np.ones(3) for i, a in enumerate("xyz")})
     with pytest.raises(InputError, match="no horizontal part"):
         effect.gyro(SimpleNamespace(extras=extras, dt=np.ones(3), channels=[Channel("gyro_z", None, "yaw")]))
+
+
+def test_the_earths_rate_sensed_by_the_gyros_is_recovered_with_its_sign_through_gyrocals_error_model():
+    """End to end, through `errormodel.linearize`: a body tumbling in a room at 50.3 deg N whose gyros
+    sense the Earth's rate (15.041 deg/h: 11.57 up, 9.61 north, 0 west) besides the room-relative
+    rate; a least-squares fit of the plugin's columns, the biases and the initial error to the
+    attitude error gives the Earth's rate back, signs included (found by an independent review)."""
+    from gyrocal.inference.errormodel import linearize
+    from gyrocal.inference.preprocess import ManeuverData
+    from gyrocal.model.effects import LIBRARY
+    from gyrocal.model.spec import ModelSpec
+
+    latitude = np.radians(50.3)
+    earth_room = 15.041 * RAD_PER_DEG_H * np.array([np.cos(latitude), 0.0, np.sin(latitude)])  # north, west, up
+    plugin = load_plugins([PLUGIN])["lab_rate"]
+    channels = (Channel("gyro_x", None, "roll"), Channel("gyro_y", None, "pitch"), Channel("gyro_z", None, "yaw"))
+    spec = ModelSpec.build("t", [LIBRARY["scale_factor"], LIBRARY["misalignment"], LIBRARY["bias"], plugin], channels)
+    euler = lambda t: np.column_stack([1.0 * t, 0.6 * np.sin(0.3 * t), 0.5 * np.cos(0.17 * t)])
+    dt, t = 0.01, np.arange(0.0, 90.0 + 0.005, 0.01)
+    attitude = Rotation.from_euler("zyx", euler(t))
+    mid = Rotation.from_euler("zyx", euler(0.5 * (t[1:] + t[:-1])))
+    increments = (attitude[:-1].inv() * attitude[1:]).as_rotvec() + mid.inv().apply(earth_room) * dt
+    dip = np.radians(66.0)
+    force, field = mid.inv().apply([0.0, 0.0, 9.81]), mid.inv().apply([np.cos(dip), 0.0, -np.sin(dip)])
+    extras = {f"acc_{a}": force[:, i] for i, a in enumerate("xyz")}
+    extras.update({f"mag_{a}": field[:, i] for i, a in enumerate("xyz")})
+    data = ManeuverData("m", "yaw", "both", channels, (), t, increments, t[100::100], attitude[100::100].as_quat(),
+                        attitude[0].as_quat(), extras)
+    lin = linearize(data, spec, np.zeros(len(spec)), np.zeros(3))
+    rate = [j for j, p in enumerate(spec.parameters) if p.effect == "lab_rate"]
+    columns = [lin.design[:, 0, :, j] for j in rate] + [lin.bias_design[:, 0, :, j] for j in range(3)]
+    columns += [np.tile(np.eye(3)[i], (len(lin.z), 1)) for i in range(3)]
+    fitted, *_ = np.linalg.lstsq(np.stack([c.reshape(-1) for c in columns], 1), lin.z[:, 0].reshape(-1), rcond=None)
+    np.testing.assert_allclose(fitted[:3] / RAD_PER_DEG_H, [11.573, 9.608, 0.0], atol=0.01)
