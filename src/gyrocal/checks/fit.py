@@ -78,8 +78,7 @@ def _correlation_advice(maneuvers, lins, est: PointEstimate) -> str:
     errors, motion capture at 100 Hz) collapses a white-noise fit."""
     if est.spec.correlated_noise:
         return ""
-    walks = smoothness.fitted_walk_variances(maneuvers, est)
-    smooth = smoothness.describe([smoothness.of_maneuver(lin, walk) for lin, walk in zip(lins, walks)])
+    smooth = smoothness.describe(smoothness.of_estimate(maneuvers, est, lins))
     if smooth:
         return f". And {smooth}"
     tau = noisefit.correlation_time(lins)
@@ -90,13 +89,14 @@ def _correlation_advice(maneuvers, lins, est: PointEstimate) -> str:
             "an interval longer than that (gyrocal import --reference-interval)")
 
 
-def check_representable(est: PointEstimate, measured):
+def check_representable(maneuvers, est: PointEstimate):
     """Stop before sampling where the Gauss-Markov share is fitted at its upper bound and the residual is
-    smooth at the sampling interval (``measured``: `smoothness.of_maneuver` of each maneuver): no noise
-    model here represents it, and the posterior lies beyond the share's bound, where the sampler's chains
-    drift (RepoIMU at 100 Hz: stopped unconverged after 750-800 steps, a minute per model)."""
+    smooth at the sampling interval (`smoothness`): no noise model here represents it, and the posterior
+    lies beyond the share's bound, where the sampler's chains drift (RepoIMU at 100 Hz: stopped
+    unconverged after 750-800 steps, a minute per model)."""
     if len(est.log_sigma) < 5 or est.log_sigma[3] < noisefit.GM_LOGIT_BOUND - SHARE_BOUND_MARGIN:
         return
+    measured = smoothness.of_estimate(maneuvers, est, [est.linearize(maneuvers, m) for m in range(len(maneuvers))])
     if smoothness.describe(measured):
         raise EstimateError(f"point estimate of model {est.spec.model}: {share_at_bound(est.log_sigma, measured)}. "
                             "Its posterior would lie beyond the share's bound, where the sampler cannot converge")
@@ -155,14 +155,14 @@ NOISE_RATIOS = ("log(sigma_about / sigma_cross)", "log(arw / sigma_cross)", "log
 order: two, and two more with correlated star-tracker noise."""
 
 
-def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_sd: float, measured=()) -> str:
+def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_sd: float) -> str:
     """Before sampling, at the fitted noise (``stats``: the data's information, the nuisance integrated
     out): refuse when a parameter the point estimate kept free carries less than
     `identification.INFORMATION_RATIO_MIN` of its prior's information, the others estimated with it
     (it was judged at the stated noise; a fitted noise far above it leaves less), naming it and what to
     fly. Otherwise return what is weakest, in words, for a sampler that does not converge: the least
     informed parameters, directions only the prior holds, noise ratios the data do not tell, a
-    Gauss-Markov share at its bound (``measured``: each maneuver's `smoothness.of_maneuver`)."""
+    Gauss-Markov share at its bound (over a smooth residual `check_representable` refused it first)."""
     spec = est.spec
     index = np.flatnonzero(spec.free)
     joint = identification.joint_information(stats.A[np.ix_(index, index)], np.asarray(prior_sd)[index])
@@ -187,7 +187,7 @@ def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_
     if flat:
         notes.append(f"the data hardly tell the noise ratio(s) {', '.join(flat)} (their profile is as wide as "
                      "the prior): a longer maneuver, or holds, separate the gyro walk from the reference noise")
-    notes += [note] if (note := share_at_bound(est.log_sigma, measured)) else []
+    notes += [note] if (note := share_at_bound(est.log_sigma)) else []
     return "; ".join(notes)
 
 

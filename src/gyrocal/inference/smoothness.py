@@ -27,7 +27,7 @@ import numpy as np
 from gyrocal.inference.preprocess import noise_groups
 
 __all__ = ["KNEE_INTERVAL_FACTOR", "MIN_INCREMENTS", "SIGNIFICANCE_SE", "Smoothness", "describe",
-           "fitted_walk_variances", "growth", "of_maneuver", "recommended_interval_s", "walk_shortfall"]
+           "fitted_walk_variances", "growth", "of_estimate", "of_maneuver", "recommended_interval_s", "walk_shortfall"]
 
 MODEL_EXPONENT_MAX = 0.5
 """The largest growth exponent a concave variogram allows (the random walk's)."""
@@ -134,6 +134,11 @@ def fitted_walk_variances(maneuvers, estimate) -> list:
     """Each maneuver's fitted ARW^2 (rad^2/s): the `estimate.PointEstimate`'s, at its noise group's level."""
     index = noise_groups(maneuvers)[1]
     return [float(estimate.maneuver_variances(m, index[m])["walk"]) for m in range(len(maneuvers))]
+
+
+def of_estimate(maneuvers, estimate, lins) -> list:
+    """`of_maneuver` of each maneuver's linearisation ``lins`` about ``estimate``, at its fitted walk."""
+    return [of_maneuver(lin, walk) for lin, walk in zip(lins, fitted_walk_variances(maneuvers, estimate))]
 
 
 def of_maneuver(lin, walk_variance: float = 0.0) -> Smoothness:

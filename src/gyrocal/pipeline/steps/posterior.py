@@ -4,8 +4,7 @@ import numpy as np
 import pandas as pd
 
 from gyrocal.checks import fit as checks
-from gyrocal.checks.fit import check_blocks, check_identified, check_noise, check_physical, sampling_stopped
-from gyrocal.inference import inferencedata, noise, posterior, smoothness
+from gyrocal.inference import inferencedata, noise, posterior
 from gyrocal.inference.budget import SamplingStopped
 from gyrocal.inference.estimate import PointEstimate
 from gyrocal.io.outputs import atomic, write_csv, write_json
@@ -33,22 +32,20 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSetti
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
     est = PointEstimate.load(out.point_estimate, known_effects(s.plugins))
     priors = model_priors(est, s.priors, s.prior_from)
-    check_blocks(maneuvers, s.sampler["block_s"])
-    check_noise(maneuvers, est)
-    check_physical(maneuvers, est, priors.bound)
-    measured = [smoothness.of_maneuver(est.linearize(maneuvers, m), walk) for m, walk in
-                enumerate(smoothness.fitted_walk_variances(maneuvers, est)) if est.spec.correlated_noise]
-    checks.check_representable(est, measured)
+    checks.check_blocks(maneuvers, s.sampler["block_s"])
+    checks.check_noise(maneuvers, est)
+    checks.check_physical(maneuvers, est, priors.bound)
+    checks.check_representable(maneuvers, est)
     notes = []
     identified = lambda stats, ratio_sd: notes.append(
-        check_identified(est, priors.sd, stats, ratio_sd, np.sqrt(2.0) * priors.log_sigma_sd[0], measured))
+        checks.check_identified(est, priors.sd, stats, ratio_sd, np.sqrt(2.0) * priors.log_sigma_sd[0]))
     try:
         post = posterior.sample(maneuvers, est, priors, s.sampler, s.grid, s.seed, before=identified)
     except SamplingStopped as stopped:
         labels = list(est.spec.labels) + noise.noise_labels(est.spec.correlated_noise)
         if est.group_offsets is not None:
             labels += [f"noise.level.{g}" for g in est.noise_groups] + ["noise.group_sd"]
-        raise sampling_stopped(stopped, est, notes[0] if notes else "", labels) from None
+        raise checks.sampling_stopped(stopped, est, notes[0] if notes else "", labels) from None
     idata, summary, fit, record = inferencedata.assemble(post, maneuvers, s.sampler, s.convergence, s.seed)
     with atomic(out.posterior) as tmp:
         idata.to_netcdf(str(tmp))
