@@ -66,7 +66,8 @@ def test_preprocess_step_writes_every_maneuver_whole_or_leaves_the_directory_as_
     shutil.copy(tiny_run[0] / "input.json", paths.input_json)
     ids = [m.id for m in telemetry.read_meta(tiny[0])["maneuvers"]]
     assert preprocess_step.run(tiny[0], paths, figures=False) == ids
-    assert sorted(p.name for p in out.iterdir()) == sorted(f"{i}.{e}" for i in ids for e in ("npz", "csv"))
+    assert sorted(p.name for p in out.iterdir()) == sorted([f"{i}.{e}" for i in ids for e in ("npz", "csv")]
+                                                           + ["reference_interval.json"])
     for i in ids:
         assert (out / f"{i}.csv").read_bytes() == (tiny_run[0] / f"preprocess/{i}.csv").read_bytes()
 

@@ -252,28 +252,38 @@ def _posterior(campaign, out, cfg, model):
 
 
 @pytest.mark.full
-def test_at_100_hz_the_correlated_model_is_refused_before_sampling_naming_the_interval(full_rate, tmp_path, config):
+def test_at_100_hz_every_sample_the_correlated_model_is_refused_before_sampling_naming_the_interval(
+        full_rate, tmp_path, config):
     """Every 10 ms the residual is smooth (it grows as lag^0.94 up to 0.08 s), which no noise model here
-    represents: the posterior step refuses before sampling (it used to sample 750 steps and stop) and
-    names the interval at which the model holds, 0.5 s (docs/real-data.md, step 11)."""
+    represents: with every sample asked for (``reference_interval_s`` = 0), the posterior step refuses
+    before sampling (it used to sample 750 steps and stop) and names the interval at which the model
+    holds, 0.5 s (docs/real-data.md, step 11)."""
     model = "gravity_latency_correlated"
-    record = json.loads(Path(_posterior(full_rate, tmp_path, tstick_config(config, [model]), model).refusal).read_text())
+    cfg = tstick_config(config, [model], reference_interval_s=0)
+    record = json.loads(Path(_posterior(full_rate, tmp_path, cfg, model).refusal).read_text())
     assert record["step"] == "posterior", record
     assert "smooth at the sampling interval" in record["reason"] and "reference_interval_s=0.5" in record["reason"]
     assert "cannot converge" in record["reason"]
 
 
 @pytest.mark.full
-def test_the_full_rate_data_used_every_half_second_agree_with_the_1_s_import_and_are_no_wider(
+def test_the_full_rate_data_by_default_are_used_every_half_second_and_agree_with_the_1_s_import(
         full_rate, tmp_path, config):
-    """Issue 30's full-rate path: the 100 Hz import with ``reference_interval_s`` = 0.5 converges and its
-    12 channel parameters agree with the 1 s import's within |z| < 2, with intervals no wider overall
-    (each at most 1.1 times; on the shared trials 0.74-1.01)."""
+    """Issue 30's full-rate path with the default ``reference_interval_s: auto``: the 100 Hz import is used
+    every 0.5 s (the baseline fitted at every sample is smooth; the 1 s import, fitted too, is not and
+    keeps every sample), converges, and its 12 channel parameters agree with the 1 s import's within
+    |z| < 2, with intervals no wider overall (each at most 1.1 times; on the shared trials 0.74-1.01)."""
+    from gyrocal.pipeline.paths import CampaignPaths
+
     model = "gravity_latency_correlated"
-    half = _posterior(full_rate, tmp_path / "half", tstick_config(config, [model], reference_interval_s=0.5), model)
+    half = _posterior(full_rate, tmp_path / "half", tstick_config(config, [model]), model)
     one_s = tmp_path / "one_s"
     importer.import_files("repoimu", one_s, [DATA / f"{t}.csv" for t in TRIALS], reference_interval_s=1.0)
     second = _posterior(one_s, tmp_path / "one_s_out", tstick_config(config, [model]), model)
+    chosen = json.loads(Path(CampaignPaths.under(tmp_path / "half").reference_interval).read_text())
+    kept = json.loads(Path(CampaignPaths.under(tmp_path / "one_s_out").reference_interval).read_text())
+    assert (chosen["requested"], chosen["fitted"], chosen["interval_s"]) == ("auto", True, 0.5)
+    assert (kept["fitted"], kept["interval_s"]) == (True, 0.0)
     a = pd.read_csv(second.summary, index_col="label")
     b = pd.read_csv(half.summary, index_col="label")
     core = [label for label in a.index if ".sf_pos" in label or ".sf_neg" in label or ".mis_" in label]

@@ -44,6 +44,8 @@ def test_default_campaign_review_says_go_with_the_papers_tables(mom_run):
         assert f'id="{table}"' in text or f"id='{table}'" in text
     assert "truth -1712" in text and "mc12" in text and "mis_roll" in text
     assert "<p id='confounded'>None: every pair is told apart.</p>" in text
+    assert ("<p id='reference-interval'>Reference interval (reference_interval_s): Every reference sample is used: "
+            "the nominal error is not smooth at the sampling interval") in text
     all_channels = text[text.index('id="table2"'):text.index("The model against the measurements")]
     combined = [c for c in re.findall(r"<td>(.*?)</td>", all_channels) if "OUTSIDE" in c]
     of_combinations = [c for c in re.findall(r"<tr>(.*?)</tr>", all_channels, re.S)

@@ -42,6 +42,8 @@ class CampaignPaths:
     input_json = _under_root("input.json", "What validation read and found (``input.json``).")
     classic = _under_root("classic.csv")
     preprocess = _under_root("preprocess", "The preprocess step's folder: ``<maneuver>.{npz,csv,png}`` each.")
+    reference_interval = _under_root("preprocess/reference_interval.json",
+                                     "The reference interval the preprocess step used, and why.")
     comparison = _under_root("model_comparison.csv")
     comparison_figure = _under_root("model_comparison.png")
     report = _under_root("report.html")

@@ -39,7 +39,7 @@ def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=Non
     campaign = telemetry.read_campaign(campaign_dir)
     validate.run(campaign_dir, paths, campaign, cfg["sampler"]["block_s"])
     ids = preprocess.run(campaign_dir, paths, figures, campaign=campaign,
-                         reference_interval_s=cfg.get("reference_interval_s", 0.0))
+                         reference_interval_s=cfg.get("reference_interval_s", 0.0), noise=cfg["noise"])
     classic.run(paths, ids, cfg["noise"])
     calibrate_models(paths, ids, cfg, models, through, strict)
     return ids

@@ -47,6 +47,8 @@ class ReviewInputs:
     """The simulation's true parameters (channel -> parameter -> value), or None for real data."""
     refused: list = field(default_factory=list)
     """The refusal records (``<model>/refused.json``) of the variants refused or skipped."""
+    reference_interval: dict | None = None
+    """``preprocess/reference_interval.json``: the reference interval used and why; None for runs before it."""
 
 
 @dataclass(frozen=True)
@@ -101,6 +103,8 @@ class ReviewContext:
     """`CorrectionSet` per channel set, in-loop first."""
     effect_table: pd.DataFrame
     mounting: str
+    reference_interval: str
+    """The reference interval used and why, in words."""
     accounting: pd.DataFrame
     outliers: pd.DataFrame
     warnings: list

@@ -118,6 +118,10 @@ def channel_kind(channels) -> str:
     return "DTG" if all(c.dtg is not None for c in channels) else "gyro"
 
 
+def _sentence(text: str) -> str:
+    return text[:1].upper() + text[1:] + ("" if text.endswith(".") else ".")
+
+
 def mounting_text(mounting: dict) -> str:
     """What the reviewer must know of the reference's mounting: where it came from and, when the data
     aligned it, which misalignment combinations the data can then tell apart."""
@@ -192,7 +196,10 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         effect_table=effect.drop(columns=["before norm", "after norm"]).assign(
             **{"before norm (arcsec)": effect["before norm"].round(1),
                "after norm (arcsec)": effect["after norm"].round(1)}).round(1),
-        mounting=mounting_text(info["mounting"]), accounting=accounting,
+        mounting=mounting_text(info["mounting"]),
+        reference_interval=_sentence((inputs.reference_interval or {}).get("reason", "not recorded (a run before "
+                                                                                   "gyrocal recorded it)")),
+        accounting=accounting,
         outliers=pd.DataFrame(info["star_tracker_outliers"],
                               columns=["maneuver", "time_s", "line", "size_arcsec", "mahalanobis", "kind"]
                               ).fillna({"kind": "outlier"}).round(2),

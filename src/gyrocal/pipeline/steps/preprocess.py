@@ -3,10 +3,15 @@ table and figure. One job per campaign: the work per maneuver is a fraction of a
 process per maneuver spent most of its time starting up and reading the whole campaign again."""
 
 
+import json
+import logging
+from pathlib import Path
+
 from scipy.spatial.transform import Rotation
 
 from gyrocal import checks
-from gyrocal.inference import preprocess
+from gyrocal.inference import interval, preprocess
+from gyrocal.inference.noise import noise_knowledge
 from gyrocal.io import telemetry
 from gyrocal.io.outputs import atomic_dir, write_csv
 from gyrocal.pipeline.paths import CampaignPaths
@@ -15,32 +20,48 @@ from gyrocal.report import figures as plots
 
 __all__ = ["run"]
 
+log = logging.getLogger("gyrocal")
+
 
 def run(campaign_dir, paths: CampaignPaths, figures=True, processes: int = 1, campaign=None,
-        reference_interval_s: float = 0.0) -> list:
+        reference_interval_s=0.0, noise=None) -> list:
     """Slice every maneuver of the campaign (in its order), leaving out the star-tracker outliers
     that validation listed and the samples between those kept every ``reference_interval_s``
-    seconds (0: every one); propagate every channel set nominally; write ``<id>.npz``, ``<id>.csv``
-    and (unless ``figures`` is false: the validation study reads none) ``<id>.png`` into
-    ``paths.preprocess``, whole or not at all. The figures, most of the step's time, are drawn by
-    ``processes`` processes (`plots.render_all`). ``campaign``: the directory's campaign as
-    `telemetry.read_campaign` read it, where the caller has it. Returns the maneuver ids, in the
-    campaign's order."""
+    seconds (0: every one; ``"auto"``: as `interval.choose` names from the data, with the config's
+    ``noise`` where campaign.yaml states none); propagate every channel set nominally; write
+    ``<id>.npz``, ``<id>.csv``, ``reference_interval.json`` and (unless ``figures`` is false: the
+    validation study reads none) ``<id>.png`` into ``paths.preprocess``, whole or not at all. The
+    figures, most of the step's time, are drawn by ``processes`` processes (`plots.render_all`).
+    ``campaign``: the directory's campaign as `telemetry.read_campaign` read it, where the caller has
+    it. Returns the maneuver ids, in the campaign's order."""
     info = read_json(paths.input_json)
     if campaign is None:
         campaign = telemetry.read_campaign(campaign_dir)
     if info["mounting"]:
         campaign = checks.aligned(campaign, Rotation.from_quat(info["mounting"]["quat"]))
     outliers = [o["time_s"] for o in info["star_tracker_outliers"]]
+    seconds = interval.requested(reference_interval_s)
+    maneuvers = [preprocess.slice_maneuver(campaign, m.id, outliers, seconds or 0.0) for m in campaign.maneuvers]
+    if seconds is None:
+        choice = interval.choose(maneuvers, noise_knowledge(info, noise), info["gyro"].get("sensor_class"))
+        record = choice.record()
+        log.info("reference interval: %s", choice.reason)
+        if choice.interval_s:
+            maneuvers = [preprocess.slice_maneuver(campaign, m.id, outliers, choice.interval_s)
+                         for m in campaign.maneuvers]
+    else:
+        record = {"requested": seconds, "interval_s": seconds, "fitted": False,
+                  "reason": (f"the reference is used every {seconds:g} s, as the config sets (reference_interval_s)"
+                             if seconds else "every reference sample is used, as the config sets (reference_interval_s = 0)")}
     with atomic_dir(paths.preprocess) as tmp:
         drawings = []
-        for m in campaign.maneuvers:
-            data = preprocess.slice_maneuver(campaign, m.id, outliers, reference_interval_s)
+        for m, data in zip(campaign.maneuvers, maneuvers):
             table = preprocess.error_table(data)
             data.save(tmp / f"{m.id}.npz")
             write_csv(table, tmp / f"{m.id}.csv")
             if figures:
                 drawings.append(("maneuver_figure", (table, f"{campaign.name}: {m.id} ({m.turn}), nominal parameters")))
+        (tmp / Path(paths.reference_interval).name).write_text(json.dumps(record, indent=1))
         for m, image in zip(campaign.maneuvers, plots.render_all(drawings, processes, dpi=plots.SAVE_DPI)):
             (tmp / f"{m.id}.png").write_bytes(image)
     return [m.id for m in campaign.maneuvers]

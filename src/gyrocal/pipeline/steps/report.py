@@ -1,5 +1,7 @@
 """Rule ``report``: the pre-uplink review of a campaign and its verdict."""
 
+from pathlib import Path
+
 import arviz as az
 import pandas as pd
 import xarray as xr
@@ -48,6 +50,7 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
         calibration=calibrations[model], fit=pd.read_csv(files.fit), posterior=posterior, diagnostics=diagnostics,
         sampler=sampler, correction=read_json(files.correction), correction_path=files.correction,
         comparison=table, info=info, config=cfg, findings=findings, effect_table=effect,
-        truth=read_json(truth_json)["parameters"] if truth_json else None, refused=refused)
+        truth=read_json(truth_json)["parameters"] if truth_json else None, refused=refused,
+        reference_interval=read_json(paths.reference_interval) if Path(paths.reference_interval).exists() else None)
     write_text(review.render(review.build_context(inputs, processes)), paths.report)
     write_json(verdict.verdict(info["campaign"], model, findings), paths.verdict)
