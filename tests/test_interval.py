@@ -122,3 +122,25 @@ def test_the_preprocess_step_records_the_interval_it_used_and_counts_what_it_lef
     thinned = [d.counts["st_thinned"] for d in load_maneuvers(paths.maneuvers(ids))]
     assert all(n > 0 for n in thinned) if interval_s else not any(thinned)
     assert ("as the config sets" in record["reason"]) == (setting != "auto")
+
+
+def test_a_maneuver_too_short_for_the_interval_auto_chose_is_refused_saying_why(tmp_path, config):
+    """The smooth-error campaign of above with 14 s maneuvers: auto chooses 2 s (knee 0.4 s), which leaves
+    fewer than the 10 samples a maneuver needs, and the refusal says that auto chose it, why, and what to
+    do; nothing is written."""
+    from gyrocal.io.telemetry import TelemetryError, write_campaign
+    from gyrocal.pipeline.paths import CampaignPaths
+    from gyrocal.pipeline.run import calibrate_campaign
+
+    campaign, stated = _campaign(star_tracker={"sigma_cross_arcsec": 2.0, "sigma_about_arcsec": 2.0},
+                                 maneuver={"hold_s": 3.0, "gap_s": 5.0, "angle_deg": 12.0, "rate_deg_s": 2.0,
+                                           "accel_deg_s2": 1.0}, star_tracker_hz=10.0, gyro_hz=20.0)
+    campaign = _with_smooth_error(campaign, 30.0, 5)
+    write_campaign(campaign, tmp_path / "campaign")
+    cfg = {**config, "noise": {**config["noise"], **{k: v for k, v in stated.items() if k != "boresight_body"}},
+           "sampler": {**config["sampler"], "block_s": 5.0}}
+    with pytest.raises(TelemetryError, match=r"has only \d valid samples kept every reference_interval_s = 2 s "
+                                             r"\(reference_interval_s: auto chose 2 s: the reference is used every 2 s: "
+                                             r".*Fly the maneuver longer, or set reference_interval_s yourself"):
+        calibrate_campaign(tmp_path / "campaign", CampaignPaths.under(tmp_path / "out"), cfg, [], figures=False)
+    assert not (tmp_path / "out" / "preprocess").exists()

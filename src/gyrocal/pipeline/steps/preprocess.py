@@ -14,6 +14,7 @@ from gyrocal.inference import interval, preprocess
 from gyrocal.inference.noise import noise_knowledge
 from gyrocal.io import telemetry
 from gyrocal.io.outputs import atomic_dir, write_csv
+from gyrocal.io.telemetry import TelemetryError
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.steps.common import read_json
 from gyrocal.report import figures as plots
@@ -47,8 +48,14 @@ def run(campaign_dir, paths: CampaignPaths, figures=True, processes: int = 1, ca
         record = choice.record()
         log.info("reference interval: %s", choice.reason)
         if choice.interval_s:
-            maneuvers = [preprocess.slice_maneuver(campaign, m.id, outliers, choice.interval_s)
-                         for m in campaign.maneuvers]
+            try:
+                maneuvers = [preprocess.slice_maneuver(campaign, m.id, outliers, choice.interval_s)
+                             for m in campaign.maneuvers]
+            except TelemetryError as short:
+                raise TelemetryError(
+                    f"{short} (reference_interval_s: auto chose {choice.interval_s:g} s: {choice.reason}). Fly the "
+                    "maneuver longer, or set reference_interval_s yourself (0: every sample, where the smoothness "
+                    "check will fail)") from short
     else:
         record = {"requested": seconds, "interval_s": seconds, "fitted": False,
                   "reason": (f"the reference is used every {seconds:g} s, as the config sets (reference_interval_s)"
