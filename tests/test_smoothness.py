@@ -198,3 +198,25 @@ def test_a_share_at_its_bound_on_a_smooth_residual_is_refused_before_sampling():
     check_representable(maneuvers, est(GM_LOGIT_BOUND - 0.01, white))
     check_representable(maneuvers, est(GM_LOGIT_BOUND - 1.0, smooth))
     check_representable(maneuvers, SimpleNamespace(log_sigma=log_sigma[:3], spec=None))
+
+
+def test_growth_within_runs_counts_only_the_increments_inside_each_run():
+    """A smooth series (white noise through a 20-sample kernel) with a step of 200 sd between two runs:
+    counted across the step the increments grow as a walk's (the step's share grows with the lag, the
+    smoothness hidden); within the runs as the smooth series' own, and the standard error follows the
+    increments actually counted."""
+    rng = np.random.default_rng(4)
+    r = gaussian_filter1d(rng.normal(size=(4_000, 3)), 20, axis=0)
+    r[2_000:] += 200.0 * r.std()
+    runs = smoothness.contiguous_runs(np.concatenate([np.arange(2_000), 5_000 + np.arange(2_000)]).astype(float))
+    assert list(np.bincount(runs)) == [2_000, 2_000]
+    lags, exponent, se = smoothness.growth(r, runs)
+    assert exponent[0] > 0.95 and smoothness.growth(r)[1][0] < 0.6, (exponent[0], smoothness.growth(r)[1][0])
+    k = lags[2]
+    np.testing.assert_allclose(se[2], 0.5 / np.log(2) * np.sqrt(2 / (3 * (4_000 - 2 * k) / k)
+                                                              + 2 / (3 * (4_000 - 4 * k) / (2 * k))))
+
+
+def test_runs_too_short_for_any_lag_give_no_growth():
+    lags, exponent, se = smoothness.growth(np.zeros((40, 3)), np.arange(40))
+    assert len(lags) == len(exponent) == len(se) == 0

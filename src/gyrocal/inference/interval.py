@@ -6,12 +6,14 @@ noise model here, but its samples every few knees can. Which interval that is de
 residual after the fit, not on the raw error: the nominal parameters' systematics make a 1 s
 RepoIMU trial look smooth (the pilot then asked for 10 s), where a fit leaves it white. The pilot is
 the baseline channel model (scale factors, misalignments, biases), the same for every model variant of
-the run so that their comparison holds, weighed at the stated noise: a WLS from the classic estimate.
+the run so that their comparison holds, with its noise scales estimated as every model's are.
 
 The fit is needed only where the nominal error itself is smooth: the parameters' errors add smooth
 increments to it (a bias's are constant, which the measure removes), so a nominal error no smoother
 than the noise model allows leaves a residual that is not smooth either, and every sample is used
-with no fit (a few milliseconds on the default campaign, where the fit takes 1.7 s).
+with no fit (a few milliseconds on the default campaign, where the fit takes 2.6 s). The increments are
+taken within runs of samples without a gap: the nominal parameters' error over an unseen slew steps
+across a gap and would hide a smooth error (found by an independent review).
 """
 
 from dataclasses import dataclass
@@ -19,14 +21,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from gyrocal.errors import InputError
-from gyrocal.inference import classic, identification, noise, smoothness
-from gyrocal.inference.estimate import wls
-from gyrocal.inference.preprocess import error_angles
+from gyrocal.inference import classic, smoothness
+from gyrocal.inference.estimate import point_estimate
+from gyrocal.inference.preprocess import error_angles, slice_maneuver
+from gyrocal.io.telemetry import TelemetryError
 from gyrocal.model import effects
 from gyrocal.model.channels import ChannelParams
 from gyrocal.model.spec import ModelSpec
 
-__all__ = ["AUTO", "Choice", "choose", "nominal", "pilot", "requested"]
+__all__ = ["AUTO", "Choice", "choose", "nominal", "pilot", "requested", "shorter", "slice_all"]
 
 AUTO = "auto"
 """The config value of ``reference_interval_s`` that asks for the interval to be chosen from the data."""
@@ -34,7 +37,7 @@ AUTO = "auto"
 
 @dataclass(frozen=True)
 class Choice:
-    """The reference interval the pilot fit named, with what it measured."""
+    """The reference interval the data named, with what was measured."""
 
     interval_s: float
     """Star-tracker samples kept about every this many seconds (0: every one)."""
@@ -46,46 +49,59 @@ class Choice:
     @property
     def reason(self) -> str:
         """The choice in words, for the log and the report."""
-        what = "the baseline model's residual fitted at every sample" if self.fitted else "the nominal error"
+        what = ("the baseline model's residual, fitted at every sample with its noise scales estimated,"
+                if self.fitted else "the nominal error")
         if not self.interval_s:
-            return (f"every reference sample is used: {what} is not smooth at the sampling interval on any "
-                    f"maneuver (its increments grow as lag^{_largest(self.measured)} at most)")
+            s = max(self.measured, key=lambda s: s.exponent[0] if len(s.exponent) else -np.inf)
+            growth = (f" (its increments grow at most as lag^{s.exponent[0]:.2f}, on {s.maneuver}, where the limit "
+                      f"is {_limit(s):.2f})" if len(s.exponent) else "")
+            return f"every reference sample is used: {what} is not smooth at the sampling interval{growth}"
         smooth = [s for s in self.measured if s.smooth]
-        worst = max(smooth, key=lambda s: s.exponent[0])
+        worst = max(smooth, key=lambda s: s.knee_s)
         return (f"the reference is used every {self.interval_s:.3g} s: {what} is smooth at the sampling interval "
-                f"on {', '.join(s.maneuver for s in smooth)} (on {worst.maneuver} its increments grow as "
-                f"lag^{worst.exponent[0]:.2f} from {worst.interval_s:.3g} s, where white noise, the gyro's walk and "
-                f"a Gauss-Markov part grow at most as lag^0.5, and faster up to {max(s.knee_s for s in smooth):.3g} "
-                f"s, the knee); {smoothness.KNEE_INTERVAL_FACTOR:g} knees, rounded up to 1, 2 or 5 times a power of "
-                "ten, apart, samples of such an error are all but uncorrelated")
+                f"on {', '.join(s.maneuver for s in smooth)}. On {worst.maneuver} its increments grow as "
+                f"lag^{worst.exponent[0]:.2f} from {worst.interval_s:.3g} s (limit {_limit(worst):.2f}: white noise, "
+                f"the gyro's walk and a Gauss-Markov part grow at most as lag^0.5) and faster up to "
+                f"{worst.knee_s:.3g} s, the knee; {smoothness.KNEE_INTERVAL_FACTOR:g} knees, "
+                f"{smoothness.KNEE_INTERVAL_FACTOR * worst.knee_s:.3g} s, rounded up to 1, 2 or 5 times a power of "
+                "ten, is where samples of such an error are all but uncorrelated")
 
-    def record(self) -> dict:
-        """What the run writes of it (`gyrocal.pipeline`'s ``reference_interval.json``)."""
-        return {"requested": AUTO, "interval_s": self.interval_s, "fitted": self.fitted, "reason": self.reason,
+    def record(self, used_s=None) -> dict:
+        """What the run writes of it (``preprocess/reference_interval.json``); ``used_s``: per maneuver the
+        interval it was used at, where a short one could not take `interval_s` (`slice_all`)."""
+        used_s = used_s or {}
+        short = [f"{m} every {every:g} s" for m, every in used_s.items() if every != self.interval_s]
+        reason = self.reason + (f"; too short to keep 10 samples at that interval, {', '.join(short)}" if short else "")
+        return {"requested": AUTO, "interval_s": self.interval_s, "fitted": self.fitted, "reason": reason,
                 "maneuvers": {s.maneuver: {"sampling_interval_s": round(s.interval_s, 6),
                                            "first_exponent": round(float(s.exponent[0]), 3) if len(s.exponent) else None,
-                                           "smooth": s.smooth, "knee_s": round(s.knee_s, 6)} for s in self.measured}}
+                                           "limit": round(_limit(s), 3) if len(s.exponent) else None,
+                                           "smooth": s.smooth, "knee_s": round(s.knee_s, 6),
+                                           "interval_s": used_s.get(s.maneuver, self.interval_s)}
+                              for s in self.measured}}
 
 
-def _largest(measured) -> str:
-    first = [float(s.exponent[0]) for s in measured if len(s.exponent)]
-    return f"{max(first):.2f}" if first else "?"
+def _limit(s) -> float:
+    """The growth exponent beyond which a maneuver's residual is smooth at its first lag."""
+    return smoothness.MODEL_EXPONENT_MAX + smoothness.SIGNIFICANCE_SE * float(s.se[0])
 
 
 def pilot(maneuvers, stated_noise: dict, sensor_class=None):
-    """The baseline channel model fitted at the stated noise (WLS from the classic estimate), and each
-    maneuver's linearisation about it."""
+    """The baseline channel model's point estimate (its noise scales estimated, as every model's are:
+    a stated ARW far below the data's would leave the walk's interpolation shortfall, `smoothness`,
+    too small), and each maneuver's linearisation about it."""
     fx = effects.resolve("baseline", effects.BASELINE, {})
     spec = ModelSpec.build("pilot", fx, maneuvers[0].channels).with_sensor_class(sensor_class)
-    spec = spec.with_prior_only(identification.unflown(maneuvers, spec))
-    est = wls(maneuvers, spec, stated_noise, noise.log_sigma_of(stated_noise), classic.classic_start(maneuvers, spec))
+    est = point_estimate(maneuvers, spec, stated_noise, classic.classic_start(maneuvers, spec))
     return est, [est.linearize(maneuvers, m) for m in range(len(maneuvers))]
 
 
 def nominal(data) -> smoothness.Smoothness:
     """The growth of a maneuver's nominal error (its first channel set's, in body axes: the tracker's
-    frame but for the mounting)."""
-    lags, exponent, se = smoothness.growth(error_angles(data, data.sets[0], ChannelParams.zeros(data.channels)))
+    frame but for the mounting), of its increments within runs of samples without a gap
+    (`smoothness.contiguous_runs`)."""
+    error = error_angles(data, data.sets[0], ChannelParams.zeros(data.channels))
+    lags, exponent, se = smoothness.growth(error, smoothness.contiguous_runs(data.st_time))
     interval = float(np.median(np.diff(data.st_time))) if len(data.st_time) > 1 else 0.0
     return smoothness.Smoothness(data.id, interval, lags, exponent, se)
 
@@ -100,6 +116,32 @@ def choose(maneuvers, stated_noise: dict, sensor_class=None) -> Choice:
     est, lins = pilot(maneuvers, stated_noise, sensor_class)
     measured = smoothness.of_estimate(maneuvers, est, lins)
     return Choice(float(smoothness.recommended_interval_s(measured)), measured, True)
+
+
+def shorter(interval_s: float) -> float:
+    """The next interval below ``interval_s`` on the 1, 2, 5 ladder (5 -> 2 -> 1 -> 0.5 ...)."""
+    decade = 10.0 ** np.floor(np.log10(interval_s) + 1e-9)
+    mantissa = round(interval_s / decade)
+    return float({5: 2, 2: 1}.get(mantissa, 0.5) * decade)
+
+
+def slice_all(campaign, outlier_times_s, interval_s: float, usable_from_s: float) -> tuple:
+    """Every maneuver sliced at ``interval_s``, or, one too short to keep 10 samples at it, at the longest
+    interval on the 1, 2, 5 ladder below it that does (every sample below ``usable_from_s``, the
+    sampling interval); and per maneuver the interval used. Every maneuver slices at every sample
+    (the caller did), so an interval's only fault can be too few samples left."""
+    sliced, used = [], {}
+    for m in campaign.maneuvers:
+        every = interval_s
+        while True:
+            try:
+                sliced.append(slice_maneuver(campaign, m.id, outlier_times_s, every))
+                break
+            except TelemetryError:
+                every = shorter(every)
+                every = every if every >= usable_from_s else 0.0
+        used[m.id] = every
+    return sliced, used
 
 
 def requested(value) -> float | None:

@@ -26,7 +26,8 @@ import numpy as np
 
 from gyrocal.inference.preprocess import noise_groups
 
-__all__ = ["KNEE_INTERVAL_FACTOR", "MIN_INCREMENTS", "SIGNIFICANCE_SE", "Smoothness", "describe",
+__all__ = ["GAP_STEP_FACTOR", "KNEE_INTERVAL_FACTOR", "MIN_INCREMENTS", "SIGNIFICANCE_SE", "Smoothness",
+           "contiguous_runs", "describe",
            "fitted_walk_variances", "growth", "of_estimate", "of_maneuver", "recommended_interval_s", "walk_shortfall"]
 
 MODEL_EXPONENT_MAX = 0.5
@@ -89,29 +90,57 @@ def _lags(m: int) -> np.ndarray:
     return lags[3 * (m - 2 * lags) / (2 * lags) >= MIN_INCREMENTS]
 
 
-def _variogram(residual: np.ndarray, lags) -> np.ndarray:
+def _variogram(residual: np.ndarray, lags, runs=None) -> np.ndarray:
     """The increments' variance over each lag, summed over the axes (their mean removed: a constant
-    rate adds nothing)."""
-    return np.array([np.sum(np.var(residual[k:] - residual[:-k], axis=0)) for k in lags])
+    rate adds nothing); with ``runs`` (a label per sample), only of increments within one run."""
+    if runs is None:
+        return np.array([np.sum(np.var(residual[k:] - residual[:-k], axis=0)) for k in lags])
+    return np.array([np.sum(np.var((residual[k:] - residual[:-k])[runs[k:] == runs[:-k]], axis=0)) for k in lags])
 
 
 def _exponents(variogram: np.ndarray) -> np.ndarray:
     return 0.5 * np.log2(variogram[1:] / variogram[:-1])
 
 
-def _standard_errors(m: int, lags) -> np.ndarray:
-    """The growth exponent's error, each lag's increments taken as ``3 (M - k) / k`` independent ones:
-    2 to 3 times the true one for increments that overlap (it errs against calling a residual smooth)."""
-    n = 3.0 * (m - lags) / lags
-    n2 = 3.0 * (m - 2 * lags) / (2 * lags)
+def _standard_errors(m: int, lags, pairs=None) -> np.ndarray:
+    """The growth exponent's error, each lag's increments taken as ``3 (M - k) / k`` independent ones
+    (``pairs``: the ``M - k`` increments at each lag and twice it, where fewer are counted): 2 to 3
+    times the true one for increments that overlap (it errs against calling a residual smooth)."""
+    at_k, at_2k = (m - lags, m - 2 * lags) if pairs is None else pairs
+    n = 3.0 * at_k / lags
+    n2 = 3.0 * at_2k / (2 * lags)
     return 0.5 / np.log(2.0) * np.sqrt(2.0 / n + 2.0 / n2)
 
 
-def growth(residual: np.ndarray):
-    """Lags (samples, doubling), growth exponents and their standard errors of a (M, 3) residual."""
+def growth(residual: np.ndarray, runs=None):
+    """Lags (samples, doubling), growth exponents and their standard errors of a (M, 3) residual; with
+    ``runs`` (`contiguous_runs`), of its increments within each run alone, at the lags with enough of them."""
     r = np.asarray(residual, dtype=float)
     lags = _lags(len(r))
-    return lags, _exponents(_variogram(r, np.append(lags, 2 * lags[-1:]))), _standard_errors(len(r), lags)
+    if runs is None:
+        return lags, _exponents(_variogram(r, np.append(lags, 2 * lags[-1:]))), _standard_errors(len(r), lags)
+    counted = np.array([np.count_nonzero(runs[k:] == runs[:-k]) for k in np.append(lags, 2 * lags[-1:])])
+    enough = 3 * counted[1:] / (2 * lags) >= MIN_INCREMENTS
+    lags = lags[:np.argmin(np.append(enough, False))]
+    if not len(lags):
+        return lags, np.zeros(0), np.zeros(0)
+    every = np.append(lags, 2 * lags[-1:])
+    return (lags, _exponents(_variogram(r, every, runs)),
+            _standard_errors(len(r), lags, (counted[:len(lags)], counted[1:len(lags) + 1])))
+
+
+GAP_STEP_FACTOR = 1.5
+"""A step longer than this many median sampling intervals ends a run of samples (`contiguous_runs`)."""
+
+
+def contiguous_runs(time_s: np.ndarray) -> np.ndarray:
+    """A label per sample, new after every step longer than `GAP_STEP_FACTOR` median steps: an error
+    that grows during a gap (the nominal parameters' over an unseen slew) steps across it, and its
+    increments over a lag counted in samples would then grow with the lag as a walk's do."""
+    step = np.diff(np.asarray(time_s, dtype=float))
+    if not len(step):
+        return np.zeros(len(time_s), dtype=int)
+    return np.concatenate([[0], np.cumsum(step > GAP_STEP_FACTOR * np.median(step))])
 
 
 def walk_shortfall(st_dt_s, walk_var, walk_lag1, lags) -> np.ndarray:

@@ -2,6 +2,7 @@
 what its rule gives it: what the validation study and the tests call where Snakemake is not used.
 The rules call the same step functions, one job each."""
 
+from gyrocal.inference import interval
 from gyrocal.io import telemetry
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import (
@@ -39,7 +40,7 @@ def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=Non
     campaign = telemetry.read_campaign(campaign_dir)
     validate.run(campaign_dir, paths, campaign, cfg["sampler"]["block_s"])
     ids = preprocess.run(campaign_dir, paths, figures, campaign=campaign,
-                         reference_interval_s=cfg.get("reference_interval_s", 0.0), noise=cfg["noise"])
+                         reference_interval_s=cfg.get("reference_interval_s", interval.AUTO), noise=cfg["noise"])
     classic.run(paths, ids, cfg["noise"])
     calibrate_models(paths, ids, cfg, models, through, strict)
     return ids

@@ -14,7 +14,6 @@ from gyrocal.inference import interval, preprocess
 from gyrocal.inference.noise import noise_knowledge
 from gyrocal.io import telemetry
 from gyrocal.io.outputs import atomic_dir, write_csv
-from gyrocal.io.telemetry import TelemetryError
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.steps.common import read_json
 from gyrocal.report import figures as plots
@@ -45,17 +44,16 @@ def run(campaign_dir, paths: CampaignPaths, figures=True, processes: int = 1, ca
     maneuvers = [preprocess.slice_maneuver(campaign, m.id, outliers, seconds or 0.0) for m in campaign.maneuvers]
     if seconds is None:
         choice = interval.choose(maneuvers, noise_knowledge(info, noise), info["gyro"].get("sensor_class"))
-        record = choice.record()
-        log.info("reference interval: %s", choice.reason)
+        used = {}
         if choice.interval_s:
-            try:
-                maneuvers = [preprocess.slice_maneuver(campaign, m.id, outliers, choice.interval_s)
-                             for m in campaign.maneuvers]
-            except TelemetryError as short:
-                raise TelemetryError(
-                    f"{short} (reference_interval_s: auto chose {choice.interval_s:g} s: {choice.reason}). Fly the "
-                    "maneuver longer, or set reference_interval_s yourself (0: every sample, where the smoothness "
-                    "check will fail)") from short
+            step = min(s.interval_s for s in choice.measured)
+            maneuvers, used = interval.slice_all(campaign, outliers, choice.interval_s, step)
+        record = choice.record(used)
+        log.info("reference interval: %s", choice.reason)
+        for m, every in used.items():
+            if every != choice.interval_s:
+                log.warning("maneuver %s is too short to keep 10 reference samples every %g s: used every %g s",
+                            m, choice.interval_s, every)
     else:
         record = {"requested": seconds, "interval_s": seconds, "fitted": False,
                   "reason": (f"the reference is used every {seconds:g} s, as the config sets (reference_interval_s)"
