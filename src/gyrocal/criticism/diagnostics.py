@@ -14,6 +14,7 @@ import pandas as pd
 from scipy.special import chdtr, chdtrc, gammaln
 
 from gyrocal.checks.finding import Finding
+from gyrocal.criticism import correlation, noiseranking
 from gyrocal.criticism.bands import band_findings
 from gyrocal.criticism.increments import smoothness_finding
 from gyrocal.inference import errormodel, noise, smoothness
@@ -173,8 +174,8 @@ def chi2_log_sf(x: float, df: int) -> float:
     return float((a - 1) * np.log(z) - z - gammaln(a) + np.log1p(terms.sum()))
 
 
-def _entry(name, kind, drop, df, description, signature=""):
-    log_p = chi2_log_sf(drop, df)
+def _entry(name, kind, drop, df, description, signature="", log_p=None):
+    log_p = chi2_log_sf(drop, df) if log_p is None else log_p
     entry = {"name": name, "kind": kind, "score": round(-float(np.expm1(log_p)), 4), "chi2_drop": round(drop, 2),
              "df": df, "log10_p": round(log_p / np.log(10), 2), "description": description}
     return {**entry, "signature": signature} if signature else entry
@@ -185,8 +186,10 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
 
     A library effect whose columns are a signature's (``bias_drift`` and ``time``) is
     scored once, under its name, with the signature beside it. A noise-model effect
-    (correlated star-tracker noise) is scored by the score test of an autocorrelation
-    coefficient, ``n rho^2`` on one degree of freedom, from ``white``.
+    (correlated star-tracker noise) is scored from ``white``: the lag-1 autocorrelation's score test
+    and a scan of Gauss-Markov correlation times, combined (`correlation.log_p`; its ``chi2_drop`` the
+    one-degree-of-freedom chi-square of that p), and set below a deterministic candidate that leaves it
+    unexplained (`noiseranking.demote_explained`).
     Returns a list of dicts (best first) and, per candidate with per-channel columns,
     its statistic channel by channel.
     """
@@ -208,10 +211,13 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
             detail[effect.name] = {extras[i].label: round(_chi2_drop(stats, n_model, [i]), 2)
                                                        for i in per_channel}
     if white is not None and not estimate.spec.correlated_noise:
+        log_p = white["gauss_markov_scan"]["log10_p"] * np.log(10)
         for effect in (e for e in effects.LIBRARY.values() if e.noise):
-            ranking.append(_entry(effect.name, "effect", white["z"] ** 2, 1, effect.description))
+            ranking.append(_entry(effect.name, "effect", correlation.chi2_equivalent(log_p), 1, effect.description,
+                                  log_p=log_p))
     ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
     _encompass(ranking, groups, stats, n_model)
+    noiseranking.demote_explained(ranking, maneuvers, estimate, {e.name: e for _, e, _ in groups}, ENCOMPASS_TOP)
     return ranking, detail
 
 
@@ -233,12 +239,14 @@ def _measuring(walk_variances, pairs, measured: list):
 
 def whiteness(maneuvers, pairs, estimate: PointEstimate):
     """Lag-1 autocorrelation of the standardised innovations at the fitted model, per
-    maneuver and overall, with its z-score (``rho sqrt(n)``, N(0, 1) under the model).
+    maneuver and overall, with its z-score (``rho sqrt(n)``, n the star-tracker samples), and the
+    scan of Gauss-Markov shapes over the first channel set's pooled autocovariances
+    (`correlation.score`, ``gauss_markov_scan``) that ranks correlated reference noise.
     ``pairs``: each maneuver's linearisation and noise structure, e.g. `linearized`'s."""
     ratios = ratios_of(estimate.log_sigma)
     scale = np.exp(2 * estimate.log_sigma[0])
     index = noise_groups(maneuvers)[1]
-    per, pooled_num, pooled_den = {}, 0.0, 0.0
+    per, pooled, pooled_num, pooled_den = {}, None, 0.0, 0.0
     for m, (data, (lin, nz)) in enumerate(zip(maneuvers, pairs)):
         wm = WhitenedManeuver(nz, ratios)
         zero = np.zeros((1, nz.n_params))
@@ -251,9 +259,12 @@ def whiteness(maneuvers, pairs, estimate: PointEstimate):
                         "variance": round(den / len(w), 4)}
         pooled_num += num
         pooled_den += den
+        acov = correlation.autocovariances(w, lag, values=3)
+        pooled = acov if pooled is None else pooled + acov
     n = sum(len(d.st_time) for d in maneuvers)
     rho = pooled_num / pooled_den
-    return {"lag1": round(rho, 4), "z": round(rho * np.sqrt(n), 2), "per_maneuver": per}
+    return {"lag1": round(rho, 4), "z": round(rho * np.sqrt(n), 2), "per_maneuver": per,
+            "gauss_markov_scan": correlation.score(pooled, 3 * n, rho * np.sqrt(n))}
 
 
 def noise_rms_arcsec(maneuvers, stated_noise) -> float:

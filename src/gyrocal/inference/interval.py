@@ -11,7 +11,7 @@ the run so that their comparison holds, with its noise scales estimated as every
 The fit is needed only where the nominal error itself is smooth: the parameters' errors add smooth
 increments to it (a bias's are constant, which the measure removes), so a nominal error no smoother
 than the noise model allows leaves a residual that is not smooth either, and every sample is used
-with no fit (a few milliseconds on the default campaign, where the fit takes 2.6 s). The increments are
+with no fit (a tenth of a second on the default campaign, where the fit would take 2.7 s). The increments are
 taken within runs of samples without a gap: the nominal parameters' error over an unseen slew steps
 across a gap and would hide a smooth error (found by an independent review).
 """
