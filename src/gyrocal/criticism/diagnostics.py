@@ -174,8 +174,8 @@ def chi2_log_sf(x: float, df: int) -> float:
     return float((a - 1) * np.log(z) - z - gammaln(a) + np.log1p(terms.sum()))
 
 
-def _entry(name, kind, drop, df, description, signature="", log_p=None):
-    log_p = chi2_log_sf(drop, df) if log_p is None else log_p
+def _entry(name, kind, drop, df, description, signature=""):
+    log_p = chi2_log_sf(drop, df)
     entry = {"name": name, "kind": kind, "score": round(-float(np.expm1(log_p)), 4), "chi2_drop": round(drop, 2),
              "df": df, "log10_p": round(log_p / np.log(10), 2), "description": description}
     return {**entry, "signature": signature} if signature else entry
@@ -186,10 +186,9 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
 
     A library effect whose columns are a signature's (``bias_drift`` and ``time``) is
     scored once, under its name, with the signature beside it. A noise-model effect
-    (correlated star-tracker noise) is scored from ``white``: the lag-1 autocorrelation's score test
-    and a scan of Gauss-Markov correlation times, combined (`correlation.log_p`; its ``chi2_drop`` the
-    one-degree-of-freedom chi-square of that p), and set below a deterministic candidate that leaves it
-    unexplained (`noiseranking.demote_explained`).
+    (correlated star-tracker noise) is scored from ``white`` by the likelihood ratio of white plus
+    Gauss-Markov noise over white (`correlation.score`, on two degrees of freedom), and set below a
+    deterministic candidate that leaves it unexplained (`noiseranking.demote_explained`).
     Returns a list of dicts (best first) and, per candidate with per-channel columns,
     its statistic channel by channel.
     """
@@ -211,10 +210,10 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
             detail[effect.name] = {extras[i].label: round(_chi2_drop(stats, n_model, [i]), 2)
                                                        for i in per_channel}
     if white is not None and not estimate.spec.correlated_noise:
-        log_p = white["gauss_markov_scan"]["log10_p"] * np.log(10)
+        fitted = white["gauss_markov"]
         for effect in (e for e in effects.LIBRARY.values() if e.noise):
-            ranking.append(_entry(effect.name, "effect", correlation.chi2_equivalent(log_p), 1, effect.description,
-                                  log_p=log_p))
+            ranking.append(_entry(effect.name, "effect", fitted["chi2"], correlation.GAUSS_MARKOV_DF,
+                                  effect.description + correlation.caveat(fitted)))
     ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
     _encompass(ranking, groups, stats, n_model)
     noiseranking.demote_explained(ranking, maneuvers, estimate, {e.name: e for _, e, _ in groups}, ENCOMPASS_TOP)
@@ -240,13 +239,13 @@ def _measuring(walk_variances, pairs, measured: list):
 def whiteness(maneuvers, pairs, estimate: PointEstimate):
     """Lag-1 autocorrelation of the standardised innovations at the fitted model, per
     maneuver and overall, with its z-score (``rho sqrt(n)``, n the star-tracker samples), and the
-    scan of Gauss-Markov shapes over the first channel set's pooled autocovariances
-    (`correlation.score`, ``gauss_markov_scan``) that ranks correlated reference noise.
+    Whittle likelihood ratio of white plus Gauss-Markov noise over white on the first channel set's
+    innovations (`correlation.score`, ``gauss_markov``) that ranks correlated reference noise.
     ``pairs``: each maneuver's linearisation and noise structure, e.g. `linearized`'s."""
     ratios = ratios_of(estimate.log_sigma)
     scale = np.exp(2 * estimate.log_sigma[0])
     index = noise_groups(maneuvers)[1]
-    per, pooled, pooled_num, pooled_den = {}, None, 0.0, 0.0
+    per, spectra, pooled_num, pooled_den = {}, [], 0.0, 0.0
     for m, (data, (lin, nz)) in enumerate(zip(maneuvers, pairs)):
         wm = WhitenedManeuver(nz, ratios)
         zero = np.zeros((1, nz.n_params))
@@ -259,12 +258,11 @@ def whiteness(maneuvers, pairs, estimate: PointEstimate):
                         "variance": round(den / len(w), 4)}
         pooled_num += num
         pooled_den += den
-        acov = correlation.autocovariances(w, lag, values=3)
-        pooled = acov if pooled is None else pooled + acov
+        spectra.append(correlation.periodogram(w, lag))
     n = sum(len(d.st_time) for d in maneuvers)
     rho = pooled_num / pooled_den
     return {"lag1": round(rho, 4), "z": round(rho * np.sqrt(n), 2), "per_maneuver": per,
-            "gauss_markov_scan": correlation.score(pooled, 3 * n, rho * np.sqrt(n))}
+            "gauss_markov": correlation.score(spectra)}
 
 
 def noise_rms_arcsec(maneuvers, stated_noise) -> float:
