@@ -55,13 +55,8 @@ def one(job) -> dict:
     from gauss_markov import scenario_for
     from scipy import stats
 
-    from gyrocal.criticism import diagnostics
-    from gyrocal.inference import classic, preprocess
-    from gyrocal.inference.estimate import linearize_all, point_estimate
-    from gyrocal.inference.noise import noise_knowledge
-    from gyrocal.model import effects
-    from gyrocal.model.spec import ModelSpec
     from gyrocal.simulation import simulate
+    from gyrocal.study.baseline import baseline_ranking
     from gyrocal.study.campaign import campaign_scenario, draw_truth, prior_spec
 
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
@@ -73,14 +68,7 @@ def one(job) -> dict:
         scenario = campaign_scenario(base, truth, hidden, f"{kind}_{index}", int(study["seed"]) * 100003 + index)
     else:
         scenario = scenario_for(tau, index, truth)
-    campaign, _ = simulate.simulate(scenario)
-    maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
-    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
-    spec = ModelSpec.build("baseline", effects.resolve("baseline", list(effects.BASELINE), {}), maneuvers[0].channels)
-    est = point_estimate(maneuvers, spec, stated, classic.classic_start(maneuvers, spec))
-    lins, noises = linearize_all(maneuvers, est)
-    white = diagnostics.whiteness(maneuvers, zip(lins, noises), est)
-    ranking, _ = diagnostics.rank(maneuvers, est, list(maneuvers[0].extras), (), white)
+    _, _, white, ranking = baseline_ranking(simulate.simulate(scenario)[0], cfg["noise"])
     lag1 = stats.chi2.logsf(white["z"] ** 2, 1) / np.log(10)
     others = [r for r in ranking if r["name"] != "st_correlated_noise"]
     at = next((i for i, r in enumerate(others) if lag1 < r["log10_p"]), len(others))

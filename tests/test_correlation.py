@@ -69,36 +69,33 @@ def test_a_large_smooth_systematic_error_gains_only_as_the_log_of_its_energy():
     assert abs(steps[1] / steps[0] - 1) < 0.25 and gains[2] < 5 * gains[0], gains  # as log(energy), not energy
 
 
-def test_a_white_baseline_on_gauss_markov_noise_of_30_s_names_it_first_where_the_lag_1_score_did_not():
-    """The Gauss-Markov validation's campaign kind (tests/data/hidden_st_correlated_noise.yaml, white 5/20
-    arcsec plus a Gauss-Markov part as large, tau 30 s), seed 4: the lag-1 score alone (log10 p -10.7)
-    ranked below a slow signature (rate_sign, -25.9); the likelihood ratio ranks the correlated noise first."""
+def _fitted(name: str, seed: int, **changes):
+    """tests/data/<name>.yaml simulated with ``seed`` (``changes``: star_tracker and effects keys), the
+    white baseline fitted and ranked (`gyrocal.study.baseline`)."""
     from pathlib import Path
 
     import yaml
 
-    from gyrocal.criticism import diagnostics
-    from gyrocal.inference import classic, preprocess
-    from gyrocal.inference.estimate import linearize_all, point_estimate
-    from gyrocal.inference.noise import noise_knowledge
-    from gyrocal.model import effects
-    from gyrocal.model.spec import ModelSpec
     from gyrocal.simulation import simulate
+    from gyrocal.study.baseline import baseline_ranking
 
     root = Path(__file__).resolve().parents[1]
-    scenario = simulate.load_scenario(root / "tests/data/hidden_st_correlated_noise.yaml")
-    scenario["star_tracker"].update(gm_sigma_cross_arcsec=5.0, gm_sigma_about_arcsec=20.0, gm_tau_s=30.0)
-    scenario["effects"]["st_correlation_time_s"] = 0.0
-    scenario["seed"] = 4
-    campaign, _ = simulate.simulate(scenario)
-    maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
+    scenario = simulate.load_scenario(root / f"tests/data/{name}.yaml")
+    for key, value in changes.items():
+        section, key = key.split("__")
+        scenario[section][key] = value
+    scenario["seed"] = seed
     cfg = yaml.safe_load((root / "config/config.yaml").read_text())
-    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
-    spec = ModelSpec.build("baseline", effects.resolve("baseline", list(effects.BASELINE), {}), maneuvers[0].channels)
-    est = point_estimate(maneuvers, spec, stated, classic.classic_start(maneuvers, spec))
-    lins, noises = linearize_all(maneuvers, est)
-    white = diagnostics.whiteness(maneuvers, zip(lins, noises), est)
-    ranking, _ = diagnostics.rank(maneuvers, est, list(maneuvers[0].extras), (), white)
+    return baseline_ranking(simulate.simulate(scenario)[0], cfg["noise"])
+
+
+def test_a_white_baseline_on_gauss_markov_noise_of_30_s_names_it_first_where_the_lag_1_score_did_not():
+    """The Gauss-Markov validation's campaign kind (tests/data/hidden_st_correlated_noise.yaml, white 5/20
+    arcsec plus a Gauss-Markov part as large, tau 30 s), seed 4: the lag-1 score alone (log10 p -10.7)
+    ranked below a slow signature (rate_sign, -25.9); the likelihood ratio ranks the correlated noise first."""
+    _, _, white, ranking = _fitted("hidden_st_correlated_noise", 4, star_tracker__gm_sigma_cross_arcsec=5.0,
+                                   star_tracker__gm_sigma_about_arcsec=20.0, star_tracker__gm_tau_s=30.0,
+                                   effects__st_correlation_time_s=0.0)
     lag1_alone = stats.chi2.logsf(white["z"] ** 2, 1) / np.log(10)
     deterministic = [r for r in ranking if r["name"] != "st_correlated_noise"]
     assert deterministic[0]["log10_p"] < lag1_alone - 5, (deterministic[0], lag1_alone)
@@ -111,31 +108,9 @@ def test_a_noise_leading_an_effect_that_leaves_it_white_is_set_below_it():
     columns the innovations are white, so the noise, were it ahead of the drift, would be set below it
     (`noiseranking.demote_explained`); here the likelihood ratio already ranks it second (log10 p -823
     against -1 087), and the check, given a rank it is handed, moves it."""
-    from pathlib import Path
-
-    import yaml
-
-    from gyrocal.criticism import diagnostics
-    from gyrocal.inference import classic, preprocess
-    from gyrocal.inference.estimate import linearize_all, point_estimate
-    from gyrocal.inference.noise import noise_knowledge
     from gyrocal.model import effects
-    from gyrocal.model.spec import ModelSpec
-    from gyrocal.simulation import simulate
 
-    root = Path(__file__).resolve().parents[1]
-    scenario = simulate.load_scenario(root / "tests/data/hidden_bias_drift.yaml")
-    scenario["effects"]["bias_drift_deg_h_per_h"] = 20.0
-    scenario["seed"] = 0
-    campaign, _ = simulate.simulate(scenario)
-    maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
-    cfg = yaml.safe_load((root / "config/config.yaml").read_text())
-    stated = noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
-    spec = ModelSpec.build("baseline", effects.resolve("baseline", list(effects.BASELINE), {}), maneuvers[0].channels)
-    est = point_estimate(maneuvers, spec, stated, classic.classic_start(maneuvers, spec))
-    lins, noises = linearize_all(maneuvers, est)
-    white = diagnostics.whiteness(maneuvers, zip(lins, noises), est)
-    ranking, _ = diagnostics.rank(maneuvers, est, list(maneuvers[0].extras), (), white)
+    maneuvers, est, _, ranking = _fitted("hidden_bias_drift", 0, effects__bias_drift_deg_h_per_h=20.0)
     assert [r["name"] for r in ranking[:2]] == ["bias_drift", "st_correlated_noise"]
     given_drift = noiseranking.noise_score_given(maneuvers, est, [effects.LIBRARY["bias_drift"]])["log10_p"]
     assert given_drift > noiseranking.LEFTOVER_LOG10_P
