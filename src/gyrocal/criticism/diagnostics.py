@@ -243,15 +243,13 @@ def whiteness(maneuvers, pairs, estimate: PointEstimate):
     innovations (`correlation.score`, ``gauss_markov``) that ranks correlated reference noise.
     ``pairs``: each maneuver's linearisation and noise structure, e.g. `linearized`'s."""
     ratios = ratios_of(estimate.log_sigma)
-    scale = np.exp(2 * estimate.log_sigma[0])
     index = noise_groups(maneuvers)[1]
     per, spectra, pooled_num, pooled_den = {}, [], 0.0, 0.0
     for m, (data, (lin, nz)) in enumerate(zip(maneuvers, pairs)):
         wm = WhitenedManeuver(nz, ratios)
         zero = np.zeros((1, nz.n_params))
         beta = wm.nuisance(zero)
-        level = 1.0 if estimate.group_offsets is None else np.exp(2 * estimate.group_offsets[index[m]])
-        w = (wm.wd - wm.wg @ beta[0]) / np.sqrt(scale * level)
+        w = (wm.wd - wm.wg @ beta[0]) / noiseranking.innovation_sd(estimate, index[m])
         lag = lin.z.shape[1] * 3
         num, den = float(w[lag:] @ w[:-lag]), float(w @ w)
         per[data.id] = {"lag1": round(num / den, 4), "z": round(num / den * np.sqrt(len(w) / lag), 2),

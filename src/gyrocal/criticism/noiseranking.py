@@ -19,13 +19,20 @@ from gyrocal.inference.noise import ratios_of
 from gyrocal.inference.predictive import WhitenedManeuver
 from gyrocal.inference.preprocess import noise_groups
 
-__all__ = ["LEFTOVER_LOG10_P", "NOISE_EFFECT", "demote_explained", "noise_score_given"]
+__all__ = ["LEFTOVER_LOG10_P", "NOISE_EFFECT", "demote_explained", "innovation_sd", "noise_score_given"]
 
 NOISE_EFFECT = "st_correlated_noise"
 
 LEFTOVER_LOG10_P = -2.0
 """Given an effect's columns, a noise score above this log10 p is explained by the effect (the ranking's
 leaders are the candidates below it)."""
+
+
+def innovation_sd(estimate: PointEstimate, group: int) -> float:
+    """The sd that standardises a maneuver's whitened innovations (`WhitenedManeuver` whitens at unit
+    cross-boresight variance): the campaign's cross-boresight sd times the level of its noise group."""
+    level = 1.0 if estimate.group_offsets is None else np.exp(2 * estimate.group_offsets[group])
+    return float(np.sqrt(np.exp(2 * estimate.log_sigma[0]) * level))
 
 
 def _whitened(maneuvers, estimate: PointEstimate, added):
@@ -35,14 +42,12 @@ def _whitened(maneuvers, estimate: PointEstimate, added):
     spec = estimate.spec.augmented(added)
     theta = np.concatenate([estimate.theta, np.zeros(len(spec) - len(estimate.spec))])
     ratios = ratios_of(estimate.log_sigma)
-    scale = np.exp(2 * estimate.log_sigma[0])
     index = noise_groups(maneuvers)[1]
     for m, data in enumerate(maneuvers):
         lin = errormodel.linearize(data, spec, theta, estimate.biases[m])
         wm = WhitenedManeuver(noise.build(lin, estimate.boresight, estimate.correlation_time_s), ratios)
-        level = 1.0 if estimate.group_offsets is None else np.exp(2 * estimate.group_offsets[index[m]])
         q = np.linalg.qr(wm.wg)[0]
-        unit = np.sqrt(scale * level)
+        unit = innovation_sd(estimate, index[m])
         x = (wm.wx - q @ (q.T @ wm.wx)) / unit
         d = (wm.wd - q @ (q.T @ wm.wd)) / unit
         yield x, d, lin.z.shape[1] * 3

@@ -29,7 +29,7 @@ from gyrocal.model import effects
 from gyrocal.model.channels import ChannelParams
 from gyrocal.model.spec import ModelSpec
 
-__all__ = ["AUTO", "Choice", "choose", "nominal", "pilot", "requested", "shorter", "slice_all"]
+__all__ = ["AUTO", "Choice", "choose", "nominal", "pilot", "requested", "shorter", "slice_all", "sliced"]
 
 AUTO = "auto"
 """The config value of ``reference_interval_s`` that asks for the interval to be chosen from the data."""
@@ -54,13 +54,13 @@ class Choice:
         if not self.interval_s:
             s = max(self.measured, key=lambda s: s.exponent[0] if len(s.exponent) else -np.inf)
             growth = (f" (its increments grow at most as lag^{s.exponent[0]:.2f}, on {s.maneuver}, where the limit "
-                      f"is {_limit(s):.2f})" if len(s.exponent) else "")
+                      f"is {s.limit[0]:.2f})" if len(s.exponent) else "")
             return f"every reference sample is used: {what} is not smooth at the sampling interval{growth}"
         smooth = [s for s in self.measured if s.smooth]
         worst = max(smooth, key=lambda s: s.knee_s)
         return (f"the reference is used every {self.interval_s:.3g} s: {what} is smooth at the sampling interval "
                 f"on {', '.join(s.maneuver for s in smooth)}. On {worst.maneuver} its increments grow as "
-                f"lag^{worst.exponent[0]:.2f} from {worst.interval_s:.3g} s (limit {_limit(worst):.2f}: white noise, "
+                f"lag^{worst.exponent[0]:.2f} from {worst.interval_s:.3g} s (limit {worst.limit[0]:.2f}: white noise, "
                 f"the gyro's walk and a Gauss-Markov part grow at most as lag^0.5) and faster up to "
                 f"{worst.knee_s:.3g} s, the knee; {smoothness.KNEE_INTERVAL_FACTOR:g} knees, "
                 f"{smoothness.KNEE_INTERVAL_FACTOR * worst.knee_s:.3g} s, rounded up to 1, 2 or 5 times a power of "
@@ -75,15 +75,10 @@ class Choice:
         return {"requested": AUTO, "interval_s": self.interval_s, "fitted": self.fitted, "reason": reason,
                 "maneuvers": {s.maneuver: {"sampling_interval_s": round(s.interval_s, 6),
                                            "first_exponent": round(float(s.exponent[0]), 3) if len(s.exponent) else None,
-                                           "limit": round(_limit(s), 3) if len(s.exponent) else None,
+                                           "limit": round(float(s.limit[0]), 3) if len(s.exponent) else None,
                                            "smooth": s.smooth, "knee_s": round(s.knee_s, 6),
                                            "interval_s": used_s.get(s.maneuver, self.interval_s)}
                               for s in self.measured}}
-
-
-def _limit(s) -> float:
-    """The growth exponent beyond which a maneuver's residual is smooth at its first lag."""
-    return smoothness.MODEL_EXPONENT_MAX + smoothness.SIGNIFICANCE_SE * float(s.se[0])
 
 
 def pilot(maneuvers, stated_noise: dict, sensor_class=None):
@@ -142,6 +137,23 @@ def slice_all(campaign, outlier_times_s, interval_s: float, usable_from_s: float
                 every = every if every >= usable_from_s else 0.0
         used[m.id] = every
     return sliced, used
+
+
+def sliced(campaign, outlier_times_s, seconds: float | None, stated_noise: dict | None, sensor_class=None) -> tuple:
+    """Every maneuver sliced as ``reference_interval_s`` asks (``seconds``, `requested`'s: None for `AUTO`,
+    which chooses with ``stated_noise``), and the record of the interval used and why
+    (``preprocess/reference_interval.json``)."""
+    every = [slice_maneuver(campaign, m.id, outlier_times_s, seconds or 0.0) for m in campaign.maneuvers]
+    if seconds is not None:
+        return every, {"requested": seconds, "interval_s": seconds, "fitted": False,
+                       "reason": (f"the reference is used every {seconds:g} s, as the config sets (reference_interval_s)"
+                                  if seconds else "every reference sample is used, as the config sets "
+                                                  "(reference_interval_s = 0)")}
+    choice = choose(every, stated_noise, sensor_class)
+    if not choice.interval_s:
+        return every, choice.record()
+    thinned, used = slice_all(campaign, outlier_times_s, choice.interval_s, min(s.interval_s for s in choice.measured))
+    return thinned, choice.record(used)
 
 
 def requested(value) -> float | None:

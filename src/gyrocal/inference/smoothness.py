@@ -65,9 +65,15 @@ class Smoothness:
     """Its approximate standard error."""
 
     @property
+    def limit(self) -> np.ndarray:
+        """Per lag, the growth exponent beyond which the residual is smoother than the noise model allows:
+        `MODEL_EXPONENT_MAX` plus `SIGNIFICANCE_SE` standard errors."""
+        return MODEL_EXPONENT_MAX + SIGNIFICANCE_SE * self.se
+
+    @property
     def beyond(self) -> np.ndarray:
         """Where the growth is significantly faster than any white, walk and Gauss-Markov sum allows."""
-        return self.exponent > MODEL_EXPONENT_MAX + SIGNIFICANCE_SE * self.se
+        return self.exponent > self.limit
 
     @property
     def smooth(self) -> bool:

@@ -27,7 +27,7 @@ def run(campaign_dir, paths: CampaignPaths, figures=True, processes: int = 1, ca
         reference_interval_s=0.0, noise=None) -> list:
     """Slice every maneuver of the campaign (in its order), leaving out the star-tracker outliers
     that validation listed and the samples between those kept every ``reference_interval_s``
-    seconds (0: every one; ``"auto"``: as `interval.choose` names from the data, with the config's
+    seconds (0: every one; ``"auto"``: as `interval.sliced` chooses from the data, with the config's
     ``noise`` where campaign.yaml states none); propagate every channel set nominally; write
     ``<id>.npz``, ``<id>.csv``, ``reference_interval.json`` and (unless ``figures`` is false: the
     validation study reads none) ``<id>.png`` into ``paths.preprocess``, whole or not at all. The
@@ -41,23 +41,10 @@ def run(campaign_dir, paths: CampaignPaths, figures=True, processes: int = 1, ca
         campaign = checks.aligned(campaign, Rotation.from_quat(info["mounting"]["quat"]))
     outliers = [o["time_s"] for o in info["star_tracker_outliers"]]
     seconds = interval.requested(reference_interval_s)
-    maneuvers = [preprocess.slice_maneuver(campaign, m.id, outliers, seconds or 0.0) for m in campaign.maneuvers]
-    if seconds is None:
-        choice = interval.choose(maneuvers, noise_knowledge(info, noise), info["gyro"].get("sensor_class"))
-        used = {}
-        if choice.interval_s:
-            step = min(s.interval_s for s in choice.measured)
-            maneuvers, used = interval.slice_all(campaign, outliers, choice.interval_s, step)
-        record = choice.record(used)
-        log.info("reference interval: %s", choice.reason)
-        for m, every in used.items():
-            if every != choice.interval_s:
-                log.warning("maneuver %s is too short to keep 10 reference samples every %g s: used every %g s",
-                            m, choice.interval_s, every)
-    else:
-        record = {"requested": seconds, "interval_s": seconds, "fitted": False,
-                  "reason": (f"the reference is used every {seconds:g} s, as the config sets (reference_interval_s)"
-                             if seconds else "every reference sample is used, as the config sets (reference_interval_s = 0)")}
+    stated = noise_knowledge(info, noise) if seconds is None else None
+    maneuvers, record = interval.sliced(campaign, outliers, seconds, stated, info["gyro"].get("sensor_class"))
+    capped = [m for m, r in record.get("maneuvers", {}).items() if r["interval_s"] != record["interval_s"]]
+    log.log(logging.WARNING if capped else logging.INFO, "reference interval: %s", record["reason"])
     with atomic_dir(paths.preprocess) as tmp:
         drawings = []
         for m, data in zip(campaign.maneuvers, maneuvers):
