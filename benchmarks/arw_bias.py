@@ -36,8 +36,8 @@ ROOT = Path(__file__).resolve().parents[1]
 def profile_ml(noises, ratios):
     """`noisefit.profile_reml`'s profile with maximum likelihood: the nuisance and the channel
     parameters are fitted, not integrated out (all n data count, no log det of the information)."""
-    from gyrocal.inference.likelihood import campaign_stats
-    from gyrocal.inference.noise import variances
+    from gyrocal.inference.fit.likelihood import campaign_stats
+    from gyrocal.inference.noise.covariance import variances
 
     stats = campaign_stats(noises, variances([0.0, ratios[0], ratios[1]]))
     informed = np.diag(stats.A) > 0
@@ -48,7 +48,7 @@ def profile_ml(noises, ratios):
 
 
 def noise_at(noises, log_sigma0, ml: bool) -> np.ndarray:
-    from gyrocal.inference import noisefit
+    from gyrocal.inference.fit import noisefit
 
     if not ml:
         return noisefit.estimate_noise(noises, log_sigma0)[0]
@@ -75,7 +75,11 @@ def realised_arw(scenario, seed) -> float:
 
 
 def fit(scenario, seed, cfg, posterior_draws: bool) -> dict:
-    from gyrocal.inference import classic, errormodel, estimate, noise, posterior, preprocess
+    from gyrocal.inference import errormodel
+    from gyrocal.inference.fit import classic, estimate
+    from gyrocal.inference.noise import covariance
+    from gyrocal.inference.sampling import posterior
+    from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline
     from gyrocal.model.units import deg_h_to_rad_s
     from gyrocal.pipeline.steps.posterior import model_priors
@@ -83,13 +87,13 @@ def fit(scenario, seed, cfg, posterior_draws: bool) -> dict:
 
     campaign, truth = simulate.simulate(scenario, seed)
     maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
-    stated = noise.noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
+    stated = covariance.noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
     spec = baseline(campaign.channels)
     est = estimate.point_estimate(maneuvers, spec, stated, classic.classic_start(maneuvers, spec))
     row = {"seed": seed, "point": est.log_sigma[2]}
     theta = spec.core_vector(spec.params_from_contract(truth["parameters"]))
     bias = deg_h_to_rad_s([truth["parameters"][c.name]["bias_deg_h"] for c in spec.channels])
-    log_sigma0 = noise.log_sigma_of(stated)
+    log_sigma0 = covariance.log_sigma_of(stated)
     for name, ml, raw in (("reml_truth", False, False), ("ml_truth", True, False), ("reml_raw_columns", False, True)):
         smoothed = errormodel.smoothed_columns
         if raw:
@@ -98,7 +102,7 @@ def fit(scenario, seed, cfg, posterior_draws: bool) -> dict:
             lins = [errormodel.linearize(d, spec, theta, bias) for d in maneuvers]
         finally:
             errormodel.smoothed_columns = smoothed
-        noises = [noise.build(lin, stated["boresight_body"]) for lin in lins]
+        noises = [covariance.build(lin, stated["boresight_body"]) for lin in lins]
         row[name] = noise_at(noises, log_sigma0, ml)[2]
     row["realised"] = np.log(realised_arw(scenario, seed))
     quiet = copy.deepcopy(scenario)
@@ -112,7 +116,7 @@ def fit(scenario, seed, cfg, posterior_draws: bool) -> dict:
         post = posterior.sample(maneuvers, est, priors, cfg["sampler"], cfg["grid"], seed)
         arw = np.exp(post.result.chains[..., -1])
         row["posterior_mean"] = np.log(arw.mean())
-    stated_arw = noise.stated_si(stated)[2]
+    stated_arw = covariance.stated_si(stated)[2]
     return {k: (float(np.exp(v) / stated_arw) if k != "seed" else v) for k, v in row.items()}
 
 

@@ -39,7 +39,8 @@ def one(kind, index: int, cfg: dict, study: dict) -> tuple:
     """(fitted, interval_s, seconds) of campaign ``index`` of ``kind``."""
     from gauss_markov import scenario_for
 
-    from gyrocal.inference import interval, preprocess
+    from gyrocal.inference import interval
+    from gyrocal.maneuvers import preprocess
     from gyrocal.simulation import simulate
     from gyrocal.study.campaign import campaign_scenario, draw_truth, prior_spec
 

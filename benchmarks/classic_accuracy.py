@@ -23,7 +23,8 @@ CONDITIONS = {"bias 0.01 deg/h (default)": (0.01, 0.0, False), "bias 0.3 deg/h":
 
 
 def errors(seed: int, bias_sd: float, drift: float, drawn: bool) -> pd.DataFrame:
-    from gyrocal.inference import classic, preprocess
+    from gyrocal.inference.fit import classic
+    from gyrocal.maneuvers import preprocess
     from gyrocal.model import spec
     from gyrocal.simulation import simulate
 

@@ -54,11 +54,13 @@ def steps(k: int, model: str, whole: bool, diagnostics_max: int, linearise_max: 
     """Time (s) and allocation peak (MB) of each step on the default campaign flown ``k`` times over."""
     from gyrocal import checks
     from gyrocal.criticism import diagnostics
-    from gyrocal.inference import classic, noise, preprocess, segments
-    from gyrocal.inference.estimate import point_estimate
-    from gyrocal.inference.likelihood import campaign_stats
-    from gyrocal.inference.noisefit import profile_reml
-    from gyrocal.inference.noisegrid import NoiseShapes
+    from gyrocal.inference.fit import classic
+    from gyrocal.inference.fit.estimate import point_estimate
+    from gyrocal.inference.fit.likelihood import campaign_stats
+    from gyrocal.inference.fit.noisefit import profile_reml
+    from gyrocal.inference.noise import covariance, segments
+    from gyrocal.inference.sampling.noisegrid import NoiseShapes
+    from gyrocal.maneuvers import preprocess
     from gyrocal.model import effects
     from gyrocal.model.spec import ModelSpec
     from gyrocal.simulation import simulate
@@ -69,14 +71,14 @@ def steps(k: int, model: str, whole: bool, diagnostics_max: int, linearise_max: 
         campaign, _ = checks.read_checked(Path(tmp) / "campaign")
     one = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
     spec = ModelSpec.build(model, effects.resolve(model, MODELS[model], {}), one[0].channels)
-    stated = noise.noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
+    stated = covariance.noise_knowledge({"star_tracker": campaign.star_tracker, "gyro": campaign.gyro}, cfg["noise"])
     reference = Path(tempfile.gettempdir()) / f"gyrocal-cost-{model}.npz"
     if not reference.exists():  # the 1x estimate: where every factor's steps are taken
         est1 = point_estimate(one, spec, stated, classic.classic_start(one, spec))
         tmp_ref = reference.with_suffix(".tmp.npz")
         est1.save(tmp_ref)
         tmp_ref.replace(reference)
-    from gyrocal.inference.estimate import PointEstimate
+    from gyrocal.inference.fit.estimate import PointEstimate
 
     est1 = PointEstimate.load(reference, effects.known([]), linearizations=False)
     span = max(m.st_time[-1] for m in one) - min(m.gyro_time[0] for m in one) + 60.0
@@ -101,18 +103,18 @@ def steps(k: int, model: str, whole: bool, diagnostics_max: int, linearise_max: 
         lins = timed("linearise every maneuver", lambda: [est.linearize(maneuvers, m) for m in range(len(maneuvers))])
     else:  # the same data: the 1x linearisations, shared (their memory is not in the figures)
         lins = [est.linearize(one, m) for m in range(len(one))] * k
-    ratios = noise.ratios_of(est.log_sigma)
+    ratios = covariance.ratios_of(est.log_sigma)
 
     if tau > 0:  # as the correlated REML evaluates it: each chain of maneuvers built, summed and dropped
         chained = segments.Chains.of(maneuvers)
         timed("REML profile, one evaluation",
               lambda: NoiseShapes(None, lins, est.boresight, chained=chained).profile(ratios))
     noises = timed("noise structures (the white REML's, or the grid's at one tau: the chains')",
-                   lambda: [noise.build(lin, est.boresight, tau) for lin in lins] if tau == 0
+                   lambda: [covariance.build(lin, est.boresight, tau) for lin in lins] if tau == 0
                    else list(chained.noises(lins, est.boresight, tau)))
     if tau == 0:
         timed("REML profile, one evaluation", lambda nz=noises: profile_reml(nz, ratios)[0])
-    timed("posterior grid, one node", lambda nz=noises: campaign_stats(nz, noise.unit_variances(ratios)))
+    timed("posterior grid, one node", lambda nz=noises: campaign_stats(nz, covariance.unit_variances(ratios)))
     del noises
 
     def diagnose():

@@ -17,8 +17,8 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from gyrocal.inference.calibration import core_rows
-from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.io.calibration import core_rows
 from gyrocal.simulation import simulate
 
 from conftest import DATA, config_with, run_campaign

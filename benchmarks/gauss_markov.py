@@ -87,12 +87,14 @@ def intervals(spec, theta, cov) -> dict:
 def one(tau_s: float, index: int, cfg: dict, sampled: bool, baseline_every: int = 1, gap_s=None) -> dict:
     from gyrocal import checks
     from gyrocal.criticism import diagnostics
-    from gyrocal.inference import classic, preprocess, segments
-    from gyrocal.inference.estimate import linearize_all, point_estimate
-    from gyrocal.inference.likelihood import campaign_stats, conditional_posterior
-    from gyrocal.inference.noise import noise_knowledge, scales_in_units, variances
-    from gyrocal.inference.posterior import Priors
+    from gyrocal.inference.fit import classic
+    from gyrocal.inference.fit.estimate import linearize_all, point_estimate
+    from gyrocal.inference.fit.likelihood import campaign_stats, conditional_posterior
+    from gyrocal.inference.noise import segments
+    from gyrocal.inference.noise.covariance import noise_knowledge, scales_in_units, variances
+    from gyrocal.inference.sampling.posterior import Priors
     from gyrocal.io.telemetry import write_campaign
+    from gyrocal.maneuvers import preprocess
     from gyrocal.model import effects
     from gyrocal.model.spec import ModelSpec
     from gyrocal.planning.plan import crlb_sd

@@ -23,10 +23,10 @@ GRIDS = [(11, 7.0), (9, 7.0), (7, 8.0), (5, 8.0)]
 
 
 def main():
-    from gyrocal.inference import noisegrid
-    from gyrocal.inference.estimate import linearize_all
-    from gyrocal.inference.likelihood import campaign_stats
-    from gyrocal.inference.noise import variances
+    from gyrocal.inference.fit.estimate import linearize_all
+    from gyrocal.inference.fit.likelihood import campaign_stats
+    from gyrocal.inference.noise.covariance import variances
+    from gyrocal.inference.sampling import noisegrid
 
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     fitted = baseline_fit(ROOT / "config/scenarios/mom.yaml", cfg)

@@ -32,8 +32,9 @@ def fit(scenario: dict, seed: int, reml: bool, cfg: dict):
     (classic start, WLS; REML noise scales only with ``reml``, else the stated noise, which is the
     simulator's): the campaign's likelihood and its specification with the config's priors."""
     from gyrocal.criticism.joint import CampaignLikelihood
-    from gyrocal.inference import classic, estimate, preprocess
-    from gyrocal.inference.noise import noise_knowledge
+    from gyrocal.inference.fit import classic, estimate
+    from gyrocal.inference.noise.covariance import noise_knowledge
+    from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline
     from gyrocal.simulation.simulate import simulate
 

@@ -32,9 +32,10 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from gyrocal.inference import inferencedata, noise, predictive
-from gyrocal.inference.estimate import PointEstimate, linearize_all
-from gyrocal.inference.likelihood import Stats, leave_one_out_log_evidence, log_evidence, maneuver_stats, total
+from gyrocal.inference.fit.estimate import PointEstimate, linearize_all
+from gyrocal.inference.fit.likelihood import Stats, leave_one_out_log_evidence, log_evidence, maneuver_stats, total
+from gyrocal.inference.noise import covariance
+from gyrocal.inference.sampling import inferencedata, predictive
 from gyrocal.pipeline.steps import common
 from gyrocal.pipeline.steps import posterior as posterior_step
 from gyrocal.simulation import simulate
@@ -54,7 +55,7 @@ def dense_parts(lin, nz, var):
     t_inv = np.tril(np.ones((n // width, n // width)))
     t_inv = np.kron(t_inv, np.eye(width))
     cov = t_inv @ c @ t_inv.T
-    return (lin.z.reshape(n), lin.design.reshape(n, -1), noise.nuisance_design(lin).reshape(n, -1), cov)
+    return (lin.z.reshape(n), lin.design.reshape(n, -1), covariance.nuisance_design(lin).reshape(n, -1), cov)
 
 
 def dense_stats(y, x, g, cov) -> Stats:
@@ -107,7 +108,7 @@ def study(scenario: Path, effect: str, tmp: Path):
         est = PointEstimate.load(tmp / "out" / model / "point_estimate.npz", known)
         priors = posterior_step.model_priors(est, cfg["priors"])
         prior_mean, prior_sd = priors.mean - est.theta, priors.sd
-        var = noise.variances(est.log_sigma)
+        var = covariance.variances(est.log_sigma)
         lins, noises = linearize_all(maneuvers, est)
         parts = [maneuver_stats(nz, var) for nz in noises]
         lomo[model] = leave_one_out_log_evidence(parts, prior_mean, prior_sd)

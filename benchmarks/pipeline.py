@@ -41,7 +41,7 @@ def snakemake_run():
 def sampler_figures():
     from snakemake.utils import validate
 
-    from gyrocal.inference import inferencedata, posterior
+    from gyrocal.inference.sampling import inferencedata, posterior
 
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     validate(cfg, str(ROOT / "workflow/schemas/config.schema.yaml"))

@@ -120,9 +120,9 @@ class Figures:
 
 def gyrocal_figures(c: Campaign, cfg: dict) -> Figures:
     """Run `posterior.sample` as the pipeline does; time it and its log posterior."""
-    from gyrocal.inference import inferencedata, posterior
-    from gyrocal.inference.likelihood import campaign_stats, conditional_posterior
-    from gyrocal.inference.noise import variances
+    from gyrocal.inference.fit.likelihood import campaign_stats, conditional_posterior
+    from gyrocal.inference.noise.covariance import variances
+    from gyrocal.inference.sampling import inferencedata, posterior
     est, spec = c.estimate, c.estimate.spec
     start = time.perf_counter()
     post = posterior.sample(c.maneuvers, est, c.priors, cfg["sampler"], cfg["grid"], cfg["seed"])

@@ -42,9 +42,11 @@ def longer(scenario: dict, k: int) -> dict:
 
 def stage_times(scenario: dict, cfg: dict) -> dict:
     from gyrocal import checks
-    from gyrocal.inference import classic, inferencedata, posterior, preprocess
-    from gyrocal.inference.estimate import point_estimate
-    from gyrocal.inference.noise import noise_knowledge
+    from gyrocal.inference.fit import classic
+    from gyrocal.inference.fit.estimate import point_estimate
+    from gyrocal.inference.noise.covariance import noise_knowledge
+    from gyrocal.inference.sampling import inferencedata, posterior
+    from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline
     from gyrocal.pipeline.steps.posterior import model_priors
     from gyrocal.simulation import simulate

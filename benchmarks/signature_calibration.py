@@ -17,8 +17,10 @@ import yaml
 from snakemake.utils import validate
 
 from gyrocal.criticism import diagnostics
-from gyrocal.inference import classic, noise, preprocess
-from gyrocal.inference.estimate import point_estimate
+from gyrocal.inference.fit import classic
+from gyrocal.inference.fit.estimate import point_estimate
+from gyrocal.inference.noise import covariance
+from gyrocal.maneuvers import preprocess
 from gyrocal.model.spec import baseline
 from gyrocal.simulation import simulate
 from gyrocal.study import campaign as study
@@ -34,7 +36,7 @@ def ranked(base, cfg, index, seed):
     campaign, _ = simulate.simulate(scenario)
     maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
     spec = baseline(campaign.channels)
-    stated = noise.noise_knowledge({"star_tracker": scenario["star_tracker"], "gyro": scenario["gyro"]}, cfg["noise"])
+    stated = covariance.noise_knowledge({"star_tracker": scenario["star_tracker"], "gyro": scenario["gyro"]}, cfg["noise"])
     est = point_estimate(maneuvers, spec, stated, classic.classic_start(maneuvers, spec))
     return {r["name"]: r["log10_p"] for r in diagnostics.rank(maneuvers, est, [], ())[0]}
 

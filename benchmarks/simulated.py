@@ -18,9 +18,10 @@ class Fitted:
 def baseline_fit(scenario_path, cfg: dict) -> Fitted:
     """Simulate ``scenario_path``, slice its maneuvers, and fit the baseline model (classic start,
     REML noise, WLS) as the pipeline would."""
-    from gyrocal.inference import classic, estimate, preprocess
-    from gyrocal.inference.noise import noise_knowledge
+    from gyrocal.inference.fit import classic, estimate
+    from gyrocal.inference.noise.covariance import noise_knowledge
     from gyrocal.io import telemetry
+    from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline
     from gyrocal.pipeline.steps.posterior import model_priors
     from gyrocal.simulation import simulate
@@ -43,9 +44,9 @@ def evaluations_per_s(post, estimate, priors, calls: int) -> float:
 
     import numpy as np
 
-    from gyrocal.inference import posterior
-    from gyrocal.inference.likelihood import campaign_stats, conditional_posterior
-    from gyrocal.inference.noise import variances
+    from gyrocal.inference.fit.likelihood import campaign_stats, conditional_posterior
+    from gyrocal.inference.noise.covariance import variances
+    from gyrocal.inference.sampling import posterior
 
     logpost = posterior.LogPosterior(post.grid, estimate.theta, priors)
     mean, _ = conditional_posterior(campaign_stats(post.noises, variances(estimate.log_sigma)),

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from gyrocal.inference import classic, preprocess
+from gyrocal.inference.fit import classic
+from gyrocal.maneuvers import preprocess
 from gyrocal.model import spec
 from gyrocal.simulation import simulate
 

@@ -8,17 +8,17 @@ the conditional's precision, and the offsets the move draws have the conditional
 import numpy as np
 from test_numerics import BORESIGHT, P, tiny_linearization
 
-from gyrocal.inference import noise
-from gyrocal.inference.noisegrid import RatioGrid
-from gyrocal.inference.posterior import LogPosterior, Priors
-from gyrocal.inference.proposal import CollapsedProposal, ConditionalCache, StudentProposal
+from gyrocal.inference.noise import covariance
+from gyrocal.inference.sampling.noisegrid import RatioGrid
+from gyrocal.inference.sampling.posterior import LogPosterior, Priors
+from gyrocal.inference.sampling.proposal import CollapsedProposal, ConditionalCache, StudentProposal
 
 LOG_SIGMA = np.log([1e-4, 3e-4, 2e-6])
 
 
 def tiny_posterior():
-    nz = [noise.build(tiny_linearization(seed), BORESIGHT) for seed in (0, 1)]
-    grid = RatioGrid(nz, noise.ratios_of(LOG_SIGMA), np.array([0.3, 0.3]), 7, 8.0)
+    nz = [covariance.build(tiny_linearization(seed), BORESIGHT) for seed in (0, 1)]
+    grid = RatioGrid(nz, covariance.ratios_of(LOG_SIGMA), np.array([0.3, 0.3]), 7, 8.0)
     priors = Priors(mean=np.full(P, 0.02), sd=np.full(P, 0.05), bound=np.full(P, 10.0),
                     log_sigma_center=LOG_SIGMA, log_sigma_sd=np.ones(3))
     return LogPosterior(grid, np.full(P, 0.01), priors)
@@ -148,7 +148,7 @@ def test_grid_statistics_taken_from_the_last_call_equal_fresh_interpolation():
     are taken from it; the rest are interpolated: every row as a fresh grid gives it."""
     grid = tiny_posterior().grid
     rng = np.random.default_rng(8)
-    first = noise.ratios_of(LOG_SIGMA) + rng.normal(0, 0.1, (6, 2))
+    first = covariance.ratios_of(LOG_SIGMA) + rng.normal(0, 0.1, (6, 2))
     second = np.vstack([first[:4], first[4:] + 0.05, first[:1]])
     grid.stats(first)
     again = grid.stats(second)

@@ -10,9 +10,10 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from gyrocal.criticism import agreement, verdict
-from gyrocal.inference import calibration, combinations
-from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.io import calibration
 from gyrocal.model import channels as ch
+from gyrocal.model import combinations
 from gyrocal.model.spec import ModelSpec, baseline
 from gyrocal.pipeline import cli
 from gyrocal.pipeline.steps import common

@@ -10,8 +10,8 @@ import json
 import pandas as pd
 import pytest
 
-from gyrocal.inference.calibration import core_rows
-from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.io.calibration import core_rows
 from gyrocal.model import effects
 from gyrocal.simulation import simulate
 

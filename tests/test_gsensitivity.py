@@ -5,8 +5,8 @@ import pandas as pd
 import pytest
 
 from gyrocal.inference.errormodel import effect_derivatives, view
-from gyrocal.inference.preprocess import slice_maneuver
 from gyrocal.io.telemetry import read_campaign
+from gyrocal.maneuvers.preprocess import slice_maneuver
 from gyrocal.model import effects
 from gyrocal.model.units import STANDARD_GRAVITY_M_S2
 from gyrocal.pipeline.paths import CampaignPaths

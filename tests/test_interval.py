@@ -11,8 +11,10 @@ from scipy.ndimage import gaussian_filter1d
 from scipy.spatial.transform import Rotation
 
 from gyrocal.errors import InputError
-from gyrocal.inference import interval, preprocess, smoothness
+from gyrocal.inference import interval
+from gyrocal.inference.noise import smoothness
 from gyrocal.io.scenario import load_scenario
+from gyrocal.maneuvers import preprocess
 from gyrocal.model.units import arcsec_to_rad
 from gyrocal.simulation.simulate import simulate
 

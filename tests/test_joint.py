@@ -12,8 +12,8 @@ from scipy.spatial.transform import Rotation
 
 from gyrocal.criticism.consistency import consistency, pair_test, posterior_of
 from gyrocal.criticism.joint import CampaignLikelihood, joint_fit
-from gyrocal.inference.calibration import COLUMNS
-from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.io.calibration import COLUMNS
 from gyrocal.io.scenario import load_scenario
 from gyrocal.io.telemetry import write_campaign
 from gyrocal.pipeline import cli

@@ -69,7 +69,7 @@ def test_the_earths_rate_sensed_by_the_gyros_is_recovered_with_its_sign_through_
     rate; a least-squares fit of the plugin's columns, the biases and the initial error to the
     attitude error gives the Earth's rate back, signs included (found by an independent review)."""
     from gyrocal.inference.errormodel import linearize
-    from gyrocal.inference.preprocess import ManeuverData
+    from gyrocal.maneuvers.preprocess import ManeuverData
     from gyrocal.model.effects import LIBRARY
     from gyrocal.model.spec import ModelSpec
 

@@ -1,5 +1,5 @@
-"""The house rules of the source tree: small modules, a declared public API, and an API reference
-that lists every module (docs/architecture.md)."""
+"""The house rules of the source tree: documented modules, a declared public API, and an API reference
+that lists every module (docs/architecture.md). One concern per module is a review rule, not a line count."""
 
 import ast
 import re
@@ -11,7 +11,6 @@ from conftest import ROOT
 
 SRC = ROOT / "src" / "gyrocal"
 MODULES = sorted(SRC.rglob("*.py"))
-MAX_LINES = 400
 
 
 def dotted(path: Path) -> str:
@@ -20,10 +19,9 @@ def dotted(path: Path) -> str:
 
 
 @pytest.mark.parametrize("path", MODULES, ids=dotted)
-def test_every_module_is_small_documented_and_declares_its_public_names(path):
+def test_every_module_is_documented_and_declares_its_public_names(path):
     text = path.read_text()
     tree = ast.parse(text)
-    assert len(text.splitlines()) <= MAX_LINES
     assert ast.get_docstring(tree), "no module docstring"
     declared = [n for n in tree.body if isinstance(n, ast.Assign) and any(
         isinstance(t, ast.Name) and t.id == "__all__" for t in n.targets)]

@@ -7,7 +7,7 @@ import pytest
 from scipy.stats import chi2
 
 from gyrocal.criticism import linearity
-from gyrocal.inference.preprocess import ManeuverData
+from gyrocal.maneuvers.preprocess import ManeuverData
 from gyrocal.pipeline import cli
 
 
@@ -30,7 +30,7 @@ def test_split_recovers_the_linear_and_quadratic_parts():
 
 @pytest.fixture(scope="module")
 def tiny_estimate(tiny_run):
-    from gyrocal.inference.estimate import PointEstimate
+    from gyrocal.inference.fit.estimate import PointEstimate
     from gyrocal.pipeline.steps.common import known_effects
     out, npz = tiny_run
     return [ManeuverData.load(p) for p in npz], PointEstimate.load(out / "baseline" / "point_estimate.npz",

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from test_numerics import BORESIGHT, P, tiny_linearization
 
-from gyrocal.inference import noise, predictive
-from gyrocal.inference.preprocess import ManeuverData
+from gyrocal.inference.noise import covariance
+from gyrocal.inference.sampling import predictive
+from gyrocal.maneuvers.preprocess import ManeuverData
 from gyrocal.study import looexact
 
 from conftest import config_with
@@ -44,7 +45,7 @@ def test_star_tracker_rows_are_invalidated_text_for_text():
 def test_block_hessian_is_the_negative_hessian_of_the_block_term():
     """Central differences of ``log p(y_b | y_-b, dtheta, sigma_cross)`` against `block_hessian`."""
     lin = tiny_linearization(2)
-    wm = predictive.WhitenedManeuver(noise.build(lin, BORESIGHT), np.array([0.9, -1.8]))
+    wm = predictive.WhitenedManeuver(covariance.build(lin, BORESIGHT), np.array([0.9, -1.8]))
     term = list(predictive.block_conditionals(lin, wm, predictive.block_index(lin, np.cumsum(lin.st_dt), 8.0)))[1]
     rng = np.random.default_rng(5)
     x0 = np.append(rng.normal(0, 0.02, P), np.log(1e-4))

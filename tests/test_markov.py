@@ -1,12 +1,13 @@
-"""The Gauss-Markov star-tracker noise (`gyrocal.inference.markov`) against dense references."""
+"""The Gauss-Markov star-tracker noise (`gyrocal.inference.noise.markov`) against dense references."""
 
 import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 from test_numerics import BORESIGHT, band_to_dense, dense_covariance, transform_matrix
 
-from gyrocal.inference import likelihood, markov, noise
 from gyrocal.inference.errormodel import Linearization
+from gyrocal.inference.fit import likelihood
+from gyrocal.inference.noise import covariance, markov
 
 
 def _tiny(m=7, n_sets=2, n_par=2, seed=3):
@@ -25,7 +26,7 @@ VAR = {"cross": 1.0, "about": 4.0, "walk": 0.3, "gm_cross": 2.5, "gm_about": 10.
 @pytest.mark.parametrize("tau", [0.7, 5.0, 300.0])
 def test_filtered_covariance_is_the_filter_applied_to_the_dense_covariance(tau):
     lin = _tiny()
-    nz = noise.build(lin, BORESIGHT, tau)
+    nz = covariance.build(lin, BORESIGHT, tau)
     t_dense = transform_matrix(nz, lin.z.shape[0], 3 * lin.z.shape[1])
     dense = dense_covariance(lin, VAR, tau)
     expected = t_dense @ dense @ t_dense.T
@@ -91,12 +92,12 @@ def test_likelihood_statistics_equal_the_dense_generalised_least_squares():
     (the filter has determinant one), nuisance integrated out the same way."""
     lin = _tiny(m=9)
     tau = 6.0
-    nz = noise.build(lin, BORESIGHT, tau)
+    nz = covariance.build(lin, BORESIGHT, tau)
     stats = likelihood.maneuver_stats(nz, VAR)
     C = dense_covariance(lin, VAR, tau)
     n = C.shape[0]
     X = lin.design.reshape(n, -1)
-    G = noise.nuisance_design(lin).reshape(n, -1)
+    G = covariance.nuisance_design(lin).reshape(n, -1)
     y = lin.z.reshape(n)
     Ci = np.linalg.inv(C)
     P = Ci - Ci @ G @ np.linalg.solve(G.T @ Ci @ G, G.T @ Ci)
@@ -109,10 +110,10 @@ def test_likelihood_statistics_equal_the_dense_generalised_least_squares():
 
 def test_vanishing_gauss_markov_part_gives_the_white_likelihood():
     lin = _tiny(m=8)
-    white = likelihood.maneuver_stats(noise.build(lin, [0, 0, 1]), VAR)
+    white = likelihood.maneuver_stats(covariance.build(lin, [0, 0, 1]), VAR)
     var = {**VAR, "gm_cross": 1e-14, "gm_about": 4e-14}
     for tau in (0.3, 30.0):
-        gm = likelihood.maneuver_stats(noise.build(lin, [0, 0, 1], tau), var)
+        gm = likelihood.maneuver_stats(covariance.build(lin, [0, 0, 1], tau), var)
         np.testing.assert_allclose(gm.A, white.A, rtol=1e-7)
         np.testing.assert_allclose(gm.logdet, white.logdet, rtol=1e-9)
 
@@ -152,13 +153,13 @@ def _simulated(tau_s, gm_arcsec, m=1200, n_man=4, seed=0):
 @pytest.mark.full
 @pytest.mark.parametrize("tau_s, gm_arcsec", [(3.0, 15.0), (30.0, 8.0)])
 def test_reml_recovers_the_gauss_markov_sd_and_correlation_time(tau_s, gm_arcsec):
-    from gyrocal.inference import noisefit
+    from gyrocal.inference.fit import noisefit
     from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
     lins, b = _simulated(tau_s, gm_arcsec)
     start = np.log([10 * ARCSEC_RAD, 40 * ARCSEC_RAD, 0.003 * DEG_SQRT_H_RAD_SQRT_S])
     log_sigma, _ = noisefit.estimate_correlated_noise(lins, b, start, 10.0)
-    fitted = noise.scales_in_units(log_sigma)
+    fitted = covariance.scales_in_units(log_sigma)
     assert fitted[0] == pytest.approx(np.hypot(10.0, gm_arcsec), rel=0.1)  # the tracker's total sd
     assert fitted[3] == pytest.approx(gm_arcsec**2 / (100 + gm_arcsec**2), abs=0.08)  # its Gauss-Markov share
     assert fitted[4] == pytest.approx(tau_s, rel=0.4)
@@ -170,7 +171,8 @@ def test_a_correlation_time_the_filter_cannot_hold_in_floating_point_is_out_of_t
     scan tries the longest tau it allows), where at tau 30 s it is finite."""
     from test_numerics import tiny_linearization
 
-    from gyrocal.inference import errormodel, noisefit
+    from gyrocal.inference import errormodel
+    from gyrocal.inference.fit import noisefit
 
     lin = tiny_linearization(seed=1, m=300)
     turn = [Rotation.from_rotvec(np.deg2rad(3.0) * np.eye(3)[(j // 100) % 3]) for j in range(1, 300)]
@@ -182,7 +184,7 @@ def test_a_correlation_time_the_filter_cannot_hold_in_floating_point_is_out_of_t
     lin.shared_walk = errormodel._shared_walk(2, lin.st_dt)
     for tau, finite in ((30.0, True), (1e5, False)):
         ratios = np.array([np.log(4.0), np.log(0.03), 0.0, np.log(tau)])
-        assert np.isfinite(noisefit.finite_profile([noise.build(lin, BORESIGHT, tau)], ratios)) == finite
+        assert np.isfinite(noisefit.finite_profile([covariance.build(lin, BORESIGHT, tau)], ratios)) == finite
 
 
 @pytest.mark.full
@@ -190,12 +192,12 @@ def test_reml_started_far_from_the_correlation_time_finds_it_by_its_scan():
     """Started at tau 100 s, 33 times the true 3 s, the descent alone ends on the plateau where a
     Gauss-Markov part that long is an offset the nuisance takes (tau 95 s, share 0.94); the scan in
     tau (`noisefit.TAU_SCAN`, the other ratios refitted at each) finds the true one."""
-    from gyrocal.inference import noisefit
+    from gyrocal.inference.fit import noisefit
     from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
     lins, b = _simulated(3.0, 15.0, m=300, n_man=3)
     start = np.log([10 * ARCSEC_RAD, 40 * ARCSEC_RAD, 0.003 * DEG_SQRT_H_RAD_SQRT_S])
-    fitted = noise.scales_in_units(noisefit.estimate_correlated_noise(lins, b, start, 100.0)[0])
+    fitted = covariance.scales_in_units(noisefit.estimate_correlated_noise(lins, b, start, 100.0)[0])
     assert fitted[4] == pytest.approx(3.0, rel=0.3)
     assert fitted[3] == pytest.approx(15.0**2 / (100 + 15.0**2), abs=0.08)
 
@@ -222,7 +224,7 @@ def test_walk_between_gyro_samples_matches_the_interpolated_walk(tau):
         seen[j, k[j]] = frac[j]
     walk = seen @ np.diag(dt) @ seen.T
     dense = np.kron(walk, np.eye(3))
-    nz = noise.build(lin, [0, 0, 1], tau)
+    nz = covariance.build(lin, [0, 0, 1], tau)
     t = transform_matrix(nz, m, 3)
     var_only = {"cross": 0.0, "about": 0.0, "walk": 1.0, "gm_cross": 0.0, "gm_about": 0.0}
     np.testing.assert_allclose(band_to_dense(nz.covariance(var_only)), t @ dense @ t.T, atol=1e-12)
@@ -231,15 +233,15 @@ def test_walk_between_gyro_samples_matches_the_interpolated_walk(tau):
 def test_reml_profile_streams_the_maneuvers_to_the_same_bits():
     """The correlated REML and the grid's curvature build each maneuver's noise structure, sum it and
     drop it (memory of one maneuver, not all): the same profile, to the bit, as from a list."""
-    from gyrocal.inference import noisefit
-    from gyrocal.inference.noisegrid import NoiseShapes
+    from gyrocal.inference.fit import noisefit
+    from gyrocal.inference.sampling.noisegrid import NoiseShapes
 
     lins = [_tiny(m=9, seed=s) for s in (3, 4, 5)]
     ratios = np.array([1.2, -3.0, 0.4, np.log(6.0)])
-    listed = noisefit.profile_reml([noise.build(lin, [0, 0, 1], 6.0) for lin in lins], ratios)
-    streamed = noisefit.profile_reml((noise.build(lin, [0, 0, 1], 6.0) for lin in lins), ratios)
+    listed = noisefit.profile_reml([covariance.build(lin, [0, 0, 1], 6.0) for lin in lins], ratios)
+    streamed = noisefit.profile_reml((covariance.build(lin, [0, 0, 1], 6.0) for lin in lins), ratios)
     assert streamed == listed
     assert NoiseShapes(None, lins, [0, 0, 1]).profile(ratios) == listed[0]
-    grouped = noisefit.profile_reml((noise.build(lin, [0, 0, 1], 6.0) for lin in lins), ratios, np.array([0, 1, 1]))
+    grouped = noisefit.profile_reml((covariance.build(lin, [0, 0, 1], 6.0) for lin in lins), ratios, np.array([0, 1, 1]))
     assert np.array_equal(grouped[1], noisefit.profile_reml(
-        [noise.build(lin, [0, 0, 1], 6.0) for lin in lins], ratios, np.array([0, 1, 1]))[1])
+        [covariance.build(lin, [0, 0, 1], 6.0) for lin in lins], ratios, np.array([0, 1, 1]))[1])

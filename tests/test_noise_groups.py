@@ -7,8 +7,8 @@ import pandas as pd
 import pytest
 from scipy.optimize import minimize
 
-from gyrocal.inference.likelihood import Stats
-from gyrocal.inference.noisefit import profile_group_levels
+from gyrocal.inference.fit.likelihood import Stats
+from gyrocal.inference.fit.noisefit import profile_group_levels
 from gyrocal.simulation import simulate
 
 from conftest import DATA, config_with, run_campaign

@@ -14,13 +14,16 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 from gyrocal.criticism import diagnostics
-from gyrocal.inference import errormodel, noise, predictive, selectedinverse, trustregion
-from gyrocal.inference.estimate import trust_region
-from gyrocal.inference.likelihood import Stats, campaign_stats
-from gyrocal.inference.noise import variances
-from gyrocal.inference.noisegrid import RatioGrid
-from gyrocal.inference.posterior import StudentProposal, start_covariance
-from gyrocal.inference.trustregion import TERMINATION_MESSAGES
+from gyrocal.inference import errormodel
+from gyrocal.inference.fit import trustregion
+from gyrocal.inference.fit.estimate import trust_region
+from gyrocal.inference.fit.likelihood import Stats, campaign_stats
+from gyrocal.inference.fit.trustregion import TERMINATION_MESSAGES
+from gyrocal.inference.noise import covariance, selectedinverse
+from gyrocal.inference.noise.covariance import variances
+from gyrocal.inference.sampling import predictive
+from gyrocal.inference.sampling.noisegrid import RatioGrid
+from gyrocal.inference.sampling.posterior import StudentProposal, start_covariance
 
 M, SETS, P, CHANNELS = 30, 2, 4, 3
 BORESIGHT = [0.3, 0.0, 0.954]
@@ -93,7 +96,7 @@ VAR = {"cross": 2.0e-10, "about": 3.5e-9, "walk": 4.0e-12, "gm_cross": 6.0e-10, 
 @pytest.mark.parametrize("tau", [0.0, 2.5])
 def test_banded_covariance_equals_the_dense_differenced_covariance(tau):
     lin = tiny_linearization()
-    nz = noise.build(lin, BORESIGHT, tau)
+    nz = covariance.build(lin, BORESIGHT, tau)
     t = transform_matrix(nz, M, 3 * SETS)
     expected = t @ dense_covariance(lin, VAR, tau) @ t.T
     got = band_to_dense(nz.covariance(VAR))
@@ -103,7 +106,7 @@ def test_banded_covariance_equals_the_dense_differenced_covariance(tau):
 @pytest.mark.parametrize("tau", [0.0, 2.5])
 def test_banded_cholesky_gram_and_logdet_equal_dense_solves(tau):
     lin = tiny_linearization(1)
-    nz = noise.build(lin, BORESIGHT, tau)
+    nz = covariance.build(lin, BORESIGHT, tau)
     gram, logdet = nz.gram(VAR)
     t = transform_matrix(nz, M, 3 * SETS)
     c = t @ dense_covariance(lin, VAR, tau) @ t.T
@@ -126,7 +129,7 @@ def test_leave_block_out_loglik_equals_brute_force_conditional_densities(tau, bl
     """log p(block | rest) = log p(all) - log p(rest), each with the nuisance integrated out;
     with Gauss-Markov star-tracker noise (its filter), and with blocks shorter than the band."""
     lin = tiny_linearization(2)
-    nz = noise.build(lin, BORESIGHT, tau)
+    nz = covariance.build(lin, BORESIGHT, tau)
     ratios = np.array([0.9, -1.8]) if tau == 0 else np.array([0.9, -1.8, 0.6, np.log(tau)])
     wm = predictive.WhitenedManeuver(nz, ratios)
     rng = np.random.default_rng(3)
@@ -134,8 +137,8 @@ def test_leave_block_out_loglik_equals_brute_force_conditional_densities(tau, bl
     scale = rng.uniform(0.5, 2.0, 3) * 1e-8
     blocks = predictive.block_index(lin, np.cumsum(lin.st_dt), block_s)
     got = predictive.leave_block_out_loglik(lin, wm, dtheta, scale, blocks)
-    unit = dense_covariance(lin, noise.unit_variances(ratios), tau)
-    g = noise.nuisance_design(lin).reshape(len(unit), -1)
+    unit = dense_covariance(lin, covariance.unit_variances(ratios), tau)
+    g = covariance.nuisance_design(lin).reshape(len(unit), -1)
     for d in range(len(dtheta)):
         r = lin.z.reshape(-1) - lin.design.reshape(len(unit), P) @ dtheta[d]
         cov = scale[d] * unit
@@ -225,7 +228,7 @@ def test_ratio_grid_over_a_flat_profile_stays_where_the_covariance_can_be_factor
     1.5): +-8 sd would put a node at e^17 times the star tracker's noise, where the banded
     Cholesky of this maneuver fails from e^10 (a RepoIMU trial crashed there); the grid stops at
     e^8 either way."""
-    nz = noise.build(tiny_linearization(), BORESIGHT)
+    nz = covariance.build(tiny_linearization(), BORESIGHT)
     with pytest.raises(np.linalg.LinAlgError):
         nz.factor(variances([0.0, 10.0, -10.0]))
     center = np.array([-2.5, -1.7])
@@ -239,7 +242,7 @@ def test_posterior_start_lands_on_a_grid_whose_span_is_capped():
     """A Gauss-Markov share and tau the data hardly tell (REML profile sd 17 and 34 on RepoIMU at
     1 s): the grid's span is capped at e^8, and the start draws spread as far as the grid does,
     not as the profile: most land inside it (with the profile's sd, 2 % did and the run stopped)."""
-    nz = noise.build(tiny_linearization(), BORESIGHT)
+    nz = covariance.build(tiny_linearization(), BORESIGHT)
     center = np.array([-2.5, -1.7])
     grid = RatioGrid([nz], center, np.array([17.0, 34.0]), 7, 8.0)
     assert grid.sd == pytest.approx([1.0, 1.0])
@@ -249,7 +252,7 @@ def test_posterior_start_lands_on_a_grid_whose_span_is_capped():
         mean = np.concatenate([[0.0, -6.0], -6.0 + center])
         start = StudentProposal(mean, start_covariance(np.eye(1) * 1e-6, 100, ratio_sd), dof=5.0, inflate=2.0)
         draws = start.draw(rng.standard_normal((4000, 4)), rng.chisquare(5.0, 4000))
-        return grid.weights(noise.ratios_of(draws[:, 1:]))[1].mean()
+        return grid.weights(covariance.ratios_of(draws[:, 1:]))[1].mean()
 
     assert inside_share(grid.sd) > 0.85
     assert inside_share(np.array([17.0, 34.0])) < 0.1
@@ -258,7 +261,7 @@ def test_posterior_start_lands_on_a_grid_whose_span_is_capped():
 def test_ratio_grid_interpolation_converges_at_fourth_order_to_the_direct_statistics():
     """Off-grid statistics against `campaign_stats` evaluated there: halving the step cuts the
     error about 16-fold (cubic Lagrange); at 21 nodes over +-3 sd it is below 3e-6."""
-    noises = [noise.build(tiny_linearization(s), BORESIGHT) for s in (4, 5)]
+    noises = [covariance.build(tiny_linearization(s), BORESIGHT) for s in (4, 5)]
     center, sd = np.array([1.2, -3.0]), np.array([0.08, 0.15])
     points = center + sd * np.array([[0.31, -0.47], [-1.13, 0.77], [1.9, 1.4]])
     direct = [campaign_stats(noises, variances([0.0, r[0], r[1]])) for r in points]
@@ -314,8 +317,8 @@ def test_score_test_ignores_a_candidate_the_model_already_spans_and_tests_a_part
 def test_leave_one_maneuver_out_evidence_equals_dense_gaussian_refits():
     """log p(y_m | y_-m) from the summed statistics against the dense marginal of the data
     (parameters integrated over their prior, nuisance over a flat prior), with and without m."""
-    from gyrocal.inference.likelihood import leave_one_out_log_evidence, maneuver_stats
-    noises = [noise.build(tiny_linearization(s, m=12), BORESIGHT) for s in (8, 9, 10)]
+    from gyrocal.inference.fit.likelihood import leave_one_out_log_evidence, maneuver_stats
+    noises = [covariance.build(tiny_linearization(s, m=12), BORESIGHT) for s in (8, 9, 10)]
     prior_mean, prior_sd = np.array([0.01, -0.02, 0.0, 0.03]), np.array([0.05, 0.1, 0.02, 0.08])
     got = leave_one_out_log_evidence([maneuver_stats(nz, VAR) for nz in noises], prior_mean, prior_sd)
 
@@ -355,7 +358,7 @@ def test_chi2_log_sf_stays_finite_and_exact_where_scipy_underflows(x, df):
 def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time():
     import emcee
 
-    from gyrocal.inference.posterior import _autocorr_times
+    from gyrocal.inference.sampling.posterior import _autocorr_times
 
     rng = np.random.default_rng(3)
     noise_draws = rng.standard_normal((200, 6, 3))
@@ -371,7 +374,7 @@ def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time(
 
 
 def test_fitted_noise_proposal_is_the_draws_mean_and_covariance_and_refuses_scales_that_never_moved():
-    from gyrocal.inference.proposal import SamplingError, fitted_noise_proposal
+    from gyrocal.inference.sampling.proposal import SamplingError, fitted_noise_proposal
 
     draws = np.random.default_rng(5).standard_normal((4000, 3)) @ np.array([[1, 0, 0], [0.5, 2, 0], [0, 1, 0.1]])
     proposal = fitted_noise_proposal(draws, inflate=1.0)

@@ -9,12 +9,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal.inference import calibration, combinations, errormodel, estimate, noise
-from gyrocal.inference.estimate import PointEstimate
-from gyrocal.inference.likelihood import campaign_stats
-from gyrocal.io import telemetry
+from gyrocal.inference import errormodel
+from gyrocal.inference.fit import estimate
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.inference.fit.likelihood import campaign_stats
+from gyrocal.inference.noise import covariance
+from gyrocal.io import calibration, telemetry
 from gyrocal.model import channels as ch
-from gyrocal.model import correction, effects
+from gyrocal.model import combinations, correction, effects
 from gyrocal.model.units import PPM
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import PosteriorSettings
@@ -59,7 +61,7 @@ def test_preprocess_step_writes_table_figure_and_counts(tiny_run):
 
 def test_preprocess_step_writes_every_maneuver_whole_or_leaves_the_directory_as_it_was(tiny, tiny_run, tmp_path,
                                                                                        monkeypatch):
-    from gyrocal.inference import preprocess
+    from gyrocal.maneuvers import preprocess
     from gyrocal.pipeline.steps import preprocess as preprocess_step
     out = tmp_path / "preprocess"
     paths = CampaignPaths.under(tmp_path)
@@ -212,7 +214,7 @@ def test_linearised_model_agrees_with_the_exact_one_to_1_percent_of_the_sd(mom, 
     maneuvers = common.load_maneuvers(npz)
     est = PointEstimate.load(out / "baseline/point_estimate.npz", effects.LIBRARY)
     lins, noises = estimate.linearize_all(maneuvers, est)
-    var = noise.variances(est.log_sigma)
+    var = covariance.variances(est.log_sigma)
     stats = campaign_stats(noises, var)
     cov = np.linalg.inv(stats.A)
     sd = np.sqrt(np.diag(cov))
@@ -223,7 +225,7 @@ def test_linearised_model_agrees_with_the_exact_one_to_1_percent_of_the_sd(mom, 
         for m, (data, lin) in enumerate(zip(maneuvers, lins)):
             exact = errormodel.linearize(data, est.spec, est.theta + shift, est.biases[m]).z
             linear = lin.z - np.einsum("msip,p->msi", lin.design, shift)
-            deltas.append(noise.build(dataclasses.replace(lin, z=exact - linear), est.boresight))
+            deltas.append(covariance.build(dataclasses.replace(lin, z=exact - linear), est.boresight))
         moved = cov @ campaign_stats(deltas, var).b
         assert np.all(np.abs(moved) < 0.01 * sd), np.max(np.abs(moved) / sd)
 
@@ -232,7 +234,7 @@ def test_psis_table_gives_arvizs_elpd_loo_its_se_and_p_loo(tiny_run):
     import arviz as az
 
     from gyrocal.criticism import comparison
-    from gyrocal.inference import inferencedata
+    from gyrocal.inference.sampling import inferencedata
     idata = az.from_netcdf(tiny_run[0] / "baseline/posterior.nc")
     blocks = pd.read_csv(tiny_run[0] / "baseline/elpd_blocks.csv")
     expected = az.loo(idata, pointwise=True)

@@ -8,9 +8,9 @@ import pytest
 import yaml
 
 from gyrocal.criticism import diagnostics
-from gyrocal.inference import preprocess
-from gyrocal.inference.estimate import point_estimate
-from gyrocal.inference.likelihood import Stats
+from gyrocal.inference.fit.estimate import point_estimate
+from gyrocal.inference.fit.likelihood import Stats
+from gyrocal.maneuvers import preprocess
 from gyrocal.model.spec import baseline
 from gyrocal.pipeline import cli
 from gyrocal.planning import plan

@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal.checks.finding import Status
 from gyrocal.criticism import priorconflict, verdict
+from gyrocal.finding import Status
 from gyrocal.io.telemetry import write_campaign
 from gyrocal.model import effects
 from gyrocal.model.channels import Channel

@@ -18,10 +18,11 @@ from hypothesis import strategies as st
 
 from gyrocal import checks
 from gyrocal.checks.fit import EstimateError, check_physical
-from gyrocal.inference import classic, preprocess
-from gyrocal.inference.estimate import point_estimate
-from gyrocal.inference.posterior import Priors
+from gyrocal.inference.fit import classic
+from gyrocal.inference.fit.estimate import point_estimate
+from gyrocal.inference.sampling.posterior import Priors
 from gyrocal.io.telemetry import TelemetryError
+from gyrocal.maneuvers import preprocess
 from gyrocal.model.spec import baseline
 
 from conftest import truth_vector

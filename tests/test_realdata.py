@@ -13,9 +13,9 @@ import yaml
 from gyrocal import checks
 from gyrocal.checks import physics, saturation, sensing
 from gyrocal.criticism.bands import outside_by_group
-from gyrocal.inference import preprocess
 from gyrocal.io import importer
 from gyrocal.io.telemetry import TelemetryError, read_campaign
+from gyrocal.maneuvers import preprocess
 from gyrocal.pipeline import cli
 
 from conftest import ROOT, run_campaign

@@ -11,9 +11,9 @@ import pytest
 from gyrocal import checks
 from gyrocal.checks import outliers, physics, sampling, saturation, sensing
 from gyrocal.checks.fit import EstimateError
-from gyrocal.inference import preprocess
-from gyrocal.inference.calibration import parameter_rows
+from gyrocal.io.calibration import parameter_rows
 from gyrocal.io.telemetry import read_campaign
+from gyrocal.maneuvers import preprocess
 from gyrocal.model.units import rad_to_arcsec
 from gyrocal.pipeline import cli
 from gyrocal.pipeline.settings import PosteriorSettings
@@ -79,7 +79,8 @@ def test_a_hyphenated_directory_without_a_name_gets_a_safe_default_name(tiny, tm
 
 
 def test_a_window_without_holds_is_a_warning_and_classic_gives_no_number(tiny, tmp_path):
-    from gyrocal.inference import classic, preprocess
+    from gyrocal.inference.fit import classic
+    from gyrocal.maneuvers import preprocess
     directory = tmp_path / "campaign"
     mutations.corrupted_copy(tiny[0], directory, mutations.no_hold)
     campaign, findings = checks.read_checked(directory)
@@ -145,8 +146,8 @@ def test_robust_covariance_recovers_the_bulk_despite_gross_outliers():
 
 
 def test_a_parameter_with_no_information_is_prior_only_and_one_with_little_is_not(tiny):
-    from gyrocal.inference.identification import uninformed
-    from gyrocal.inference.likelihood import Stats
+    from gyrocal.inference.fit.identification import uninformed
+    from gyrocal.inference.fit.likelihood import Stats
     from gyrocal.io.telemetry import read_campaign
     from gyrocal.model.spec import baseline
     spec = baseline(read_campaign(tiny[0]).channels)
@@ -309,8 +310,8 @@ def test_a_noise_no_sensor_can_have_stops_before_sampling_with_the_residuals(tin
     import dataclasses
 
     from gyrocal.checks.fit import check_noise
-    from gyrocal.inference import preprocess
-    from gyrocal.inference.estimate import PointEstimate
+    from gyrocal.inference.fit.estimate import PointEstimate
+    from gyrocal.maneuvers import preprocess
     out, npz = tiny_run
     est = PointEstimate.load(out / "baseline/point_estimate.npz")
     collapsed = dataclasses.replace(est, log_sigma=est.log_sigma + np.array([-8.0, 0.0, 0.0]))

@@ -9,8 +9,8 @@ import pytest
 
 from gyrocal import checks
 from gyrocal.checks import saturation, sensing
-from gyrocal.inference import preprocess
 from gyrocal.io.telemetry import read_campaign
+from gyrocal.maneuvers import preprocess
 
 
 def refusals(campaign, range_rad_s=None) -> dict:

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from test_numerics import BORESIGHT, VAR, P, integrated_loglik, tiny_linearization
 
-from gyrocal.inference import errormodel, noise, segments
-from gyrocal.inference.likelihood import campaign_stats, maneuver_stats
+from gyrocal.inference import errormodel
+from gyrocal.inference.fit.likelihood import campaign_stats, maneuver_stats
+from gyrocal.inference.noise import covariance, segments
 
 
 def one_set(lin):
@@ -58,7 +59,7 @@ def chain_nuisance(lins):
     s = lins[0].z.shape[1]
     blocks = []
     for k, lin in enumerate(lins):
-        nuis = noise.nuisance_design(lin)
+        nuis = covariance.nuisance_design(lin)
         if k:
             offsets = np.zeros(lin.z.shape[:2] + (3, 3 * s))
             for u in range(s):
@@ -94,7 +95,7 @@ def test_with_one_set_and_the_error_forgotten_across_the_gap_the_chain_is_its_ma
     maneuvers' (a set's offset is then the initial attitude error, and nothing runs on)."""
     lins = [one_set(tiny_linearization(seed, 12)) for seed in (0, 1)]
     chained = maneuver_stats(segments.build(lins, np.array([1e4]), BORESIGHT, 2.0), VAR)
-    apart = campaign_stats([noise.build(lin, BORESIGHT, 2.0) for lin in lins], VAR)
+    apart = campaign_stats([covariance.build(lin, BORESIGHT, 2.0) for lin in lins], VAR)
     np.testing.assert_allclose(chained.A, apart.A, rtol=1e-8)
     np.testing.assert_allclose(chained.b, apart.b, rtol=1e-8)
     assert chained.c == pytest.approx(apart.c, rel=1e-8)

@@ -5,9 +5,9 @@ import hashlib
 import numpy as np
 import pytest
 
-from gyrocal.inference import preprocess
-from gyrocal.inference.classic import hold_windows
+from gyrocal.inference.fit.classic import hold_windows
 from gyrocal.io import telemetry
+from gyrocal.maneuvers import preprocess
 from gyrocal.model import channels as ch
 from gyrocal.model.units import AXIS_INDEX, arcsec_to_rad, arw_to_rad_sqrt_s, rad_to_arcsec
 from gyrocal.pipeline import cli

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import yaml
 
-from gyrocal.inference import preprocess
 from gyrocal.io import telemetry
+from gyrocal.maneuvers import preprocess
 from gyrocal.model.units import arcsec_to_rad
 from gyrocal.simulation import simulate
 

@@ -1,4 +1,4 @@
-"""The residual's increment growth (`gyrocal.inference.smoothness`) on series whose variogram is known."""
+"""The residual's increment growth (`gyrocal.inference.noise.smoothness`) on series whose variogram is known."""
 
 from pathlib import Path
 
@@ -8,8 +8,8 @@ from scipy.ndimage import gaussian_filter1d
 
 from gyrocal.checks.fit import share_at_bound
 from gyrocal.criticism.increments import smoothness_finding
-from gyrocal.inference import smoothness
-from gyrocal.inference.noisefit import GM_LOGIT_BOUND
+from gyrocal.inference.fit.noisefit import GM_LOGIT_BOUND
+from gyrocal.inference.noise import smoothness
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -54,8 +54,9 @@ def _at_truth(seed=1, **changes):
     model's own noise, which must never be called smooth."""
     import copy
 
-    from gyrocal.inference import errormodel, preprocess
+    from gyrocal.inference import errormodel
     from gyrocal.io.scenario import load_scenario
+    from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline
     from gyrocal.model.units import deg_h_to_rad_s
     from gyrocal.simulation.simulate import simulate

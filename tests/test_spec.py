@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.model import channels as ch
 from gyrocal.model import effects
 from gyrocal.model.spec import ModelSpec, baseline
@@ -100,7 +100,7 @@ def test_a_model_with_an_arcsec_plugin_parameter_runs_end_to_end(tiny, tmp_path,
 
 
 def test_start_points_with_zero_density_are_redrawn_a_bounded_number_of_times_then_refused():
-    from gyrocal.inference.posterior import START_REDRAWS, SamplingError, run_ensembles
+    from gyrocal.inference.sampling.posterior import START_REDRAWS, SamplingError, run_ensembles
     calls = []
 
     def nowhere(x):

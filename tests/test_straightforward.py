@@ -6,9 +6,11 @@ import sys
 import numpy as np
 from scipy.optimize import least_squares
 
-from gyrocal.inference import errormodel, posterior, preprocess
-from gyrocal.inference.noise import noise_knowledge
+from gyrocal.inference import errormodel
+from gyrocal.inference.noise.covariance import noise_knowledge
+from gyrocal.inference.sampling import posterior
 from gyrocal.io import telemetry
+from gyrocal.maneuvers import preprocess
 from gyrocal.model.spec import baseline
 from gyrocal.model.units import rad_s_to_deg_h
 

@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from gyrocal.inference import errormodel, identification
-from gyrocal.inference.preprocess import ManeuverData
+from gyrocal.inference import errormodel
+from gyrocal.inference.fit import identification
+from gyrocal.maneuvers.preprocess import ManeuverData
 from gyrocal.model import channels as ch
 from gyrocal.model import correction, effects
 from gyrocal.model.spec import ModelSpec, baseline

@@ -161,7 +161,7 @@ def test_unpaired_channel_is_refused_with_the_reason(campaign_copy):
 
 
 def test_noise_groups_default_to_one_for_the_campaign_and_round_trip(campaign_copy, tmp_path):
-    from gyrocal.inference import preprocess
+    from gyrocal.maneuvers import preprocess
 
     assert {m.noise_group for m in telemetry.read_campaign(campaign_copy).maneuvers} == {"all"}
     assert "noise_group" not in (campaign_copy / "campaign.yaml").read_text()
@@ -189,7 +189,7 @@ def test_a_bad_noise_group_is_refused_naming_the_file_and_maneuver(campaign_copy
 def test_a_reference_interval_keeps_every_kth_sample_and_counts_the_rest(tiny):
     """``reference_interval_s`` keeps each maneuver's first star-tracker sample, every k-th after it
     (k = interval / median step) and its last; the ones left out are counted, not dropped silently."""
-    from gyrocal.inference import preprocess
+    from gyrocal.maneuvers import preprocess
 
     campaign = telemetry.read_campaign(tiny[0])
     m = campaign.maneuvers[0].id

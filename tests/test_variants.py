@@ -11,7 +11,7 @@ import yaml
 
 from gyrocal.checks.fit import VariantSkipped, check_variant_informed
 from gyrocal.errors import InputError
-from gyrocal.inference.calibration import parameter_rows
+from gyrocal.io.calibration import parameter_rows
 from gyrocal.model import effects
 from gyrocal.model.channels import MOM_CHANNELS, Channel
 from gyrocal.model.spec import ModelSpec

@@ -3,8 +3,8 @@
 import pandas as pd
 import pytest
 
-from gyrocal.checks.finding import Finding, Status
 from gyrocal.criticism import modelchoice, verdict
+from gyrocal.finding import Finding, Status
 from gyrocal.model.channels import Channel
 from gyrocal.model.spec import baseline
 

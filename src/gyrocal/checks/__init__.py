@@ -2,7 +2,7 @@
 screen, the reference mounting, and the refusals before a posterior is sampled."""
 
 from gyrocal.checks.campaign import check, read_checked, summary
-from gyrocal.checks.finding import Finding, Findings, Status
 from gyrocal.checks.mounting import align, aligned, estimate_mounting
+from gyrocal.finding import Finding, Findings, Status
 
 __all__ = ["Finding", "Findings", "Status", "align", "aligned", "check", "estimate_mounting", "read_checked", "summary"]

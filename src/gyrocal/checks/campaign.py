@@ -10,7 +10,6 @@ noise measured in the data themselves, not from one file."""
 
 import numpy as np
 
-from gyrocal.checks.finding import Findings
 from gyrocal.checks.fit import EstimateError, check_blocks
 from gyrocal.checks.mounting import align
 from gyrocal.checks.outliers import EXCURSION_MAX_S, outlier_distances, screen, trend_distances
@@ -18,9 +17,11 @@ from gyrocal.checks.physics import rotation_findings
 from gyrocal.checks.sampling import clock_findings, extreme_findings, gap_findings, interval_findings
 from gyrocal.checks.saturation import saturation_findings
 from gyrocal.checks.sensing import physical_limits, sense
-from gyrocal.inference import classic, preprocess
+from gyrocal.finding import Findings
+from gyrocal.inference.fit import classic
 from gyrocal.io.telemetry import UNIT_NORM_TOL, Campaign, TelemetryError, read_campaign
 from gyrocal.io.telemetry import summary as format_summary
+from gyrocal.maneuvers import preprocess
 
 __all__ = ["check", "read_checked", "summary"]
 

@@ -9,10 +9,11 @@ without them."""
 import numpy as np
 
 from gyrocal.errors import InputError
-from gyrocal.inference import identification, noise, noisefit, smoothness
-from gyrocal.inference.estimate import PointEstimate, linearize_all
-from gyrocal.inference.likelihood import maneuver_stats
-from gyrocal.inference.noise import variances
+from gyrocal.inference.fit import identification, noisefit
+from gyrocal.inference.fit.estimate import PointEstimate, linearize_all
+from gyrocal.inference.fit.likelihood import maneuver_stats
+from gyrocal.inference.noise import covariance, smoothness
+from gyrocal.inference.noise.covariance import variances
 from gyrocal.model import units
 
 __all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "NOISE_RATIOS", "SHARE_BOUND_MARGIN", "EstimateError", "VariantSkipped",
@@ -56,10 +57,11 @@ the sensors can have: the residuals are structure the model lacks."""
 def check_noise(maneuvers, est: PointEstimate):
     """Stop before sampling when REML puts a noise scale `NOISE_PLAUSIBLE` times off the stated one;
     the message gives each maneuver's residual RMS about roll, pitch and yaw."""
-    ratio = np.exp(est.log_sigma[:3] - noise.log_sigma_of(est.stated_noise))
+    ratio = np.exp(est.log_sigma[:3] - covariance.log_sigma_of(est.stated_noise))
     off = (ratio > NOISE_PLAUSIBLE) | (ratio < 1.0 / NOISE_PLAUSIBLE)
     if off.any():
-        fitted, stated = noise.stated_scales(est.log_sigma[:3]), noise.stated_scales(noise.log_sigma_of(est.stated_noise))
+        fitted = covariance.stated_scales(est.log_sigma[:3])
+        stated = covariance.stated_scales(covariance.log_sigma_of(est.stated_noise))
         listed = "; ".join(f"{k} {fitted[k]:.3g} (stated {stated[k]:.3g})" for k, bad in zip(fitted, off) if bad)
         lins, _ = linearize_all(maneuvers, est)
         rms = [np.sqrt(np.mean((lin.body_error[:, 0] - lin.body_error[:, 0].mean(axis=0)) ** 2, axis=0))
@@ -151,7 +153,7 @@ SHARE_BOUND_MARGIN = 0.05
 """A fitted ``logit st_gm_fraction`` this close to its bound is at it (`share_at_bound`)."""
 
 NOISE_RATIOS = ("log(sigma_about / sigma_cross)", "log(arw / sigma_cross)", "logit st_gm_fraction", "log st_gm_tau_s")
-"""The noise ratios the posterior's grid spans (`noisegrid.RatioGrid`, `noise.ratios_of`), in its
+"""The noise ratios the posterior's grid spans (`noisegrid.RatioGrid`, `covariance.ratios_of`), in its
 order: two, and two more with correlated star-tracker noise."""
 
 
@@ -198,7 +200,7 @@ def share_at_bound(log_sigma, measured=()) -> str:
     `smoothness.of_maneuver` of each maneuver) that is why, and the reference interval to use follows."""
     if len(log_sigma) < 5 or abs(log_sigma[3]) < noisefit.GM_LOGIT_BOUND - SHARE_BOUND_MARGIN:
         return ""
-    share = noise.stated_scales(log_sigma)["st_gm_fraction"]
+    share = covariance.stated_scales(log_sigma)["st_gm_fraction"]
     if log_sigma[3] < 0:
         return (f"the reference's noise fits as white (Gauss-Markov share {share:.2g}, at its bound): the model "
                 "without st_correlated_noise holds it")
@@ -223,5 +225,5 @@ def sampling_stopped(stopped, est: PointEstimate, notes: str, labels) -> Estimat
 
 
 def _noise_words(est: PointEstimate) -> str:
-    fitted = noise.stated_scales(est.log_sigma)
+    fitted = covariance.stated_scales(est.log_sigma)
     return ", ".join(f"{k} {v:.3g}" for k, v in fitted.items())

@@ -6,11 +6,11 @@ from dataclasses import replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from gyrocal.checks.finding import Finding, Status
 from gyrocal.checks.sensing import physical_limits, sense
-from gyrocal.inference import preprocess
-from gyrocal.inference.identification import DETECTION_SD
+from gyrocal.finding import Finding, Status
+from gyrocal.inference.fit.identification import DETECTION_SD
 from gyrocal.io.telemetry import Campaign
+from gyrocal.maneuvers import preprocess
 from gyrocal.model.units import AXES
 
 __all__ = ["ALTERNATIVES", "align", "aligned", "carried", "estimate_mounting", "judge_declared"]

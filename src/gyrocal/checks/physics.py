@@ -3,7 +3,6 @@ rotation, a unit slip's likely cause, a reference sampled too sparsely, and a gy
 
 import numpy as np
 
-from gyrocal.checks.finding import Findings
 from gyrocal.checks.sensing import (
     Sensed,
     blocked_sums,
@@ -14,6 +13,7 @@ from gyrocal.checks.sensing import (
     nominal_body_increments,
     reference_noise_rad,
 )
+from gyrocal.finding import Findings
 from gyrocal.io.telemetry import Campaign
 from gyrocal.model.units import AXES, AXIS_INDEX, rad_to_arcsec
 

@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from gyrocal.checks.finding import Findings
 from gyrocal.checks.sensing import Sensed, reference_noise_rad
-from gyrocal.inference.identification import DETECTION_SD
+from gyrocal.finding import Findings
+from gyrocal.inference.fit.identification import DETECTION_SD
 from gyrocal.io.telemetry import Campaign
 from gyrocal.model.units import AXIS_INDEX, rad_to_arcsec
 

@@ -22,9 +22,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gyrocal.checks.finding import Findings
 from gyrocal.checks.sensing import Sensed
-from gyrocal.inference.identification import DETECTION_SD
+from gyrocal.finding import Findings
+from gyrocal.inference.fit.identification import DETECTION_SD
 from gyrocal.model.units import AXES
 
 __all__ = [

@@ -7,9 +7,9 @@ from functools import cached_property
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from gyrocal.inference import preprocess
 from gyrocal.inference.errormodel import cumulative_at_st
-from gyrocal.inference.identification import DETECTION_SD
+from gyrocal.inference.fit.identification import DETECTION_SD
+from gyrocal.maneuvers import preprocess
 from gyrocal.model import channels as ch
 from gyrocal.model.spec import baseline
 

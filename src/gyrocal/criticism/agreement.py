@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation
 
-from gyrocal.inference.calibration import combination_rows
+from gyrocal.io.calibration import combination_rows
 from gyrocal.model.units import ARCSEC_RAD, AXES, PPM
 
 __all__ = ["KEYS", "compare", "compare_files", "into_frame", "mounting_of", "turnable"]

@@ -8,7 +8,7 @@ one's misfit, nor the reverse.
 
 import pandas as pd
 
-from gyrocal.checks.finding import Finding
+from gyrocal.finding import Finding
 from gyrocal.model.units import AXES
 
 __all__ = ["band_findings", "outside_by_group"]

@@ -13,16 +13,17 @@ import numpy as np
 import pandas as pd
 from scipy.special import chdtr, chdtrc, gammaln
 
-from gyrocal.checks.finding import Finding
 from gyrocal.criticism import correlation, noiseranking
 from gyrocal.criticism.bands import band_findings
 from gyrocal.criticism.increments import smoothness_finding
-from gyrocal.inference import errormodel, noise, smoothness
-from gyrocal.inference.estimate import PointEstimate
-from gyrocal.inference.likelihood import campaign_stats, maneuver_stats, total
-from gyrocal.inference.noise import CORRELATED_SCALES, NOISE_SCALES, ratios_of, variances
-from gyrocal.inference.predictive import WhitenedManeuver
-from gyrocal.inference.preprocess import noise_groups
+from gyrocal.finding import Finding
+from gyrocal.inference import errormodel
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.inference.fit.likelihood import campaign_stats, maneuver_stats, total
+from gyrocal.inference.noise import covariance, smoothness
+from gyrocal.inference.noise.covariance import CORRELATED_SCALES, NOISE_SCALES, ratios_of, variances
+from gyrocal.inference.sampling.predictive import WhitenedManeuver
+from gyrocal.maneuvers.preprocess import noise_groups
 from gyrocal.model import effects
 from gyrocal.model.units import AXES, rad_to_arcsec
 
@@ -91,7 +92,7 @@ def _augmented(maneuvers, estimate: PointEstimate, candidates, var):
     effects' columns, all global, with each maneuver's nuisance integrated out."""
     spec = estimate.spec.augmented(candidates)
     theta = np.concatenate([estimate.theta, np.zeros(len(spec) - len(estimate.spec))])
-    noises = (noise.build(errormodel.linearize(data, spec, theta, estimate.biases[m]), estimate.boresight,
+    noises = (covariance.build(errormodel.linearize(data, spec, theta, estimate.biases[m]), estimate.boresight,
                           estimate.correlation_time_s) for m, data in enumerate(maneuvers))
     if estimate.group_offsets is None:
         return spec, campaign_stats(noises, var)  # one maneuver's noise at a time: summed, then freed
@@ -225,7 +226,7 @@ def linearized(maneuvers, estimate: PointEstimate):
     time (`linearize_all` holds every maneuver's: over 1 GB at 10x the default campaign)."""
     for m in range(len(maneuvers)):
         lin = estimate.linearize(maneuvers, m)
-        yield lin, noise.build(lin, estimate.boresight, estimate.correlation_time_s)
+        yield lin, covariance.build(lin, estimate.boresight, estimate.correlation_time_s)
 
 
 def _measuring(walk_variances, pairs, measured: list):
@@ -269,7 +270,7 @@ def noise_rms_arcsec(maneuvers, stated_noise) -> float:
     attitude and bias are fitted (detrended Brownian motion: q T / 15)."""
     b = np.asarray(stated_noise["boresight_body"], dtype=float)
     b = b / np.linalg.norm(b)
-    cross, about, arw = noise.stated_si(stated_noise)
+    cross, about, arw = covariance.stated_si(stated_noise)
     st_var = (2 * cross**2 + about**2) / 3
     durations = np.array([d.st_time[-1] - d.gyro_time[0] for d in maneuvers])
     return float(rad_to_arcsec(np.sqrt(st_var + arw**2 * np.mean(durations) / 15)))

@@ -1,9 +1,9 @@
 """The residual's increments against the noise model's reach: a residual smooth at the sampling
-interval (`gyrocal.inference.smoothness`) is structure no noise model here can represent, so its
+interval (`gyrocal.inference.noise.smoothness`) is structure no noise model here can represent, so its
 intervals would rest on a wrong likelihood."""
 
-from gyrocal.checks.finding import Finding
-from gyrocal.inference import smoothness
+from gyrocal.finding import Finding
+from gyrocal.inference.noise import smoothness
 
 __all__ = ["smoothness_finding"]
 

@@ -2,7 +2,7 @@
 
 Each campaign's likelihood of its parameters is Gaussian about its point estimate (the WLS, no
 prior) with the information ``I = cov^-1`` at its own REML noise: the linear model of
-`gyrocal.inference.likelihood` with the nuisance (initial attitude error, biases of each
+`gyrocal.inference.fit.likelihood` with the nuisance (initial attitude error, biases of each
 maneuver) integrated out. The campaign's own parameters beyond the channel model (a bias drift,
 a latency) are integrated out too, under their prior (`CampaignLikelihood.of`). The shared
 channel parameters then combine by summing information, and the prior enters once:
@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from gyrocal.criticism.agreement import into_frame
-from gyrocal.inference.calibration import COLUMNS
+from gyrocal.io.calibration import COLUMNS
 from gyrocal.model.spec import ModelSpec
 
 __all__ = ["CampaignLikelihood", "JointFit", "joint_fit", "joint_table"]

@@ -21,8 +21,8 @@ import pandas as pd
 from scipy.special import gammaincinv
 
 from gyrocal.inference import errormodel
-from gyrocal.inference.estimate import linearize_all
-from gyrocal.inference.preprocess import noise_groups
+from gyrocal.inference.fit.estimate import linearize_all
+from gyrocal.maneuvers.preprocess import noise_groups
 from gyrocal.model.units import ARCSEC_RAD
 
 __all__ = ["LEVEL", "SHRINK", "check", "probe_steps", "split", "summary"]

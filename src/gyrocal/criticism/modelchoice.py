@@ -27,7 +27,7 @@ import pandas as pd
 from scipy.optimize import minimize
 from scipy.special import logsumexp, softmax
 
-from gyrocal.checks.finding import Finding
+from gyrocal.finding import Finding
 
 __all__ = [
     "MEASURES", "SEPARATED_BY", "branch_labels", "branch_rows", "classify", "disagreements", "interval_widths",

@@ -13,11 +13,12 @@ given the top deterministic candidates).
 import numpy as np
 
 from gyrocal.criticism import correlation
-from gyrocal.inference import errormodel, noise
-from gyrocal.inference.estimate import PointEstimate
-from gyrocal.inference.noise import ratios_of
-from gyrocal.inference.predictive import WhitenedManeuver
-from gyrocal.inference.preprocess import noise_groups
+from gyrocal.inference import errormodel
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.inference.noise import covariance
+from gyrocal.inference.noise.covariance import ratios_of
+from gyrocal.inference.sampling.predictive import WhitenedManeuver
+from gyrocal.maneuvers.preprocess import noise_groups
 
 __all__ = ["LEFTOVER_LOG10_P", "NOISE_EFFECT", "demote_explained", "innovation_sd", "noise_score_given"]
 
@@ -45,7 +46,7 @@ def _whitened(maneuvers, estimate: PointEstimate, added):
     index = noise_groups(maneuvers)[1]
     for m, data in enumerate(maneuvers):
         lin = errormodel.linearize(data, spec, theta, estimate.biases[m])
-        wm = WhitenedManeuver(noise.build(lin, estimate.boresight, estimate.correlation_time_s), ratios)
+        wm = WhitenedManeuver(covariance.build(lin, estimate.boresight, estimate.correlation_time_s), ratios)
         q = np.linalg.qr(wm.wg)[0]
         unit = innovation_sd(estimate, index[m])
         x = (wm.wx - q @ (q.T @ wm.wx)) / unit

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import norm
 
-from gyrocal.checks.finding import Finding, Status
+from gyrocal.finding import Finding, Status
 from gyrocal.model.spec import CONFIG_PRIOR_KEYS
 
 __all__ = ["CHECK", "SHIFT_MAX", "Z_MAX", "conflict_check", "conflict_table", "widen_key"]

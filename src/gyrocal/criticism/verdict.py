@@ -9,11 +9,11 @@ the thresholds of the config's ``convergence``, ``report`` (``max_ci_width_<unit
 import numpy as np
 import pandas as pd
 
-from gyrocal.checks.finding import Finding
 from gyrocal.criticism import modelchoice
-from gyrocal.inference import preprocess
-from gyrocal.inference.calibration import core_rows, posterior_mean_params
-from gyrocal.inference.classic import hold_windows
+from gyrocal.finding import Finding
+from gyrocal.inference.fit.classic import hold_windows
+from gyrocal.io.calibration import core_rows, posterior_mean_params
+from gyrocal.maneuvers import preprocess
 from gyrocal.model.units import AXES, rad_to_arcsec
 
 __all__ = ["RANKED_SHOWN", "bounds_check", "checks", "convergence_check", "correction_check", "correction_effect",

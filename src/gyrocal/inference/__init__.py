@@ -1,7 +1,5 @@
-"""From a campaign's maneuvers to a posterior: preprocessing (eq. 4), the error model and its
-noise, the likelihood, the paper's classic method, the point estimate and the emcee sampler."""
+"""From a campaign's maneuvers to a posterior, in three families, each a package: the noise model
+(`noise`), the deterministic fits (`fit`) and the sampler (`sampling`), above the error model and
+its Jacobian (`errormodel`); `interval` chooses the reference interval with a pilot fit."""
 
-__all__ = [
-    "calibration", "classic", "errormodel", "estimate", "identification", "inferencedata", "likelihood", "noise",
-    "posterior", "predictive", "preprocess", "selectedinverse"
-]
+__all__ = ["errormodel", "fit", "interval", "noise", "sampling"]

@@ -29,7 +29,7 @@ from scipy.ndimage import uniform_filter1d
 from scipy.spatial.transform import Rotation
 
 from gyrocal.errors import InputError
-from gyrocal.inference.preprocess import ManeuverData
+from gyrocal.maneuvers.preprocess import ManeuverData
 from gyrocal.model import channels as ch
 from gyrocal.model import kinematics
 from gyrocal.model.effects import ManeuverView

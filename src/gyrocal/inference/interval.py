@@ -21,10 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from gyrocal.errors import InputError
-from gyrocal.inference import classic, smoothness
-from gyrocal.inference.estimate import point_estimate
-from gyrocal.inference.preprocess import error_angles, slice_maneuver
+from gyrocal.inference.fit import classic
+from gyrocal.inference.fit.estimate import point_estimate
+from gyrocal.inference.noise import smoothness
 from gyrocal.io.telemetry import TelemetryError
+from gyrocal.maneuvers.preprocess import error_angles, slice_maneuver
 from gyrocal.model import effects
 from gyrocal.model.channels import ChannelParams
 from gyrocal.model.spec import ModelSpec

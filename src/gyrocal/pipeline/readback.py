@@ -5,7 +5,7 @@ import json
 from pathlib import Path
 
 from gyrocal.criticism import linearity
-from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.pipeline.steps.common import known_effects, load_maneuvers
 
 __all__ = ["linearity_report", "load_model_run"]

@@ -23,11 +23,14 @@ from scipy import stats as sps
 from scipy.optimize import brentq
 
 from gyrocal.criticism.diagnostics import COLLINEAR_FRACTION
-from gyrocal.inference import combinations, errormodel, identification, noise, preprocess
-from gyrocal.inference.identification import CORRELATION_MAX, confounded_pairs
-from gyrocal.inference.likelihood import Stats, campaign_stats
+from gyrocal.inference import errormodel
+from gyrocal.inference.fit import identification
+from gyrocal.inference.fit.identification import CORRELATION_MAX, confounded_pairs
+from gyrocal.inference.fit.likelihood import Stats, campaign_stats
+from gyrocal.inference.noise import covariance
 from gyrocal.io.yamlfile import load_yaml
-from gyrocal.model import effects
+from gyrocal.maneuvers import preprocess
+from gyrocal.model import combinations, effects
 from gyrocal.model.spec import ModelSpec
 from gyrocal.model.units import AXES
 from gyrocal.simulation import simulate
@@ -66,7 +69,7 @@ def planned_maneuvers(scenario: dict) -> list:
 
 def stated_noise(scenario: dict, noise_defaults: dict) -> dict:
     """The noise knowledge a run would be given: the scenario's, as its campaign.yaml states it."""
-    return noise.noise_knowledge({"star_tracker": scenario["star_tracker"], "gyro": scenario["gyro"]}, noise_defaults)
+    return covariance.noise_knowledge({"star_tracker": scenario["star_tracker"], "gyro": scenario["gyro"]}, noise_defaults)
 
 
 def information(maneuvers, spec: ModelSpec, stated: dict) -> Stats:
@@ -74,8 +77,8 @@ def information(maneuvers, spec: ModelSpec, stated: dict) -> Stats:
     information of the spec's parameters (SI) with each maneuver's nuisance integrated out."""
     zeros = np.zeros(len(spec.channels))
     lins = [errormodel.linearize(d, spec, spec.prior_mean_si, zeros) for d in maneuvers]
-    noises = [noise.build(lin, stated["boresight_body"]) for lin in lins]
-    return campaign_stats(noises, noise.variances(noise.log_sigma_of(stated)))
+    noises = [covariance.build(lin, stated["boresight_body"]) for lin in lins]
+    return campaign_stats(noises, covariance.variances(covariance.log_sigma_of(stated)))
 
 
 def predicted_covariance(A: np.ndarray, prior_sd_si: np.ndarray) -> np.ndarray:

@@ -40,7 +40,7 @@ class ReviewInputs:
     config: dict
     """The whole config."""
     findings: list
-    """The checks behind the verdict, as `gyrocal.checks.finding.Finding` (`gyrocal.criticism.verdict.checks`)."""
+    """The checks behind the verdict, as `gyrocal.finding.Finding` (`gyrocal.criticism.verdict.checks`)."""
     effect_table: pd.DataFrame
     """The end-of-maneuver error before and after the correction (`gyrocal.criticism.verdict.estimate_effect`)."""
     truth: dict | None = None

@@ -2,12 +2,12 @@
 misalignments against their priors, one sentence per channel with the maneuver that would resolve
 what is not, the directions of the channel parameters left to the prior, and, for a reference whose
 mounting was estimated, which misalignment combinations the mounting takes up
-(`gyrocal.inference.combinations`)."""
+(`gyrocal.model.combinations`)."""
 
 import numpy as np
 import pandas as pd
 
-from gyrocal.inference import combinations as comb
+from gyrocal.model import combinations as comb
 
 __all__ = ["LOADINGS_SHOWN", "channel_sentences", "mounting_table", "prior_directions", "resolution_table"]
 

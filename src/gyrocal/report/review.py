@@ -21,8 +21,9 @@ from markupsafe import Markup
 from gyrocal import __version__
 from gyrocal.criticism import modelchoice
 from gyrocal.criticism import verdict as judge
-from gyrocal.inference import combinations, identification
+from gyrocal.inference.fit import identification
 from gyrocal.io import telemetry
+from gyrocal.model import combinations
 from gyrocal.model.units import PAPER_AXES, paper_term
 from gyrocal.report import figures as plots
 from gyrocal.report import resolution
@@ -64,7 +65,7 @@ def entry(row, truth=None) -> str:
 
 
 COMBINATION_HEADINGS = {"sf_mean": "sf_mean = (sf_pos + sf_neg) / 2 (ppm)", "sf_asym": "sf_asym = sf_pos - sf_neg (ppm)"}
-"""Table 2's columns of each channel's identifiable combinations (`gyrocal.inference.combinations`)."""
+"""Table 2's columns of each channel's identifiable combinations (`gyrocal.model.combinations`)."""
 
 
 def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> dict:

@@ -3,9 +3,10 @@ process: what the ranking study (`benchmarks/explanation_ranking.py`) and its te
 point-estimate and diagnostics steps compute them, without the workflow."""
 
 from gyrocal.criticism import diagnostics
-from gyrocal.inference import classic, preprocess
-from gyrocal.inference.estimate import linearize_all, point_estimate
-from gyrocal.inference.noise import noise_knowledge
+from gyrocal.inference.fit import classic
+from gyrocal.inference.fit.estimate import linearize_all, point_estimate
+from gyrocal.inference.noise.covariance import noise_knowledge
+from gyrocal.maneuvers import preprocess
 from gyrocal.model import effects
 from gyrocal.model.spec import ModelSpec
 

@@ -20,10 +20,10 @@ import numpy as np
 import pandas as pd
 from scipy import stats as sps
 
-from gyrocal.inference import classic
-from gyrocal.inference.estimate import PointEstimate, linearize_all
-from gyrocal.inference.likelihood import campaign_stats
-from gyrocal.inference.noise import log_sigma_of, variances
+from gyrocal.inference.fit import classic
+from gyrocal.inference.fit.estimate import PointEstimate, linearize_all
+from gyrocal.inference.fit.likelihood import campaign_stats
+from gyrocal.inference.noise.covariance import log_sigma_of, variances
 from gyrocal.io.outputs import strict
 from gyrocal.io.telemetry import write_campaign
 from gyrocal.model import effects, spec

@@ -39,10 +39,12 @@ import numpy as np
 import pandas as pd
 from scipy.special import logsumexp
 
-from gyrocal.inference import classic, inferencedata, noise, predictive
-from gyrocal.inference.estimate import PointEstimate
-from gyrocal.inference.likelihood import maneuver_stats
-from gyrocal.inference.preprocess import ManeuverData
+from gyrocal.inference.fit import classic
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.inference.fit.likelihood import maneuver_stats
+from gyrocal.inference.noise import covariance
+from gyrocal.inference.sampling import inferencedata, predictive
+from gyrocal.maneuvers.preprocess import ManeuverData
 from gyrocal.model import effects
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.run import calibrate_campaign
@@ -120,8 +122,8 @@ def posterior_draws(idata, spec, theta_ref: np.ndarray) -> np.ndarray:
     if labels != list(spec.labels):
         raise ValueError(f"posterior parameters {labels} are not the model's {list(spec.labels)}")
     theta = spec.to_si(post["channel_param"].values)
-    scales = np.stack([post[s.key].values for s in noise.NOISE_SCALES], axis=-1)
-    log_sigma = np.log(scales * np.array([s.si_per_unit for s in noise.NOISE_SCALES]))
+    scales = np.stack([post[s.key].values for s in covariance.NOISE_SCALES], axis=-1)
+    log_sigma = np.log(scales * np.array([s.si_per_unit for s in covariance.NOISE_SCALES]))
     flat = np.concatenate([theta - theta_ref, log_sigma], axis=-1)
     return flat.reshape(-1, flat.shape[-1])
 
@@ -267,7 +269,7 @@ class FullRun:
         """Linearisation and noise structure of maneuver ``m`` about the full point estimate."""
         if m not in self._linear:
             lin = self.estimate.linearize(self.maneuvers, m)
-            self._linear[m] = lin, noise.build(lin, self.estimate.boresight, self.estimate.correlation_time_s)
+            self._linear[m] = lin, covariance.build(lin, self.estimate.boresight, self.estimate.correlation_time_s)
         return self._linear[m]
 
     def terms(self, m: int) -> list:
@@ -329,7 +331,7 @@ def curvature_table(full: FullRun) -> pd.DataFrame:
     `joint_curvature` of the maneuver's whole likelihood."""
     mean, cov = scale_moments(full.flat, full.n_params)
     dtheta, _, scale = predictive.split_draws(full.flat, full.n_params)
-    unit = noise.variances([0.0, full.ratios[0], full.ratios[1]])
+    unit = covariance.variances([0.0, full.ratios[0], full.ratios[1]])
     rows = []
     for m, data in enumerate(full.maneuvers):
         kinds = block_kinds(data, full.block_s)
@@ -367,7 +369,7 @@ def p_loo_summary(full: FullRun, table: pd.DataFrame) -> dict:
         "joint_trace": float(joint["trace"].sum()),
         "joint_trace_params": float(joint["trace_params"].sum()),
         "free_parameters": int(full.estimate.spec.free.sum()),
-        "sampled_parameters": full.n_params + len(noise.NOISE_SCALES),
+        "sampled_parameters": full.n_params + len(covariance.NOISE_SCALES),
         "blocks": len(blocks),
         "khat_max": float(blocks["khat"].max()),
     }

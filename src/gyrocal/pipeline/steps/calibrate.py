@@ -4,8 +4,8 @@ one model."""
 import pandas as pd
 
 from gyrocal import __version__
-from gyrocal.inference.calibration import calibration_table, posterior_mean_params
-from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.io.calibration import calibration_table, posterior_mean_params
 from gyrocal.io.outputs import write_csv, write_json
 from gyrocal.model.correction import campaign_correction
 from gyrocal.pipeline.paths import CampaignPaths

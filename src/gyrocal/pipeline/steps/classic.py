@@ -3,8 +3,8 @@ each maneuver's bias from its holds where they allow, each value with its sd fro
 
 import logging
 
-from gyrocal.inference import classic
-from gyrocal.inference.noise import noise_knowledge
+from gyrocal.inference.fit import classic
+from gyrocal.inference.noise.covariance import noise_knowledge
 from gyrocal.io.outputs import write_csv
 from gyrocal.model import spec
 from gyrocal.pipeline.paths import CampaignPaths

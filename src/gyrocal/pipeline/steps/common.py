@@ -10,8 +10,8 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from gyrocal.errors import InputError
-from gyrocal.inference import preprocess
 from gyrocal.io.outputs import write_json, write_text
+from gyrocal.maneuvers import preprocess
 from gyrocal.model import effects
 from gyrocal.pipeline.steps import REFUSED
 
@@ -159,6 +159,6 @@ def posterior_spec(spec, priors_cfg: dict, prior_from=None):
     parameter's prior: ``sf_mean`` is correlated with both scale factors)."""
     import pandas as pd
 
-    from gyrocal.inference.calibration import parameter_rows
+    from gyrocal.io.calibration import parameter_rows
     earlier = parameter_rows(pd.read_csv(prior_from)) if prior_from else None
     return spec.with_priors(priors_cfg, earlier, str(prior_from))

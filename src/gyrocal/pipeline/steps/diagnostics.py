@@ -3,7 +3,7 @@
 import pandas as pd
 
 from gyrocal.criticism import diagnostics
-from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.io.outputs import write_json
 from gyrocal.model import effects
 from gyrocal.pipeline.paths import CampaignPaths

@@ -16,7 +16,7 @@ from scipy.spatial.transform import Rotation
 from gyrocal.criticism.agreement import mounting_of
 from gyrocal.criticism.consistency import PRIOR_SHARE_MAX, consistency
 from gyrocal.criticism.joint import CampaignLikelihood, joint_fit, joint_table
-from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.io.outputs import write_csv, write_json
 from gyrocal.model.units import ARCSEC_RAD
 from gyrocal.pipeline.paths import CampaignPaths

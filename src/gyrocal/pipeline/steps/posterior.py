@@ -4,9 +4,10 @@ import numpy as np
 import pandas as pd
 
 from gyrocal.checks import fit as checks
-from gyrocal.inference import inferencedata, noise, posterior
-from gyrocal.inference.budget import SamplingStopped
-from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.inference.noise import covariance
+from gyrocal.inference.sampling import inferencedata, posterior
+from gyrocal.inference.sampling.budget import SamplingStopped
 from gyrocal.io.outputs import atomic, write_csv, write_json
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import PosteriorSettings
@@ -42,7 +43,7 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSetti
     try:
         post = posterior.sample(maneuvers, est, priors, s.sampler, s.grid, s.seed, before=identified)
     except SamplingStopped as stopped:
-        labels = list(est.spec.labels) + noise.noise_labels(est.spec.correlated_noise)
+        labels = list(est.spec.labels) + covariance.noise_labels(est.spec.correlated_noise)
         if est.group_offsets is not None:
             labels += [f"noise.level.{g}" for g in est.noise_groups] + ["noise.group_sd"]
         raise checks.sampling_stopped(stopped, est, notes[0] if notes else "", labels) from None

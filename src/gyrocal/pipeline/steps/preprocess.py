@@ -10,10 +10,11 @@ from pathlib import Path
 from scipy.spatial.transform import Rotation
 
 from gyrocal import checks
-from gyrocal.inference import interval, preprocess
-from gyrocal.inference.noise import noise_knowledge
+from gyrocal.inference import interval
+from gyrocal.inference.noise.covariance import noise_knowledge
 from gyrocal.io import telemetry
 from gyrocal.io.outputs import atomic_dir, write_csv
+from gyrocal.maneuvers import preprocess
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.steps.common import read_json
 from gyrocal.report import figures as plots

@@ -7,7 +7,7 @@ import pandas as pd
 import xarray as xr
 
 from gyrocal.criticism import priorconflict, verdict
-from gyrocal.inference.estimate import PointEstimate
+from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.io.outputs import write_json, write_text
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import ReportSettings

@@ -3,14 +3,14 @@
 One row per parameter of the model, in the spec's order: the channel model's terms
 first, channel by channel, then the extra effects' parameters in their own units; then,
 channel by channel, the identifiable combinations of its scale factors (``sf_mean``,
-``sf_asym``: `gyrocal.inference.combinations`), derived rows that no parameter reader takes.
+``sf_asym``: `gyrocal.model.combinations`), derived rows that no parameter reader takes.
 """
 
 import numpy as np
 import pandas as pd
 
-from gyrocal.inference.combinations import COMBINATION_NAMES, scale_combinations
 from gyrocal.model import channels as ch
+from gyrocal.model.combinations import COMBINATION_NAMES, scale_combinations
 from gyrocal.model.spec import ModelSpec
 
 __all__ = ["COLUMNS", "calibration_table", "combination_rows", "core_rows", "parameter_rows", "posterior_mean_params"]

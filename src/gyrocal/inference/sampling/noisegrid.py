@@ -1,7 +1,7 @@
 """The likelihood's sufficient statistics tabulated over the noise's shape, and interpolated.
 
 The noise covariance is ``sigma_cross^2`` times a matrix fixed by the log ratios of the other
-scales to it (`noise.ratios_of`): two for white star-tracker noise, and with a Gauss-Markov
+scales to it (`covariance.ratios_of`): two for white star-tracker noise, and with a Gauss-Markov
 part (`markov`) its ratio and ``log tau`` too. The scale enters in closed form; the statistics
 at unit scale are tabulated on a grid over the ratios, spanning many posterior standard
 deviations, and interpolated (tensor-product cubic Lagrange), so a posterior draw costs a
@@ -12,9 +12,9 @@ import logging
 
 import numpy as np
 
-from gyrocal.inference import noise, segments
-from gyrocal.inference.likelihood import campaign_stats, maneuver_stats, total
-from gyrocal.inference.noisefit import profile_reml
+from gyrocal.inference.fit.likelihood import campaign_stats, maneuver_stats, total
+from gyrocal.inference.fit.noisefit import profile_reml
+from gyrocal.inference.noise import covariance, segments
 
 __all__ = ["MAX_HALF_WIDTH_LOG_RATIO", "NoiseShapes", "RatioGrid", "ratio_curvature"]
 
@@ -50,7 +50,7 @@ class NoiseShapes:
         return self.chained.noises(self.lins, self.boresight, float(np.exp(ratios[-1])))
 
     def at(self, ratios) -> list:
-        """The `noise.ManeuverNoise` structures for ``ratios`` (only ``log tau``, the last, matters)."""
+        """The `covariance.ManeuverNoise` structures for ``ratios`` (only ``log tau``, the last, matters)."""
         return list(self._built(ratios)) if self.correlated else self.noises
 
     def profile(self, ratios) -> float:
@@ -67,7 +67,7 @@ def _lagrange(f):
 
 
 class RatioGrid:
-    """Unit-scale sufficient statistics on a grid over the noise ratios (`noise.ratios_of`).
+    """Unit-scale sufficient statistics on a grid over the noise ratios (`covariance.ratios_of`).
 
     At each node the statistics are computed with ``sigma_cross = 1``. The grid spans
     ``half_width_sd`` sd either way, at most `MAX_HALF_WIDTH_LOG_RATIO`. ``noises`` is the
@@ -98,7 +98,7 @@ class RatioGrid:
             for index in np.ndindex(*inner):
                 index = index + (last,) if shapes.correlated else index
                 r = self.start + self.step * np.array(index)
-                parts = self._group_stats(current, noise.unit_variances(r))
+                parts = self._group_stats(current, covariance.unit_variances(r))
                 row = np.concatenate([np.concatenate([s.A.ravel(), s.b, [s.c, s.logdet]]) for s in parts])
                 if self.values is None:
                     self.values = np.empty((nodes**self.dims, len(row)))

@@ -12,11 +12,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import sparse
 
-from gyrocal.inference import errormodel, identification, noise, noisefit, segments
-from gyrocal.inference.likelihood import campaign_stats
-from gyrocal.inference.noise import variances
-from gyrocal.inference.preprocess import noise_groups
-from gyrocal.inference.trustregion import TERMINATION_MESSAGES, trust_region
+from gyrocal.inference import errormodel
+from gyrocal.inference.fit import identification, noisefit
+from gyrocal.inference.fit.likelihood import campaign_stats
+from gyrocal.inference.fit.trustregion import TERMINATION_MESSAGES, trust_region
+from gyrocal.inference.noise import covariance, segments
+from gyrocal.inference.noise.covariance import variances
+from gyrocal.maneuvers.preprocess import noise_groups
 from gyrocal.model.spec import ModelSpec
 
 __all__ = [
@@ -182,8 +184,8 @@ class _Whitened:
         out, row = np.empty(self.n_rows), 0
         for m, (lin, chol) in enumerate(zip(self.linearizations(x), self.chols)):
             n = chol.shape[1]
-            r = noise.transformed(lin.z - chi0[m], self.filters[m]).reshape(n, 1)
-            out[row:row + n] = noise.whiten(chol, np.asfortranarray(r))[:, 0]
+            r = covariance.transformed(lin.z - chi0[m], self.filters[m]).reshape(n, 1)
+            out[row:row + n] = covariance.whiten(chol, np.asfortranarray(r))[:, 0]
             row += n
         return out
 
@@ -191,9 +193,9 @@ class _Whitened:
         jac = _Jacobian(self.n_rows, self.n_par, self.n_man, 3 + self.n_ch)
         for m, (lin, chol) in enumerate(zip(self.linearizations(x), self.chols)):
             n = chol.shape[1]
-            nuis = noise.transformed(noise.nuisance_design(lin), self.filters[m]).reshape(n, -1)
-            j_theta = -noise.transformed(lin.design[..., self.free], self.filters[m]).reshape(n, -1)
-            jac.add(m, noise.whiten(chol, np.asfortranarray(np.concatenate([j_theta, nuis], axis=1))))
+            nuis = covariance.transformed(covariance.nuisance_design(lin), self.filters[m]).reshape(n, -1)
+            j_theta = -covariance.transformed(lin.design[..., self.free], self.filters[m]).reshape(n, -1)
+            jac.add(m, covariance.whiten(chol, np.asfortranarray(np.concatenate([j_theta, nuis], axis=1))))
         return jac.matrix()
 
 
@@ -234,7 +236,7 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
     # only the factors are kept of the noise: its right-hand sides are the REML's, not the WLS's
     chols, filters = [], []
     for lin in lins0:
-        nz = noise.build(lin, boresight, correlation_time_s)
+        nz = covariance.build(lin, boresight, correlation_time_s)
         chols.append(nz.factor(levels.maneuver_variances(len(chols), index[len(chols)])))
         filters.append(nz.filter)
         del nz
@@ -261,7 +263,7 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
 def linearize_all(maneuvers, estimate: PointEstimate):
     """Linearisations and noise structures of every maneuver about a point estimate."""
     lins = [estimate.linearize(maneuvers, m) for m in range(len(maneuvers))]
-    return lins, [noise.build(lin, estimate.boresight, estimate.correlation_time_s) for lin in lins]
+    return lins, [covariance.build(lin, estimate.boresight, estimate.correlation_time_s) for lin in lins]
 
 
 def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estimate_scales=True) -> PointEstimate:
@@ -276,7 +278,7 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     time are what the model is for), from the residuals' correlation time as a start.
     """
     spec = spec.with_prior_only(identification.unflown(maneuvers, spec))
-    log_sigma = noise.log_sigma_of(stated_noise)
+    log_sigma = covariance.log_sigma_of(stated_noise)
     n_man, n_ch = len(maneuvers), len(spec.channels)
 
     def start_at(spec):

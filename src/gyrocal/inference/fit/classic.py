@@ -12,10 +12,10 @@ import pandas as pd
 from scipy.spatial.transform import Rotation
 
 from gyrocal.inference import errormodel
-from gyrocal.inference.preprocess import ManeuverData, body_increments, error_angles, propagate_set
+from gyrocal.maneuvers.holds import MIN_HOLD_SAMPLES, hold_windows, missing_holds
+from gyrocal.maneuvers.preprocess import ManeuverData, error_angles, propagate_set
 from gyrocal.model import channels as ch
 from gyrocal.model import kinematics
-from gyrocal.model.channels import MOVING_RATE_FRACTION
 from gyrocal.model.spec import ModelSpec
 from gyrocal.model.units import ARCSEC_RAD, AXES, AXIS_INDEX, DEG_SQRT_H_RAD_SQRT_S
 
@@ -29,9 +29,6 @@ BIAS_CHOICES = ("auto", "holds", "trusted")
 """Where the classic method takes each maneuver's residual bias from: ``trusted`` (the paper: the
 bias known before the maneuver, zero residual), ``holds`` (estimated from the inertial holds around
 it) or ``auto`` (the holds where they are long enough, `MIN_BIAS_HOLD_SAMPLES`; the pipeline's)."""
-
-MIN_HOLD_SAMPLES = 3
-"""Star-tracker samples a hold needs for the classic method to average over it."""
 
 MIN_BIAS_HOLD_SAMPLES = 10
 """Star-tracker samples each hold needs before ``auto`` estimates the bias from the holds: with
@@ -47,23 +44,6 @@ PIPELINE_ITERATIONS = 4
 paper's single solve (so the models' outputs stay as they were)."""
 
 _ROW_COLUMNS = ["maneuver", "set", "channel", "parameter", "value", "sd", "angle_rad", "bias_source", "note"]
-
-
-def hold_windows(data: ManeuverData, channel_set=None):
-    """Star-tracker masks of the inertial holds before and after the rotation: where the
-    maneuver-axis rate is below `MOVING_RATE_FRACTION` of its peak."""
-    channel_set = channel_set or data.sets[0]
-    inc = body_increments(data, channel_set, ch.ChannelParams.zeros(data.channels))
-    rate = np.abs(inc[:, AXIS_INDEX[data.axis]] / data.dt)
-    moving = np.flatnonzero(rate > MOVING_RATE_FRACTION * rate.max())
-    t_first, t_last = data.gyro_time[moving[0]], data.gyro_time[moving[-1] + 1]
-    return data.st_time < t_first, data.st_time > t_last
-
-
-def missing_holds(data: ManeuverData) -> list:
-    """Which holds (``"before"``, ``"after"``) a maneuver lacks for the classic method."""
-    before, after = hold_windows(data)
-    return [name for name, mask in (("before", before), ("after", after)) if mask.sum() < MIN_HOLD_SAMPLES]
 
 
 def bias_source(before, after, bias: str = "auto") -> tuple:
@@ -171,7 +151,7 @@ def classic(data: ManeuverData, bias: str = "trusted", stated: dict | None = Non
     not apply to it. The paper trusts the bias known before the maneuver (zero residual bias);
     from the holds (``bias``, `bias_source`), each channel set's residual bias is first
     estimated from them (`hold_bias`), so that it is not read as a scale factor. With the
-    ``stated`` noise (`gyrocal.inference.noise.noise_knowledge`) each value gets its sd
+    ``stated`` noise (`gyrocal.inference.noise.covariance.noise_knowledge`) each value gets its sd
     (`classic_sd`); without, the sd is NaN. The paper's solve is linear about zero; with
     ``iterations`` > 1 it is repeated about its own estimate (Gauss-Newton), which removes its
     second-order error at large parameters (5000 ppm and 1000 arcsec: -35 ppm of bias, twice its sd).

@@ -11,7 +11,7 @@ prior, and the verdict names them.
 
 import numpy as np
 
-from gyrocal.inference.likelihood import Stats
+from gyrocal.inference.fit.likelihood import Stats
 from gyrocal.model.spec import ModelSpec
 
 __all__ = [

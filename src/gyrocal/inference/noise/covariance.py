@@ -18,8 +18,8 @@ from scipy.linalg import cholesky_banded
 from scipy.linalg.lapack import dtbtrs
 from scipy.special import expit
 
-from gyrocal.inference import markov
 from gyrocal.inference.errormodel import Linearization
+from gyrocal.inference.noise import markov
 from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
 __all__ = [

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from gyrocal.inference.preprocess import noise_groups
+from gyrocal.maneuvers.preprocess import noise_groups
 
 __all__ = ["GAP_STEP_FACTOR", "KNEE_INTERVAL_FACTOR", "MIN_INCREMENTS", "SIGNIFICANCE_SE", "Smoothness",
            "contiguous_runs", "describe",

@@ -17,26 +17,26 @@ import arviz as az
 import emcee
 import numpy as np
 
-from gyrocal.inference import segments
-from gyrocal.inference.budget import SamplingBudget
-from gyrocal.inference.estimate import linearize_all
-from gyrocal.inference.likelihood import (
+from gyrocal.inference.fit.estimate import linearize_all
+from gyrocal.inference.fit.likelihood import (
     LOG_2PI,
     conditional_posterior,
     leave_one_out_log_evidence,
     maneuver_stats,
     total,
 )
-from gyrocal.inference.noise import log_sigma_of, ratios_of, variances
-from gyrocal.inference.noisegrid import NoiseShapes, RatioGrid, ratio_curvature
-from gyrocal.inference.preprocess import noise_groups
-from gyrocal.inference.proposal import (
+from gyrocal.inference.noise import segments
+from gyrocal.inference.noise.covariance import log_sigma_of, ratios_of, variances
+from gyrocal.inference.sampling.budget import SamplingBudget
+from gyrocal.inference.sampling.noisegrid import NoiseShapes, RatioGrid, ratio_curvature
+from gyrocal.inference.sampling.proposal import (
     CollapsedProposal,
     ConditionalCache,
     SamplingError,
     StudentProposal,
     fitted_noise_proposal,
 )
+from gyrocal.maneuvers.preprocess import noise_groups
 
 __all__ = [
     "AUTOCORR_WINDOW_C", "DE_SHARE", "GM_FRACTION_LOGIT_SD", "GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDIAN",

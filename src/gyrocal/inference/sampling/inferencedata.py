@@ -17,9 +17,11 @@ import xarray as xr
 from arviz.stats.stats_utils import logsumexp
 
 from gyrocal import __version__
-from gyrocal.inference import combinations, predictive, preprocess
-from gyrocal.inference.noise import CORRELATED_SCALES, build, noise_scales, scales_in_units, stated_scales
+from gyrocal.inference.noise.covariance import CORRELATED_SCALES, build, noise_scales, scales_in_units, stated_scales
+from gyrocal.inference.sampling import predictive
+from gyrocal.maneuvers import preprocess
 from gyrocal.model import channels as ch
+from gyrocal.model import combinations
 from gyrocal.model.units import AXES, rad_to_arcsec
 
 __all__ = ["CI_PROB", "PARETO_K_MAX", "assemble", "combination_summary", "loo", "loo_blocks", "posterior_dataset",

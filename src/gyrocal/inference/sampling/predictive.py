@@ -12,8 +12,8 @@ import numpy as np
 from scipy.linalg import cho_solve_banded, solve_triangular
 
 from gyrocal.inference.errormodel import Linearization
-from gyrocal.inference.noise import ManeuverNoise, nuisance_design, ratios_of, unit_variances, untransformed
-from gyrocal.inference.selectedinverse import inverse_windows, recursion_bounds
+from gyrocal.inference.noise.covariance import ManeuverNoise, nuisance_design, ratios_of, unit_variances, untransformed
+from gyrocal.inference.noise.selectedinverse import inverse_windows, recursion_bounds
 
 __all__ = [
     "BlockConditional", "WhitenedManeuver", "block_conditionals", "block_index", "leave_block_out_loglik",

@@ -18,7 +18,7 @@ import itertools
 
 import numpy as np
 
-from gyrocal.inference import noise
+from gyrocal.inference.noise import covariance
 
 __all__ = ["MAX_CHAIN", "Chains", "build", "chains", "gaps_s"]
 
@@ -73,15 +73,15 @@ def _set_offsets(m_samples: int, n_sets: int) -> np.ndarray:
     return out
 
 
-def build(lins, gaps, boresight_body, correlation_time_s: float) -> noise.ManeuverNoise:
-    """One `noise.ManeuverNoise` for maneuvers flown one after another (``lins`` in time order,
+def build(lins, gaps, boresight_body, correlation_time_s: float) -> covariance.ManeuverNoise:
+    """One `covariance.ManeuverNoise` for maneuvers flown one after another (``lins`` in time order,
     ``gaps`` between them, s) with Gauss-Markov star-tracker noise of ``correlation_time_s``: the
     filter runs on across the gaps; the nuisance is each maneuver's own (its biases; the first its
     initial attitude error, the later ones an offset per set)."""
     if len(lins) == 1:
-        return noise.build(lins[0], boresight_body, correlation_time_s)
+        return covariance.build(lins[0], boresight_body, correlation_time_s)
     n_sets = lins[0].z.shape[1]
-    parts = [noise.nuisance_design(lin) for lin in lins]
+    parts = [covariance.nuisance_design(lin) for lin in lins]
     parts[1:] = [np.concatenate([_set_offsets(len(lin.z), n_sets), nuis[..., 3:]], axis=3)
                  for lin, nuis in zip(lins[1:], parts[1:])]
     widths = np.cumsum([0] + [p.shape[3] for p in parts])
@@ -94,7 +94,7 @@ def build(lins, gaps, boresight_body, correlation_time_s: float) -> noise.Maneuv
     lag1 = [lin.walk_lag1_or_none() for lin in lins]
     lag1 = None if all(x is None for x in lag1) else np.concatenate(
         [np.zeros(len(lin.z)) if x is None else x for lin, x in zip(lins, lag1)])
-    return noise.filtered(
+    return covariance.filtered(
         "+".join(lin.maneuver for lin in lins), np.concatenate([lin.z for lin in lins]),
         np.concatenate([lin.design for lin in lins]), nuisance, np.concatenate([lin.st_matrix for lin in lins]),
         np.concatenate([lin.random_walk() for lin in lins]), st_dt, lag1, boresight_body, correlation_time_s)

@@ -2,7 +2,7 @@
 
 With the channel parameters and the nuisance integrated out under flat priors, the
 likelihood of the noise depends on ``sigma_cross^2`` in closed form and on the shape of
-the covariance (`noise.ratios_of`) through the banded statistics; the shape is found by
+the covariance (`covariance.ratios_of`) through the banded statistics; the shape is found by
 Nelder-Mead on the profile. Correlated star-tracker noise (`markov`) adds the Gauss-Markov
 part's sd and correlation time, its filter rebuilt at each tau tried.
 """
@@ -10,8 +10,8 @@ part's sd and correlation time, its filter rebuilt at each tau tried.
 import numpy as np
 from scipy.optimize import minimize
 
-from gyrocal.inference import noise, segments
-from gyrocal.inference.likelihood import campaign_stats, maneuver_stats, total
+from gyrocal.inference.fit.likelihood import campaign_stats, maneuver_stats, total
+from gyrocal.inference.noise import covariance, segments
 
 __all__ = [
     "GM_LOGIT_BOUND", "GROUP_ITERATIONS", "SCAN_EVALUATIONS", "SCAN_MARGIN", "TAU_SCAN", "TAU_START_INTERVALS",
@@ -45,13 +45,13 @@ def profile_reml(noises, ratios, groups=None):
 
     ``ratios`` are ``log(sigma_about / sigma_cross)`` and ``log(arw / sigma_cross)``
     (arw per sqrt(s)), and with correlated noise ``logit st_gm_fraction`` and
-    ``log tau`` (`noise.ratios_of`); the covariance is ``sigma_cross^2`` times one built from them.
+    ``log tau`` (`covariance.ratios_of`); the covariance is ``sigma_cross^2`` times one built from them.
     Returns the negative log-likelihood (up to a constant) and ``log sigma_cross``.
     Prior-only parameters have no column, so they are left out. With ``groups`` (each maneuver's
     noise group, `preprocess.noise_groups`) of more than one group, each group's level is
     profiled (`profile_group_levels`), and ``log sigma_cross`` is one per group.
     """
-    var = noise.unit_variances(ratios)
+    var = covariance.unit_variances(ratios)
     if groups is not None and np.max(groups) > 0:
         parts = [maneuver_stats(nz, var) for nz in noises]
         return profile_group_levels([total([s for s, g in zip(parts, groups) if g == k])

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
-from gyrocal.inference.noise import ManeuverNoise
+from gyrocal.inference.noise.covariance import ManeuverNoise
 
 __all__ = [
     "LOG_2PI", "Stats", "campaign_stats", "conditional_posterior", "leave_one_out_log_evidence", "log_evidence",
