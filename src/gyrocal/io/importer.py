@@ -36,8 +36,9 @@ from importlib import resources
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
+from gyrocal.io import readers, rests
+from gyrocal.io.readers import printed_quantum
 from gyrocal.io.telemetry import (
     NAME_PATTERN,
     UNIT_NORM_TOL,
@@ -102,6 +103,10 @@ class Imported:
     """(N,) quaternions off unit beyond that: flagged invalid, not renormalised."""
     precision: str = ""
     """How the reference quaternion columns are printed, in words ("5 significant digits")."""
+    missing: np.ndarray | None = None
+    """(N,) reference rows with a missing value (NaN, an empty cell: occluded markers): invalid."""
+    rate_hz: float | None = None
+    """The sampling rate the rows are counted at, where the mapping reads the time off a rate."""
 
 
 def mapping_path(name_or_path) -> Path:
@@ -130,6 +135,17 @@ def read_mapping(name_or_path) -> dict:
     if gyro["unit"] not in units:
         raise TelemetryError(f"{path}: gyro.unit of a {gyro['quantity']} must be one of {sorted(units)}")
     _check_interval(mapping["reference"].get("sample_interval_s"), f"{path}: reference.sample_interval_s")
+    time = mapping["time"]
+    ways = [k for k in ("column", "rate_hz", "rate_variable") if k in time] or (["variable"] if "variable" in time else [])
+    if len(ways) != 1 or ("variable" in time and "rate" in ways[0]):
+        raise TelemetryError.at(path, f"the time is given {len(ways) or 'no'} ways ({', '.join(sorted(time))})",
+                                f"time (line {document.line(['time'])})",
+                                "give one: column: N (a CSV), variable: name (with column: N for a matrix), "
+                                "rate_hz: Hz, or rate_variable: name (a variable holding the rate)")
+    options = mapping.get("maneuver") or {}
+    if options.get("free") and "direction" in options:
+        raise TelemetryError.at(path, "a free maneuver has no direction", f"maneuver (line {document.line(['maneuver'])})",
+                                "drop maneuver.direction, or maneuver.free")
     unpaired = sorted(set(gyro["columns"]) ^ set(gyro["axes"]))
     if unpaired:
         raise TelemetryError.at(path, f"gyro.columns and gyro.axes must name the same channels; {unpaired} is in "
@@ -137,37 +153,57 @@ def read_mapping(name_or_path) -> dict:
     return mapping
 
 
+def _variable(section: dict):
+    """The variable a section's columns are in (a MAT or HDF5 file), or None (a CSV's one table)."""
+    return (section or {}).get("variable")
+
+
+def _variables(mapping) -> list:
+    """Every variable a mapping reads from a MAT or HDF5 file."""
+    time = mapping["time"]
+    names = [_variable(time), time.get("rate_variable"), _variable(mapping["reference"]), _variable(mapping["gyro"])]
+    names += [e.get("variable") for e in (mapping.get("extras") or {}).values() if isinstance(e, dict)]
+    return names
+
+
+def _extra(spec) -> tuple:
+    """An extra's variable and column: ``N`` (a CSV column) or ``{variable, column}``."""
+    return (spec.get("variable"), int(spec.get("column", 1))) if isinstance(spec, dict) else (None, int(spec))
+
+
+def file_time(table: readers.Table, time: dict) -> tuple:
+    """Each row's time in seconds, and the sampling rate it was counted at (or None): a column, or
+    the rows counted at a rate (``rate_hz``, or a variable of the file holding it, ``rate_variable``)."""
+    if "rate_hz" in time or "rate_variable" in time:
+        rate = float(time["rate_hz"]) if "rate_hz" in time else table.scalar(time["rate_variable"], "sampling rate")
+        return np.arange(table.rows) / rate, rate
+    values = table.column(_variable(time), int(time.get("column", 1)), "time")
+    step = np.diff(values)
+    if (step <= 0).any():
+        row = int(np.flatnonzero(step <= 0)[0]) + 1
+        raise TelemetryError.at(table.path, f"the time {values[row]:.9g} s does not increase (the row before holds "
+                                            f"{values[row - 1]:.9g} s)", table.where(_variable(time), row,
+                                                                                      int(time.get("column", 1)), "time"),
+                                "sort the rows by time and drop repeated ones")
+    return values, None
+
+
 def read_file(path, mapping) -> Imported:
-    """One file through the mapping; columns are numbered from 1, as a spreadsheet shows them."""
+    """One file through the mapping (`gyrocal.io.readers`: CSV, MAT or HDF5); columns are numbered
+    from 1, as a spreadsheet shows them. A reference row with a missing value (NaN, an empty
+    cell) has no quaternion: it is flagged invalid and counted, not refused."""
     path = Path(path)
-    fmt = mapping["format"]
-    try:
-        frame = pd.read_csv(path, sep=fmt.get("delimiter", ","), skiprows=int(fmt.get("header_rows", 1)),
-                            header=None, dtype=str)
-    except (OSError, pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        raise TelemetryError(f"{path}: cannot be read with this mapping: {exc}") from exc
-
-    def column(number, what):
-        if not 1 <= number <= frame.shape[1]:
-            raise TelemetryError(f"{path}: the mapping's {what} is column {number}, but the file has "
-                                 f"{frame.shape[1]} columns")
-        values = pd.to_numeric(frame.iloc[:, number - 1], errors="coerce").to_numpy(dtype=float)
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            line = int(bad[0]) + int(fmt.get("header_rows", 1)) + 1
-            raise TelemetryError(f"{path}: line {line}, column {number} ({what}): not a number: "
-                                 f"{frame.iloc[bad[0], number - 1]!r}")
-        return values
-
-    time = column(mapping["time"]["column"], "time")
+    table = readers.read_table(path, mapping["format"], _variables(mapping))
+    time, rate_hz = file_time(table, mapping["time"])
     ref = mapping["reference"]
-    raw = np.column_stack([column(c, "reference quaternion") for c in ref["columns"]])
-    lines = np.arange(len(frame)) + int(fmt.get("header_rows", 1)) + 1
-    quat, valid, checked = _unit_quaternions(path, raw, [frame.iloc[:, c - 1] for c in ref["columns"]], ref, lines)
+    where = _variable(ref)
+    raw = np.column_stack([table.column(where, c, "reference quaternion", missing_ok=True) for c in ref["columns"]])
+    lines = table.lines()
+    quat, valid, checked = _unit_quaternions(path, raw, [table.printed(where, c) for c in ref["columns"]], ref, lines)
     quat = quat[:, ORDERS[ref["order"]]]
     gyro = mapping["gyro"]
     names = list(gyro["columns"])
-    values = np.column_stack([column(gyro["columns"][n], f"gyro {n}") for n in names])
+    values = np.column_stack([table.column(_variable(gyro), gyro["columns"][n], f"gyro {n}") for n in names])
     rate = None
     if gyro["quantity"] == "rate":
         rate = values * RATE_UNITS[gyro["unit"]]
@@ -175,45 +211,23 @@ def read_file(path, mapping) -> Imported:
         increments[1:] = 0.5 * (rate[1:] + rate[:-1]) * np.diff(time)[:, None]
     else:
         increments = values * ANGLE_UNITS[gyro["unit"]]
-    extras = {name: column(number, f"extra {name}") for name, number in (mapping.get("extras") or {}).items()}
-    return Imported(path.stem, time, quat, valid, increments, extras, rate, lines, **checked)
-
-
-_NUMBER = r"^\s*[+-]?(\d*)(?:\.(\d*))?(?:[eE]([+-]?\d+))?\s*$"
-"""A number as a file prints it: whole part, decimals, exponent."""
-
-
-def printed_quantum(text, values) -> tuple:
-    """The unit in the last place of each value of one column as the file prints it, and the
-    column's precision in words. A column printed to a fixed number of decimals (``%.4f``) has
-    one unit, 10^-decimals; one printed to significant digits (``%.5g``: 0.98275, 2.4976e-006)
-    has a unit that scales with each value, 10^(exponent - digits + 1). Which one is read off the
-    column: the most decimals and the most significant digits any value shows; each value's unit
-    is the larger of the two readings, which is the right one in either case (a value printed as
-    ``1`` among 5-digit ones stands for 1.0000). In words, a column whose values all show as many
-    decimals is printed to decimals, any other to significant digits."""
-    parts = pd.Series(text, dtype=object).astype(str).str.extract(_NUMBER)
-    whole, frac = parts[0].fillna(""), parts[1].fillna("")
-    exponent = pd.to_numeric(parts[2], errors="coerce").fillna(0).to_numpy(dtype=float)
-    shown = frac.str.len().to_numpy(dtype=float) - exponent
-    decimals = float(shown.max())
-    digits = float(max(1, (whole + frac).str.lstrip("0").str.len().max()))
-    values = np.asarray(values, dtype=float)
-    with np.errstate(divide="ignore"):
-        by_digits = 10.0 ** (np.floor(np.log10(np.abs(values))) - digits + 1)
-    if shown.min() < decimals:
-        words = f"{digits:.0f} significant digit{'s' if digits != 1 else ''}"
-    else:
-        words = f"{decimals:.0f} decimal{'s' if decimals != 1 else ''}"
-    return np.maximum(by_digits, 10.0 ** -decimals), words
+    extras = {name: table.column(*_extra(spec), f"extra {name}") for name, spec in (mapping.get("extras") or {}).items()}
+    return Imported(path.stem, time, quat, valid, increments, extras, rate, lines, **checked, rate_hz=rate_hz)
 
 
 def _unit_quaternions(path, raw, text, ref, lines) -> tuple:
     """The reference quaternions (in the file's order) renormalised where their printed digits
-    explain their norm error, which rows are valid (not all zero, not refused), and what was
-    found (`Imported`'s norm fields); a file where most are off unit beyond their precision is
-    refused."""
-    quanta, words = zip(*(printed_quantum(t, raw[:, i]) for i, t in enumerate(text)))
+    explain their norm error (a binary file's, its floats' spacing), which rows are valid (no
+    missing value, not all zero, not refused), and what was found (`Imported`'s norm fields); a
+    file where most are off unit beyond their precision is refused."""
+    missing = np.isnan(raw).any(axis=1)
+    raw = np.where(missing[:, None], 0.0, raw)
+    quanta, words = [], []
+    for i, t in enumerate(text):
+        quantum = np.zeros(len(raw))
+        quantum[~missing], word = readers.printed_quantum(None if t is None else t[~missing], raw[~missing, i])
+        quanta.append(quantum)
+        words.append(word)
     norm = np.linalg.norm(raw, axis=1)
     present = norm > 0
     error = np.where(present, norm - 1.0, 0.0)
@@ -224,16 +238,18 @@ def _unit_quaternions(path, raw, text, ref, lines) -> tuple:
     columns = ", ".join(str(c) for c in ref["columns"])
     if refused.sum() > MOST_REFUSED * max(present.sum(), 1):
         row = int(np.argmax(refused))
+        place = f"line {lines[row]}" if _variable(ref) is None else f"variable {_variable(ref)}, row {lines[row]}"
         raise TelemetryError.at(
             path, f"the reference quaternion's norm is {norm[row]:.6g}, off 1 by {abs(error[row]):.2g}, more than "
                   f"the {precision} printed explain ({tolerance[row]:.2g}), as are {int(refused.sum())} of the "
                   f"file's {int(present.sum())} quaternions",
-            f"line {lines[row]}, columns {columns} (reference quaternion)",
+            f"{place}, columns {columns} (reference quaternion)",
             "check the mapping's reference.columns: they should hold a unit quaternion")
     quat = raw.copy()
     keep = present & ~refused
     quat[keep] /= norm[keep, None]
-    return quat, keep, {"norm_error": error, "norm_rounding": rounding, "refused": refused, "precision": precision}
+    return quat, keep, {"norm_error": error, "norm_rounding": rounding, "refused": refused, "precision": precision,
+                        "missing": missing}
 
 
 def declared_range_rad_s(mapping) -> float | None:
@@ -278,36 +294,60 @@ def reference_rows(time, interval_s) -> np.ndarray:
     return keep
 
 
+def split_file(imp: Imported, options: dict) -> tuple:
+    """A file's maneuvers ``[(first row, row after the last)]`` and its `rests.Rests` (None when the
+    mapping keeps each file whole: ``maneuver.split: file``, the default)."""
+    if options.get("split", "file") != "rests":
+        return [(0, len(imp.time))], None
+    rate = imp.rate if imp.rate is not None else np.vstack([imp.increments[1:2] * 0, imp.increments[1:]
+                                                            / np.diff(imp.time)[:, None]])
+    found = rests.find_rests(rate, float(np.median(np.diff(imp.time))), float(options.get("min_rest_s", rests.MIN_REST_S)))
+    return rests.pieces(len(imp.time), found.runs), found
+
+
 def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tuple:
-    """The campaign of ``files`` (one maneuver and one noise group each, end to end) and what was
-    counted per file."""
+    """The campaign of ``files`` (end to end; each file one noise group, and one maneuver or, with
+    ``maneuver.split: rests``, one per stretch between its rests) and what was counted per file.
+    A maneuver is labelled (its axis, the one the gyro turns most about, and the mapping's
+    direction, ``both`` by default) unless the mapping says ``maneuver.free: true``: then it has
+    neither axis nor direction, free motion."""
     gyro = mapping["gyro"]
     names = list(gyro["columns"])
     axes = [gyro["axes"][n] for n in names]
     channels = tuple(Channel(n, None, a) for n, a in zip(names, axes))
     gap = mapping.get("gap_s")
-    direction = (mapping.get("maneuver") or {}).get("direction", "both")
+    options = mapping.get("maneuver") or {}
+    direction = None if options.get("free") else options.get("direction", "both")
     interval = mapping["reference"].get("sample_interval_s") if reference_interval_s is None else reference_interval_s
     _check_interval(interval, "the reference sample interval")
     range_rad_s = declared_range_rad_s(mapping)
-    parts, maneuvers, counts = [], [], {}
+    parts, maneuvers, counts, rates = [], [], {}, []
     offset = 0.0
     for f in files:
         imp = read_file(f, mapping)
         if not NAME_PATTERN.match(imp.stem):
-            raise TelemetryError(f"{f}: the file's stem names its maneuver, so it may hold only letters, digits "
-                                 f"and '_'")
+            raise TelemetryError.at(f, "the file's stem names its maneuvers and noise group, so it may hold only "
+                                       "letters, digits and '_'", todo="rename the file")
         shift = offset - imp.time[0]
         time = imp.time + shift
         keep = reference_rows(time, interval)
         parts.append((time, imp, keep))
-        maneuvers.append(Maneuver(imp.stem, maneuver_axis(imp, axes), direction, float(time[0]), float(time[-1]),
-                                  noise_group=imp.stem))  # one noise level per recording
-        counts[imp.stem] = {"rows": len(time), "reference_dropouts": int((~imp.valid[keep] & ~imp.refused[keep]).sum()),
+        spans, found = split_file(imp, options)
+        for i, (a, b) in enumerate(spans):
+            piece = imp.increments[a:b]
+            axis = None if direction is None else axes[int(np.argmax(np.abs(piece).sum(axis=0)))]
+            maneuvers.append(Maneuver(imp.stem if len(spans) == 1 else f"{imp.stem}_{i + 1}", axis, direction,
+                                      float(time[a]), float(time[b - 1]), noise_group=imp.stem))  # one noise level per recording
+        step = float(np.median(np.diff(time)))
+        rates.append(imp.rate_hz)
+        counts[imp.stem] = {"rows": len(time), "maneuvers": [m.id for m in maneuvers[-len(spans):]],
+                            "reference_dropouts": int((~imp.valid[keep] & ~imp.refused[keep] & ~imp.missing[keep]).sum()),
+                            "reference_missing": int((keep & imp.missing).sum()),
                             "reference_kept": int(keep.sum()), "reference_interval_s": float(interval or 0.0),
-                            "time_shift_s": float(shift), **_norm_counts(imp, keep, mapping["reference"]["columns"]),
+                            "time_shift_s": float(shift), "rate_hz": imp.rate_hz or 1.0 / step,
+                            **_rest_counts(found, spans, time), **_norm_counts(imp, keep, mapping["reference"]["columns"]),
                             **_range_counts(imp, names, range_rad_s)}
-        offset = time[-1] + (float(np.median(np.diff(time))) if gap is None else float(gap))
+        offset = time[-1] + (step if gap is None else float(gap))
     time = np.concatenate([t for t, _, _ in parts])
     st_time = np.concatenate([t[keep] for t, _, keep in parts])
     quat = np.concatenate([imp.quat[keep] for _, imp, keep in parts])
@@ -316,13 +356,40 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
     columns = {n: increments[:, i] for i, n in enumerate(names)}
     for key in parts[0][1].extras:
         columns[key] = np.concatenate([imp.extras[key] for _, imp, _ in parts])
-    gyro_known = dict(mapping.get("gyro_noise") or {})
-    if range_rad_s is not None:
-        gyro_known["range_deg_s"] = float(np.rad2deg(range_rad_s))  # validate's saturation check reads it
     campaign = Campaign(name=name, channels=channels, star_tracker=dict(mapping.get("star_tracker") or {}),
-                        gyro=gyro_known, maneuvers=tuple(maneuvers), st_time=st_time,
+                        gyro=_gyro_knowledge(mapping, range_rad_s, rates), maneuvers=tuple(maneuvers), st_time=st_time,
                         st_quat=quat, st_valid=valid, gyro_time=time, gyro_columns=columns)
     return campaign, counts
+
+
+RATE_AGREE = 1e-3
+"""Files whose sampling rates differ by less than this share are at one rate (``gyro.rate_hz``)."""
+
+
+def _gyro_knowledge(mapping, range_rad_s, rates) -> dict:
+    """``campaign.yaml``'s ``gyro:`` from the mapping: its noise (``gyro_noise``), its sensor class,
+    its range, and its sampling rate (the mapping's ``rate_hz``, or the files' one rate where the
+    mapping reads the time off a rate)."""
+    known = dict(mapping.get("gyro_noise") or {})
+    if mapping.get("sensor_class"):
+        known["sensor_class"] = mapping["sensor_class"]
+    if range_rad_s is not None:
+        known["range_deg_s"] = float(np.rad2deg(range_rad_s))  # validate's saturation check reads it
+    if mapping.get("rate_hz") is not None:
+        known["rate_hz"] = float(mapping["rate_hz"])
+    elif None not in rates and np.ptp(rates) <= RATE_AGREE * min(rates):
+        known["rate_hz"] = float(rates[0])
+    return known
+
+
+def _rest_counts(found, spans, time) -> dict:
+    """The rests a file was cut at, for the report (none unless the mapping splits at rests)."""
+    if found is None:
+        return {}
+    return {"rests_s": [(float(time[a]), float(time[b - 1])) for a, b in found.runs],
+            "rest_threshold_rad_s": found.threshold, "rest_sigma_rad_s": found.sigma.tolist(),
+            "rest_bias_rad_s": found.bias.tolist(), "rest_smooth": found.smooth,
+            "maneuver_spans_s": [(float(time[a]), float(time[b - 1])) for a, b in spans]}
 
 
 def _norm_counts(imp: Imported, keep, columns) -> dict:
@@ -367,16 +434,29 @@ def import_files(mapping_name, outdir, files, reference_interval_s=None) -> tupl
 def report(campaign, counts, outdir) -> str:
     """What ``gyrocal import`` prints: the campaign written and what was counted per file."""
     lines = [f"wrote {outdir}: {len(campaign.maneuvers)} maneuvers, channels {', '.join(campaign.channel_names)}, "
-             f"extras {', '.join(campaign.extras()) or 'none'}"]
-    for m in campaign.maneuvers:
-        c = counts[m.id]
+             f"extras {', '.join(campaign.extras()) or 'none'}"
+             + (f", sensor class {campaign.gyro['sensor_class']}" if "sensor_class" in campaign.gyro else "")]
+    for stem, c in counts.items():
         kept = ""
         if c["reference_kept"] < c["rows"]:
             kept = (f", reference kept every {c['reference_interval_s']:g} s: {c['reference_kept']} samples, "
                     f"{c['rows'] - c['reference_kept']} left out between them (the gyro keeps every row)")
-        lines.append(f"  {m.id:<24} {m.direction} {m.axis:<6} {c['rows']} rows{kept}, {c['reference_dropouts']} "
-                     f"reference dropouts (all-zero quaternions, flagged invalid), times shifted by "
+        lines.append(f"  {stem:<24} {c['rows']} rows at {c['rate_hz']:.6g} Hz{kept}, {c['reference_dropouts']} "
+                     f"reference dropouts (all-zero quaternions, flagged invalid), {c['reference_missing']} reference "
+                     f"rows missing (NaN or empty: no attitude, flagged invalid), times shifted by "
                      f"{c['time_shift_s']:+.2f} s")
+        turns = []
+        for mid in c["maneuvers"]:
+            m = campaign.maneuver(mid)
+            turn = "free motion" if m.axis is None else m.turn
+            turns.append(f"{m.id} ({turn}, {m.t_start:.2f} to {m.t_end:.2f} s)")
+        lines.append("    maneuvers: " + ", ".join(turns))
+        if "rests_s" in c:
+            found = ", ".join(f"{a:.2f} to {b:.2f} s" for a, b in c["rests_s"]) or "none"
+            lines.append(f"    rests (gyro rate within {np.rad2deg(c['rest_threshold_rad_s']):.2g} deg/s of its rest "
+                         f"value over {c['rest_smooth']} samples: {rests.REST_SIGMAS:g} sd of its noise at rest, "
+                         f"{', '.join(f'{np.rad2deg(v):.2g}' for v in c['rest_sigma_rad_s'])} deg/s a sample): {found}; "
+                         "cut in the middle of each inner one")
         lines.append("    " + _norm_report(c))
         if "at_range" in c:
             at = ", ".join(f"{n} {k}" for n, k in c["at_range"].items() if k) or "none"
@@ -388,10 +468,18 @@ def report(campaign, counts, outdir) -> str:
 
 def _norm_report(c: dict) -> str:
     """The import report's line on the reference quaternions of one file."""
+    first = c["reference_refused_first"]
+    if c["reference_precision"] == readers.BINARY_WORDS:  # not printed: off 1 by more than UNIT_NORM_TOL is not rounding
+        text = (f"reference quaternions stored as {readers.BINARY_WORDS}: {c['reference_renormalised']} renormalised "
+                f"(norm off 1 by up to {c['reference_norm_error_max']:.2g}), ")
+        if first is None:
+            return text + f"none off by more than {UNIT_NORM_TOL:g}"
+        return text + (f"{c['reference_refused']} off by more than {UNIT_NORM_TOL:g} refused and flagged invalid; the "
+                       f"first at row {first['line']}, columns {', '.join(str(k) for k in first['columns'])}: norm "
+                       f"{first['norm']:.6f}")
     text = (f"reference quaternions printed to {c['reference_precision']}: {c['reference_renormalised']} renormalised "
             f"(norm off 1 by up to {c['reference_norm_error_max']:.2g}, at most {c['reference_times_rounding_max']:.2g} "
             f"times what rounding to those digits can do)")
-    first = c["reference_refused_first"]
     if first is None:
         return text + f", none off by more than {PRECISION_MARGIN:g} times"
     columns = ", ".join(str(k) for k in first["columns"])
