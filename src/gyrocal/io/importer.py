@@ -1,44 +1,36 @@
-"""Tabular telemetry into a campaign directory (docs/interface.md section 3), driven by a mapping.
+"""Recordings into a campaign directory (docs/interface.md section 3), driven by a mapping
+(`gyrocal.io.mapping`; each file read by `gyrocal.io.recording`).
 
-A mapping file (YAML) says where each quantity sits in a user's files and in which units:
-the time column, the attitude reference's quaternion columns and their order, the gyro
-columns and whether they hold rates or increments, and any extra columns to keep as
-candidate regressors. Each file becomes one maneuver named after its stem; the files'
-times are shifted so the maneuvers follow each other, one sample step apart (or ``gap_s``). A new format needs a mapping, not
-code. gyrocal ships the mappings in ``gyrocal/io/mappings/`` (``repoimu``: the RepoIMU
-T-stick recordings).
+Each file becomes one maneuver named after its stem, or, with ``maneuver.split: rests``, one per
+stretch between the rests its gyro shows (`gyrocal.io.rests`; ``<stem>_1``, ``<stem>_2``, ...);
+each file is one noise group. The files' times are shifted so they follow each other, one
+sample step apart (or ``gap_s``). A maneuver is labelled with the axis it turns most about and
+the mapping's direction, or, with ``maneuver.free: true``, written with neither: free motion.
 
 A reference faster than its noise is white (a motion-capture system filters its attitude over
 several of its samples) can be kept only every ``reference.sample_interval_s`` seconds, as a
 star tracker at a few Hz would give it, while the gyro keeps every row: the rows in between
 are left out of ``star_tracker.csv`` and counted in the import report, never dropped silently.
 
-Rates become increments by the trapezoidal rule, ``(w[k-1] + w[k]) / 2 * dt``: a sampled
-rate is an instantaneous value, and the trapezoid integrates a rate that varies linearly
-between samples with no lag; ``w[k] * dt`` would lag half a sample, 5 ms at 100 Hz, which is
-1 400 arcsec at 80 deg/s.
-
-Reference quaternions are written unit. A source prints them to a few digits, so their norm is
-off 1 by what rounding those digits can do: the importer reads how many digits each quaternion
-column prints (`printed_quantum`) and renormalises every quaternion whose norm error is within
-`PRECISION_MARGIN` times what that rounding explains. One further off is not a rounded unit
-quaternion: it is refused as a sample (flagged invalid, as a dropout is) and named with its
-file, line and columns; a file where most are refused is refused whole (the columns hold no
-quaternion). The import report counts both, per file.
-
 A mapping may declare the gyro's range (``gyro.range``, in the mapping's gyro unit, per second
 for increments): the report counts the samples within `RANGE_BAND` of it, where the gyro clips
 (`gyrocal.checks.saturation` refuses such a maneuver).
 """
 
-from dataclasses import dataclass
-from importlib import resources
-from pathlib import Path
-
 import numpy as np
 
-from gyrocal.io import readers, rests
-from gyrocal.io.readers import printed_quantum
+from gyrocal.io import rests
+from gyrocal.io.mapping import (
+    ANGLE_UNITS,
+    ORDERS,
+    RATE_UNITS,
+    check_interval,
+    declared_range_rad_s,
+    mapping_path,
+    read_mapping,
+)
+from gyrocal.io.readers import BINARY_WORDS, printed_quantum
+from gyrocal.io.recording import MOST_REFUSED, PRECISION_MARGIN, Imported, maneuver_axis, read_file
 from gyrocal.io.telemetry import (
     NAME_PATTERN,
     UNIT_NORM_TOL,
@@ -48,235 +40,17 @@ from gyrocal.io.telemetry import (
     default_name,
     write_campaign,
 )
-from gyrocal.io.yamlfile import check_schema, read_yaml
 from gyrocal.model.channels import Channel
 
 __all__ = [
-    "ANGLE_UNITS", "MOST_REFUSED", "ORDERS", "PRECISION_MARGIN", "RANGE_BAND", "RATE_UNITS", "Imported", "build_campaign",
-    "declared_range_rad_s", "import_files", "maneuver_axis", "mapping_path", "printed_quantum", "read_file",
-    "read_mapping", "reference_rows", "report"
+    "ANGLE_UNITS", "MOST_REFUSED", "ORDERS", "PRECISION_MARGIN", "RANGE_BAND", "RATE_AGREE", "RATE_UNITS", "Imported",
+    "build_campaign", "declared_range_rad_s", "import_files", "maneuver_axis", "mapping_path", "printed_quantum",
+    "read_file", "read_mapping", "reference_rows", "report", "split_file"
 ]
 
-ORDERS = {"xyzw": [0, 1, 2, 3], "wxyz": [1, 2, 3, 0]}
-"""Where scalar-last ``q1..q4`` come from in each quaternion order a mapping may declare."""
-
-RATE_UNITS = {"rad/s": 1.0, "deg/s": np.pi / 180.0}
-ANGLE_UNITS = {"rad": 1.0, "deg": np.pi / 180.0}
-
-PRECISION_MARGIN = 2.0
-"""A quaternion is renormalised when its norm is off 1 by at most this many times what rounding
-its printed digits can do (the norm of half a unit in the last place of each component), and
-never less than `UNIT_NORM_TOL`. Twice, since a source may have rounded more than once; the
-RepoIMU trials that turn slowly sit up to 1.7 times the rounding bound (their norms dip a little
-below 1, as an interpolation between samples makes them); the fast one, 133 times."""
 RANGE_BAND = 0.01
 """Samples within this share of a declared gyro range are counted as at the range (as
 `gyrocal.checks.saturation.FLAT_BAND`)."""
-MOST_REFUSED = 0.5
-"""A file where more than this share of the quaternions are off unit beyond their precision is
-refused whole: its reference columns hold no quaternion."""
-
-
-@dataclass
-class Imported:
-    """One file read through a mapping, in SI, before the maneuvers are put end to end."""
-
-    stem: str
-    time: np.ndarray
-    quat: np.ndarray
-    """(N, 4) scalar last; rows where the reference has no value are zero."""
-    valid: np.ndarray
-    increments: np.ndarray
-    """(N, n_channels) rad over the interval ending at each row; the first row is the start."""
-    extras: dict
-    rate: np.ndarray | None = None
-    """(N, n_channels) rad/s as sampled, for a gyro logged as rates (None for increments). The
-    Allan deviation needs the samples: the trapezoid averages neighbours, which hides half the
-    white noise at a cluster of one sample."""
-    lines: np.ndarray | None = None
-    """(N,) each row's line in the file (the first line is 1)."""
-    norm_error: np.ndarray | None = None
-    """(N,) each reference quaternion's norm less 1, as read (0 where all components are zero)."""
-    norm_rounding: np.ndarray | None = None
-    """(N,) the largest norm error rounding to its printed digits can make (`printed_quantum`)."""
-    refused: np.ndarray | None = None
-    """(N,) quaternions off unit beyond that: flagged invalid, not renormalised."""
-    precision: str = ""
-    """How the reference quaternion columns are printed, in words ("5 significant digits")."""
-    missing: np.ndarray | None = None
-    """(N,) reference rows with a missing value (NaN, an empty cell: occluded markers): invalid."""
-    rate_hz: float | None = None
-    """The sampling rate the rows are counted at, where the mapping reads the time off a rate."""
-
-
-def mapping_path(name_or_path) -> Path:
-    """A shipped mapping by name (``repoimu``) or a user's mapping file."""
-    path = Path(name_or_path)
-    if path.suffix in (".yaml", ".yml"):
-        return path
-    shipped = resources.files("gyrocal.io") / "mappings" / f"{name_or_path}.yaml"
-    if not shipped.is_file():
-        names = sorted(p.name.removesuffix(".yaml") for p in (resources.files("gyrocal.io") / "mappings").iterdir()
-                       if p.name.endswith(".yaml"))
-        raise TelemetryError(f"no mapping {name_or_path!r}: gyrocal ships {names}; or give a mapping file (.yaml)")
-    return Path(str(shipped))
-
-
-def read_mapping(name_or_path) -> dict:
-    """A mapping, read by `gyrocal.io.yamlfile` and checked against its schema
-    (``gyrocal/io/schemas/mapping.schema.json``: the sections, the orders, quantities, units and
-    axes), then for what the schema does not say."""
-    path = mapping_path(name_or_path)
-    document = read_yaml(path)
-    check_schema(document, "mapping")
-    mapping = document.data
-    gyro = mapping["gyro"]
-    units = RATE_UNITS if gyro["quantity"] == "rate" else ANGLE_UNITS
-    if gyro["unit"] not in units:
-        raise TelemetryError(f"{path}: gyro.unit of a {gyro['quantity']} must be one of {sorted(units)}")
-    _check_interval(mapping["reference"].get("sample_interval_s"), f"{path}: reference.sample_interval_s")
-    time = mapping["time"]
-    ways = [k for k in ("column", "rate_hz", "rate_variable") if k in time] or (["variable"] if "variable" in time else [])
-    if len(ways) != 1 or ("variable" in time and "rate" in ways[0]):
-        raise TelemetryError.at(path, f"the time is given {len(ways) or 'no'} ways ({', '.join(sorted(time))})",
-                                f"time (line {document.line(['time'])})",
-                                "give one: column: N (a CSV), variable: name (with column: N for a matrix), "
-                                "rate_hz: Hz, or rate_variable: name (a variable holding the rate)")
-    options = mapping.get("maneuver") or {}
-    if options.get("free") and "direction" in options:
-        raise TelemetryError.at(path, "a free maneuver has no direction", f"maneuver (line {document.line(['maneuver'])})",
-                                "drop maneuver.direction, or maneuver.free")
-    unpaired = sorted(set(gyro["columns"]) ^ set(gyro["axes"]))
-    if unpaired:
-        raise TelemetryError.at(path, f"gyro.columns and gyro.axes must name the same channels; {unpaired} is in "
-                                      "only one", f"gyro (line {document.line(['gyro'])})")
-    return mapping
-
-
-def _variable(section: dict):
-    """The variable a section's columns are in (a MAT or HDF5 file), or None (a CSV's one table)."""
-    return (section or {}).get("variable")
-
-
-def _variables(mapping) -> list:
-    """Every variable a mapping reads from a MAT or HDF5 file."""
-    time = mapping["time"]
-    names = [_variable(time), time.get("rate_variable"), _variable(mapping["reference"]), _variable(mapping["gyro"])]
-    names += [e.get("variable") for e in (mapping.get("extras") or {}).values() if isinstance(e, dict)]
-    return names
-
-
-def _extra(spec) -> tuple:
-    """An extra's variable and column: ``N`` (a CSV column) or ``{variable, column}``."""
-    return (spec.get("variable"), int(spec.get("column", 1))) if isinstance(spec, dict) else (None, int(spec))
-
-
-def file_time(table: readers.Table, time: dict) -> tuple:
-    """Each row's time in seconds, and the sampling rate it was counted at (or None): a column, or
-    the rows counted at a rate (``rate_hz``, or a variable of the file holding it, ``rate_variable``)."""
-    if "rate_hz" in time or "rate_variable" in time:
-        rate = float(time["rate_hz"]) if "rate_hz" in time else table.scalar(time["rate_variable"], "sampling rate")
-        return np.arange(table.rows) / rate, rate
-    values = table.column(_variable(time), int(time.get("column", 1)), "time")
-    step = np.diff(values)
-    if (step <= 0).any():
-        row = int(np.flatnonzero(step <= 0)[0]) + 1
-        raise TelemetryError.at(table.path, f"the time {values[row]:.9g} s does not increase (the row before holds "
-                                            f"{values[row - 1]:.9g} s)", table.where(_variable(time), row,
-                                                                                      int(time.get("column", 1)), "time"),
-                                "sort the rows by time and drop repeated ones")
-    return values, None
-
-
-def read_file(path, mapping) -> Imported:
-    """One file through the mapping (`gyrocal.io.readers`: CSV, MAT or HDF5); columns are numbered
-    from 1, as a spreadsheet shows them. A reference row with a missing value (NaN, an empty
-    cell) has no quaternion: it is flagged invalid and counted, not refused."""
-    path = Path(path)
-    table = readers.read_table(path, mapping["format"], _variables(mapping))
-    time, rate_hz = file_time(table, mapping["time"])
-    ref = mapping["reference"]
-    where = _variable(ref)
-    raw = np.column_stack([table.column(where, c, "reference quaternion", missing_ok=True) for c in ref["columns"]])
-    lines = table.lines()
-    quat, valid, checked = _unit_quaternions(path, raw, [table.printed(where, c) for c in ref["columns"]], ref, lines)
-    quat = quat[:, ORDERS[ref["order"]]]
-    gyro = mapping["gyro"]
-    names = list(gyro["columns"])
-    values = np.column_stack([table.column(_variable(gyro), gyro["columns"][n], f"gyro {n}") for n in names])
-    rate = None
-    if gyro["quantity"] == "rate":
-        rate = values * RATE_UNITS[gyro["unit"]]
-        increments = np.zeros_like(rate)
-        increments[1:] = 0.5 * (rate[1:] + rate[:-1]) * np.diff(time)[:, None]
-    else:
-        increments = values * ANGLE_UNITS[gyro["unit"]]
-    extras = {name: table.column(*_extra(spec), f"extra {name}") for name, spec in (mapping.get("extras") or {}).items()}
-    return Imported(path.stem, time, quat, valid, increments, extras, rate, lines, **checked, rate_hz=rate_hz)
-
-
-def _unit_quaternions(path, raw, text, ref, lines) -> tuple:
-    """The reference quaternions (in the file's order) renormalised where their printed digits
-    explain their norm error (a binary file's, its floats' spacing), which rows are valid (no
-    missing value, not all zero, not refused), and what was found (`Imported`'s norm fields); a
-    file where most are off unit beyond their precision is refused."""
-    missing = np.isnan(raw).any(axis=1)
-    raw = np.where(missing[:, None], 0.0, raw)
-    quanta, words = [], []
-    for i, t in enumerate(text):
-        quantum = np.zeros(len(raw))
-        quantum[~missing], word = readers.printed_quantum(None if t is None else t[~missing], raw[~missing, i])
-        quanta.append(quantum)
-        words.append(word)
-    norm = np.linalg.norm(raw, axis=1)
-    present = norm > 0
-    error = np.where(present, norm - 1.0, 0.0)
-    rounding = np.linalg.norm(0.5 * np.column_stack(quanta), axis=1)
-    tolerance = np.maximum(PRECISION_MARGIN * rounding, UNIT_NORM_TOL)
-    refused = present & (np.abs(error) > tolerance)
-    precision = ", ".join(dict.fromkeys(words))
-    columns = ", ".join(str(c) for c in ref["columns"])
-    if refused.sum() > MOST_REFUSED * max(present.sum(), 1):
-        row = int(np.argmax(refused))
-        place = f"line {lines[row]}" if _variable(ref) is None else f"variable {_variable(ref)}, row {lines[row]}"
-        raise TelemetryError.at(
-            path, f"the reference quaternion's norm is {norm[row]:.6g}, off 1 by {abs(error[row]):.2g}, more than "
-                  f"the {precision} printed explain ({tolerance[row]:.2g}), as are {int(refused.sum())} of the "
-                  f"file's {int(present.sum())} quaternions",
-            f"{place}, columns {columns} (reference quaternion)",
-            "check the mapping's reference.columns: they should hold a unit quaternion")
-    quat = raw.copy()
-    keep = present & ~refused
-    quat[keep] /= norm[keep, None]
-    return quat, keep, {"norm_error": error, "norm_rounding": rounding, "refused": refused, "precision": precision,
-                        "missing": missing}
-
-
-def declared_range_rad_s(mapping) -> float | None:
-    """The gyro's range a mapping declares (``gyro.range``, in its gyro unit: a rate unit, or an
-    angle unit per second for increments), in rad/s; None if it declares none."""
-    gyro = mapping["gyro"]
-    value = gyro.get("range")
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
-        raise TelemetryError(f"the mapping's gyro.range must be a positive number (in {gyro['unit']}"
-                             f"{'' if gyro['quantity'] == 'rate' else ' per second'}), got {value!r}")
-    units = RATE_UNITS if gyro["quantity"] == "rate" else ANGLE_UNITS
-    return float(value) * units[gyro["unit"]]
-
-
-def maneuver_axis(imported: Imported, axes: list) -> str:
-    """The body axis a file rotates about most (the largest total gyro rotation); ``axes`` are the
-    gyro columns' axes, in their order."""
-    turned = np.abs(imported.increments).sum(axis=0)
-    return axes[int(np.argmax(turned))]
-
-
-def _check_interval(interval_s, where: str):
-    """A reference sample interval is ``None`` or a number of seconds >= 0 (0: every row)."""
-    if interval_s is not None and not (isinstance(interval_s, (int, float)) and interval_s >= 0):
-        raise TelemetryError(f"{where} must be a number of seconds >= 0 (0: every row), got {interval_s!r}")
 
 
 def reference_rows(time, interval_s) -> np.ndarray:
@@ -319,7 +93,7 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
     options = mapping.get("maneuver") or {}
     direction = None if options.get("free") else options.get("direction", "both")
     interval = mapping["reference"].get("sample_interval_s") if reference_interval_s is None else reference_interval_s
-    _check_interval(interval, "the reference sample interval")
+    check_interval(interval, "the reference sample interval")
     range_rad_s = declared_range_rad_s(mapping)
     parts, maneuvers, counts, rates = [], [], {}, []
     offset = 0.0
@@ -469,8 +243,8 @@ def report(campaign, counts, outdir) -> str:
 def _norm_report(c: dict) -> str:
     """The import report's line on the reference quaternions of one file."""
     first = c["reference_refused_first"]
-    if c["reference_precision"] == readers.BINARY_WORDS:  # not printed: off 1 by more than UNIT_NORM_TOL is not rounding
-        text = (f"reference quaternions stored as {readers.BINARY_WORDS}: {c['reference_renormalised']} renormalised "
+    if c["reference_precision"] == BINARY_WORDS:  # not printed: off 1 by more than UNIT_NORM_TOL is not rounding
+        text = (f"reference quaternions stored as {BINARY_WORDS}: {c['reference_renormalised']} renormalised "
                 f"(norm off 1 by up to {c['reference_norm_error_max']:.2g}), ")
         if first is None:
             return text + f"none off by more than {UNIT_NORM_TOL:g}"
