@@ -5,7 +5,8 @@ or a scalar-first quaternion from a scalar-last one. Here each maneuver's gyro r
 summed between star-tracker samples, is compared with the star tracker's own rotation
 over the same interval (`physics`), the sampling and clocks are checked (`sampling`), and
 star-tracker outliers are screened (`outliers`). Each finding says what was found and its
-likely cause. The thresholds come from the physical bounds the effects declare and from the
+likely cause. The thresholds come from the physical bounds of the campaign's sensor class
+(`gyrocal.model.sensorclass`, a DTG's where it declares none) and from the
 noise measured in the data themselves, not from one file."""
 
 import numpy as np
@@ -35,7 +36,7 @@ def check(campaign: Campaign, block_s: float | None = None) -> Findings:
     if extreme_findings(campaign, findings) or interval_findings(campaign, findings):
         return findings
     gap_findings(campaign, findings)
-    limits = physical_limits(campaign.channels)
+    limits = physical_limits(campaign.channels, campaign.gyro.get("sensor_class"))  # the class's, not a DTG's
     range_rad_s = np.deg2rad(campaign.gyro["range_deg_s"]) if "range_deg_s" in campaign.gyro else None
     screened, sliced = [], []
     for m in campaign.maneuvers:

@@ -150,9 +150,11 @@ def _within(fit: RotationFit, axis: int, sf_bound, mis_bound) -> bool:
     return bool(scale_ok and cross_ok and determined and fit.axis == axis)
 
 
-def physical_limits(channels):
-    """Largest physical scale error and misalignment (SI), as the baseline effects declare them."""
-    spec = baseline(channels)
+def physical_limits(channels, sensor_class=None):
+    """Largest physical scale error and misalignment (SI), and the scale factor's prior sd, of the
+    campaign's sensor class (`gyrocal.model.sensorclass`; None: a DTG's, as the baseline effects
+    declare them)."""
+    spec = baseline(channels).with_sensor_class(sensor_class)
     bounds = {p.name: b for p, b in zip(spec.parameters, spec.bound_si)}
     sds = {p.name: s for p, s in zip(spec.parameters, spec.prior_sd_si)}
     mis = max(v for k, v in bounds.items() if k.startswith("mis_"))
