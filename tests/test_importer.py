@@ -335,6 +335,31 @@ def test_a_mapping_that_gives_the_time_twice_or_a_free_maneuver_a_direction_is_r
         importer.read_mapping(tmp_path / "mine.yaml")
 
 
+def test_a_time_that_does_not_increase_is_refused_with_its_line(tmp_path):
+    t, _, _ = repoimu_like(tmp_path / "Trial_A.csv")
+    lines = (tmp_path / "Trial_A.csv").read_text().splitlines()
+    fields = lines[2 + 40].split(";")
+    fields[0] = f"{t[39]:.10g}"
+    lines[2 + 40] = ";".join(fields)
+    (tmp_path / "Trial_A.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=r"Trial_A.csv: line 43, column 1 \(time\): the time 3.39 s does not increase "
+                                         r"\(the row before holds 3.39 s\). Sort the rows"):
+        importer.build_campaign([tmp_path / "Trial_A.csv"], importer.read_mapping("repoimu"), "c")
+
+
+def test_gyrocal_import_of_a_mat_file_prints_its_missing_rows_rests_and_maneuvers(tmp_path, capsys):
+    from scipy.io import savemat
+
+    savemat(tmp_path / "trial_A.mat", broad_like())
+    assert cli.main(["import", "broad", str(tmp_path / "out"), str(tmp_path / "trial_A.mat")]) == 0
+    out = capsys.readouterr().out
+    assert "wrote " in out and "2 maneuvers" in out and "sensor class mems" in out
+    assert "trial_A                  2500 rows at 100 Hz, 0 reference dropouts" in out
+    assert "3 reference rows missing" in out and "0.00 to 4.95 s, 10.05 to 14.95 s, 20.05 to 24.99 s" in out
+    assert "trial_A_1 (free motion, 0.00 to 12.49 s), trial_A_2 (free motion, 12.50 to 24.99 s)" in out
+    assert "reference quaternions stored as binary floats: 0 renormalised" in out
+
+
 BROAD = Path(__file__).resolve().parents[2] / "shared" / "data" / "broad"
 
 
