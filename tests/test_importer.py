@@ -284,8 +284,19 @@ def test_a_variable_the_file_lacks_is_refused_naming_those_it_holds(tmp_path):
     arrays = broad_like()
     arrays["gyr"] = arrays.pop("imu_gyr")
     savemat(tmp_path / "trial_A.mat", arrays)
-    with pytest.raises(InputError, match=r"the mapping's gyro gyro_x is variable 'imu_gyr', which the file does not "
+    with pytest.raises(InputError, match=r"the mapping's gyro is variable 'imu_gyr', which the file does not "
                                          r"hold. The file holds \['imu_acc', 'opt_quat', 'sampling_rate'\]"):
+        importer.build_campaign([tmp_path / "trial_A.mat"], importer.read_mapping("broad"), "c")
+
+
+def test_a_reference_with_fewer_rows_than_the_gyro_is_refused_naming_both_variables(tmp_path):
+    from scipy.io import savemat
+
+    arrays = broad_like()
+    arrays["opt_quat"] = arrays["opt_quat"][::2]
+    savemat(tmp_path / "trial_A.mat", arrays)
+    with pytest.raises(InputError, match=r"variable opt_quat \(reference quaternion\): variable opt_quat has 1250 "
+                                         r"rows, variable imu_gyr 2500: .* Resample one onto the other's times"):
         importer.build_campaign([tmp_path / "trial_A.mat"], importer.read_mapping("broad"), "c")
 
 

@@ -49,10 +49,17 @@ class Table:
     first_line: int = 1
     """The line in a CSV of the first row of numbers (the lines before it are headers)."""
     scalars: dict = field(default_factory=dict)
+    samples: tuple | None = None
+    """(variable, rows) every column read must have as many rows as (`sampled_as`)."""
 
     @property
     def rows(self) -> int:
-        return len(next(iter(self.variables.values())))
+        return self.samples[1] if self.samples else len(next(iter(self.variables.values())))
+
+    def sampled_as(self, variable, what: str):
+        """Every column read from now on must have as many rows as ``variable`` (the gyro's): the
+        importer reads the gyro and the reference at the same timestamps."""
+        self.samples = (variable, len(self.array(variable, what)))
 
     def where(self, variable, row: int, column: int, what: str) -> str:
         """Where one cell is, in words: ``line 12, column 3 (gyro x)`` or ``variable imu_gyr, row 12,
@@ -81,6 +88,12 @@ class Table:
                 f"variable {variable} has {values.shape[1]} columns ({values.shape[0]} x {values.shape[1]})"
             raise TelemetryError.at(self.path, f"the mapping's {what} is column {number}, but {holds}",
                                     todo="check the mapping's column numbers (counted from 1)")
+        if self.samples and len(values) != self.samples[1]:
+            raise TelemetryError.at(self.path, f"variable {variable} has {len(values)} rows, variable "
+                                               f"{self.samples[0]} {self.samples[1]}: gyrocal reads the gyro and the "
+                                               "reference at the same timestamps, one row each",
+                                    f"variable {variable} ({what})",
+                                    "resample one onto the other's times before importing")
         values = values[:, number - 1]
         bad = ~np.isfinite(values)
         if missing_ok:

@@ -93,6 +93,8 @@ def read_file(path, mapping) -> Imported:
     cell) has no quaternion: it is flagged invalid and counted, not refused."""
     path = Path(path)
     table = readers.read_table(path, mapping["format"], variables(mapping))
+    if table.kind != "csv":
+        table.sampled_as(variable(mapping["gyro"]), "gyro")
     time, rate_hz = file_time(table, mapping["time"])
     ref = mapping["reference"]
     where = variable(ref)
