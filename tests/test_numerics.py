@@ -357,7 +357,7 @@ def test_chi2_log_sf_stays_finite_and_exact_where_scipy_underflows(x, df):
 def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time():
     import emcee
 
-    from gyrocal.inference.sampling.posterior import _autocorr_times
+    from gyrocal.inference.sampling.posterior import _autocorr_times, _sokal_window
 
     rng = np.random.default_rng(3)
     noise_draws = rng.standard_normal((200, 6, 3))
@@ -370,6 +370,9 @@ def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time(
     chain[:, 2, 1] = 3.7  # one walker stuck: that parameter's time is undefined, and only that one
     times = _autocorr_times(chain)
     assert np.isnan(times[1]) and np.isfinite(times[[0, 2]]).all()
+    taus = np.array([[1.0, 1.2, 1.3, 1.3, 1.3], [1.0, 3.0, 6.0, 9.0, 12.0]])  # the second's window never closes
+    np.testing.assert_array_equal(_sokal_window(taus, 2.0), [3, 0])  # emcee's auto_window: [3, 0]
+    np.testing.assert_array_equal(_sokal_window(taus, 5.0), [0, 0])  # ... and [0, 0]
 
 
 def test_fitted_noise_proposal_is_the_draws_mean_and_covariance_and_refuses_scales_that_never_moved():

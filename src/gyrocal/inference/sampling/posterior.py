@@ -194,17 +194,25 @@ AUTOCORR_WINDOW_C = 5.0
 
 
 def _autocorr_times(chain) -> np.ndarray:
-    """emcee's integrated autocorrelation time per parameter of a (steps, walkers, dim) chain:
-    the walkers' mean autocorrelation and Sokal's window (`emcee.autocorr.auto_window`), with
+    """emcee's integrated autocorrelation time per parameter of a (steps, walkers, dim) chain
+    (`emcee.autocorr.integrated_time`): the walkers' mean autocorrelation and Sokal's window, with
     every walker and parameter in one FFT (`arviz.autocorr`) where emcee takes one at a time
     (eight times as fast, the same times to 1e-15). A walker that never moves leaves its
     parameter's time undefined (NaN), as in emcee. The caller compares the length with them."""
     rho = az.autocorr(np.moveaxis(chain, 0, -1), axis=-1).mean(axis=0)
     taus = 2.0 * np.cumsum(rho, axis=-1) - 1.0
-    window = [emcee.autocorr.auto_window(t, AUTOCORR_WINDOW_C) for t in taus]
-    tau = taus[np.arange(len(taus)), window]
+    tau = taus[np.arange(len(taus)), _sokal_window(taus, AUTOCORR_WINDOW_C)]
     tau[np.any(np.ptp(chain, axis=0) == 0, axis=0)] = np.nan
     return tau
+
+
+def _sokal_window(taus, c: float) -> np.ndarray:
+    """Each row's window: the first lag M with ``M >= c * tau(M)`` (lag 0 where no lag reaches it, as emcee's
+    argmin gives). emcee's ``auto_window`` (emcee 3.1, MIT licence, D. Foreman-Mackey and contributors)
+    over every row at once: it is not in ``emcee.autocorr.__all__``; tests/test_numerics.py pins the
+    times against `emcee.autocorr.integrated_time`."""
+    below = np.arange(taus.shape[-1]) < c * taus
+    return np.where(below.any(axis=-1), np.argmin(below, axis=-1), taus.shape[-1] - 1)
 
 
 DE_SHARE = 0.1
