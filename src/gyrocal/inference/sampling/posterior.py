@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import arviz as az
 import emcee
 import numpy as np
+import pandas as pd
 
 from gyrocal.inference.fit.estimate import linearize_all
 from gyrocal.inference.fit.likelihood import (
@@ -36,13 +37,14 @@ from gyrocal.inference.sampling.proposal import (
     StudentProposal,
     fitted_noise_proposal,
 )
+from gyrocal.io.calibration import parameter_rows
 from gyrocal.maneuvers.preprocess import noise_groups
 
 __all__ = [
     "AUTOCORR_WINDOW_C", "DE_SHARE", "GM_FRACTION_LOGIT_SD", "GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDIAN",
     "GROUP_SD_START_VARIANCE", "LOCAL_SCALE", "LOCAL_SHARE", "START_REDRAWS", "TAU_PRIOR_CENTER_S",
     "TAU_PRIOR_LOG_SD", "LogPosterior", "Posterior", "Priors", "SamplerResult", "SamplingError", "StudentProposal",
-    "absolute", "leave_one_maneuver_out", "run_ensembles", "sample", "start_covariance"
+    "absolute", "leave_one_maneuver_out", "model_priors", "posterior_spec", "run_ensembles", "sample", "start_covariance"
 ]
 
 
@@ -77,6 +79,22 @@ class Priors:
             center = np.concatenate([center, [0.0, np.log(TAU_PRIOR_CENTER_S)]])
             sd = np.concatenate([sd, [GM_FRACTION_LOGIT_SD, TAU_PRIOR_LOG_SD]])
         return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, center, sd)
+
+
+def posterior_spec(spec, priors_cfg: dict, prior_from=None):
+    """A point estimate's specification with the priors its posterior samples under: the declared
+    ones, overridden by the config and by an earlier campaign's ``calibration.csv``
+    (``prior_from``): its parameters' rows, never its derived combinations (a combination is no
+    parameter's prior: ``sf_mean`` is correlated with both scale factors)."""
+    earlier = parameter_rows(pd.read_csv(prior_from)) if prior_from else None
+    return spec.with_priors(priors_cfg, earlier, str(prior_from))
+
+
+def model_priors(estimate, priors_cfg: dict, prior_from=None) -> Priors:
+    """The priors of a point estimate's posterior (`posterior_spec`), its noise scales' centred on
+    its stated noise with the config's ``noise_log_sd``."""
+    spec = posterior_spec(estimate.spec, priors_cfg, prior_from)
+    return Priors.from_spec(spec, estimate.stated_noise, priors_cfg["noise_log_sd"])
 
 
 GROUP_SD_PRIOR_MEDIAN = 0.5

@@ -9,18 +9,12 @@ from gyrocal.inference.noise import covariance
 from gyrocal.inference.sampling import inferencedata, posterior
 from gyrocal.inference.sampling.budget import SamplingStopped
 from gyrocal.io.outputs import atomic, write_csv, write_json
+from gyrocal.model import effects
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import PosteriorSettings
-from gyrocal.pipeline.steps.common import known_effects, load_maneuvers, posterior_spec
+from gyrocal.pipeline.steps.common import load_maneuvers
 
-__all__ = ["model_priors", "run"]
-
-
-def model_priors(est: PointEstimate, priors_cfg: dict, prior_from=None) -> posterior.Priors:
-    """The spec's declared priors, overridden by the config and by an earlier campaign's
-    ``calibration.csv`` (``prior_from``; `common.posterior_spec`)."""
-    spec = posterior_spec(est.spec, priors_cfg, prior_from)
-    return posterior.Priors.from_spec(spec, est.stated_noise, priors_cfg["noise_log_sd"])
+__all__ = ["run"]
 
 
 def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSettings):
@@ -31,8 +25,8 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSetti
     comparison of the models needs neither)."""
     out, s = paths.model(model), settings
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
-    est = PointEstimate.load(out.point_estimate, known_effects(s.plugins))
-    priors = model_priors(est, s.priors, s.prior_from)
+    est = PointEstimate.load(out.point_estimate, effects.known(s.plugins))
+    priors = posterior.model_priors(est, s.priors, s.prior_from)
     checks.check_blocks(maneuvers, s.sampler["block_s"])
     checks.check_noise(maneuvers, est)
     checks.check_physical(maneuvers, est, priors.bound)
