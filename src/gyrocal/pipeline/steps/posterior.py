@@ -1,11 +1,9 @@
 """Rule ``posterior``: emcee over one model's parameters and noise scales."""
 
-import numpy as np
 import pandas as pd
 
 from gyrocal.checks import fit as checks
 from gyrocal.inference.fit.estimate import PointEstimate
-from gyrocal.inference.noise import covariance
 from gyrocal.inference.sampling import inferencedata, posterior
 from gyrocal.inference.sampling.budget import SamplingStopped
 from gyrocal.io.outputs import atomic, write_csv, write_json
@@ -31,22 +29,19 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSetti
     checks.check_noise(maneuvers, est)
     checks.check_physical(maneuvers, est, priors.bound)
     checks.check_representable(maneuvers, est)
-    notes = []
-    identified = lambda stats, ratio_sd: notes.append(
-        checks.check_identified(est, priors.sd, stats, ratio_sd, np.sqrt(2.0) * priors.log_sigma_sd[0]))
+    ready = posterior.prepare(maneuvers, est, priors, s.grid)
+    weakest = checks.check_identified(est, priors.sd, ready.stats, ready.ratio_sd, priors.log_ratio_sd)
     try:
-        post = posterior.sample(maneuvers, est, priors, s.sampler, s.grid, s.seed, before=identified)
+        post = posterior.run(ready, s.sampler, s.seed)
     except SamplingStopped as stopped:
-        labels = list(est.spec.labels) + covariance.noise_labels(est.spec.correlated_noise)
-        if est.group_offsets is not None:
-            labels += [f"noise.level.{g}" for g in est.noise_groups] + ["noise.group_sd"]
-        raise checks.sampling_stopped(stopped, est, notes[0] if notes else "", labels) from None
+        raise checks.sampling_stopped(stopped, est, weakest, ready.labels) from None
     idata, summary, fit, record = inferencedata.assemble(post, maneuvers, s.sampler, s.convergence, s.seed)
+    blocks = inferencedata.loo_blocks(idata, est.spec.model)
+    elpd = posterior.leave_one_maneuver_out(post, priors)
     with atomic(out.posterior) as tmp:
         idata.to_netcdf(str(tmp))
     write_csv(summary, out.summary)
     write_csv(fit, out.fit)
     write_json(record, out.sampler)
-    write_csv(inferencedata.loo_blocks(idata, est.spec.model), out.elpd_blocks)
-    elpd = posterior.leave_one_maneuver_out(post, priors)
+    write_csv(blocks, out.elpd_blocks)
     write_csv(pd.DataFrame({"maneuver": [d.id for d in maneuvers], "elpd": elpd}), out.elpd_maneuvers)
