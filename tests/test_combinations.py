@@ -11,12 +11,12 @@ from scipy.spatial.transform import Rotation
 
 from gyrocal.criticism import agreement, verdict
 from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.inference.sampling.posterior import posterior_spec
 from gyrocal.io import calibration
 from gyrocal.model import channels as ch
 from gyrocal.model import combinations
 from gyrocal.model.spec import ModelSpec, baseline
 from gyrocal.pipeline import cli
-from gyrocal.pipeline.steps import common
 from gyrocal.report import fleet, resolution, review
 
 from conftest import run_campaign
@@ -169,7 +169,7 @@ def test_calibration_csv_with_derived_rows_goes_through_every_reader(tiny, short
     assert len(calibration.core_rows(spec, table)) == spec.n_core
     params = calibration.posterior_mean_params(spec, table)
     assert spec.core_vector(params) == pytest.approx(spec.to_si(table["mean"].to_numpy()[:spec.n_core]), rel=1e-12)
-    prior = common.posterior_spec(spec, cfg["priors"], path)
+    prior = posterior_spec(spec, cfg["priors"], path)
     assert [p.prior_sd for p in prior.parameters] == pytest.approx(table["sd"].to_numpy()[:len(spec)], rel=1e-12)
     assert all(not p.label.endswith(("sf_mean", "sf_asym")) for p in prior.parameters)
     assert cli.main(["compare-campaigns", str(path), str(path)]) == 0
