@@ -17,6 +17,7 @@ from gyrocal.checks.physics import rotation_findings
 from gyrocal.checks.sampling import clock_findings, extreme_findings, gap_findings, interval_findings
 from gyrocal.checks.saturation import saturation_findings
 from gyrocal.checks.sensing import physical_limits, sense
+from gyrocal.checks.stuck import stuck_findings
 from gyrocal.finding import Findings
 from gyrocal.inference.fit import classic
 from gyrocal.io.telemetry import UNIT_NORM_TOL, Campaign, TelemetryError, read_campaign
@@ -36,6 +37,8 @@ def check(campaign: Campaign, block_s: float | None = None) -> Findings:
         return findings
     gap_findings(campaign, findings)
     limits = physical_limits(campaign.channels)
+    if stuck_findings(campaign, limits, findings):  # the physics per maneuver would only restate them
+        return findings
     range_rad_s = np.deg2rad(campaign.gyro["range_deg_s"]) if "range_deg_s" in campaign.gyro else None
     screened, sliced = [], []
     for m in campaign.maneuvers:
