@@ -3,7 +3,20 @@ an `InputError` that names the file, where in it (line, column or key) and what 
 says what to do where it knows. The command line and every pipeline step print it without a
 traceback and exit non-zero."""
 
-__all__ = ["InputError"]
+__all__ = ["ECHO_MAX_CHARS", "InputError", "excerpt"]
+
+ECHO_MAX_CHARS = 60
+"""A value echoed in a message is cut to this many characters of its ``repr`` (an 8 MB cell is
+named, not printed)."""
+
+
+def excerpt(value, limit: int = ECHO_MAX_CHARS) -> str:
+    """``repr(value)``, cut to ``limit`` characters with its full length said where it is longer."""
+    text = repr(value)
+    if len(text) <= limit:
+        return text
+    size = f"{len(value)} characters" if isinstance(value, (str, bytes)) else f"{len(text)} characters written"
+    return f"{text[:limit]}... ({size})"
 
 
 class InputError(ValueError):

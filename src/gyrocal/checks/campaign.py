@@ -10,6 +10,7 @@ noise measured in the data themselves, not from one file."""
 
 import numpy as np
 
+from gyrocal.checks.conventions import convention_findings
 from gyrocal.checks.fit import EstimateError, check_blocks
 from gyrocal.checks.mounting import align
 from gyrocal.checks.outliers import EXCURSION_MAX_S, outlier_distances, screen, trend_distances
@@ -37,8 +38,8 @@ def check(campaign: Campaign, block_s: float | None = None) -> Findings:
         return findings
     gap_findings(campaign, findings)
     limits = physical_limits(campaign.channels)
-    if stuck_findings(campaign, limits, findings):  # the physics per maneuver would only restate them
-        return findings
+    if convention_findings(campaign, limits, findings) or stuck_findings(campaign, limits, findings):
+        return findings  # the physics per maneuver would only restate them, once per maneuver
     range_rad_s = np.deg2rad(campaign.gyro["range_deg_s"]) if "range_deg_s" in campaign.gyro else None
     screened, sliced = [], []
     for m in campaign.maneuvers:

@@ -38,6 +38,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from gyrocal.errors import excerpt
 from gyrocal.io.telemetry import (
     NAME_PATTERN,
     UNIT_NORM_TOL,
@@ -156,7 +157,7 @@ def read_file(path, mapping) -> Imported:
         if bad.size:
             line = int(bad[0]) + int(fmt.get("header_rows", 1)) + 1
             raise TelemetryError(f"{path}: line {line}, column {number} ({what}): not a number: "
-                                 f"{frame.iloc[bad[0], number - 1]!r}")
+                                 f"{excerpt(frame.iloc[bad[0], number - 1])}")
         return values
 
     time = column(mapping["time"]["column"], "time")
@@ -245,7 +246,7 @@ def declared_range_rad_s(mapping) -> float | None:
         return None
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
         raise TelemetryError(f"the mapping's gyro.range must be a positive number (in {gyro['unit']}"
-                             f"{'' if gyro['quantity'] == 'rate' else ' per second'}), got {value!r}")
+                             f"{'' if gyro['quantity'] == 'rate' else ' per second'}), got {excerpt(value)}")
     units = RATE_UNITS if gyro["quantity"] == "rate" else ANGLE_UNITS
     return float(value) * units[gyro["unit"]]
 
@@ -260,7 +261,7 @@ def maneuver_axis(imported: Imported, axes: list) -> str:
 def _check_interval(interval_s, where: str):
     """A reference sample interval is ``None`` or a number of seconds >= 0 (0: every row)."""
     if interval_s is not None and not (isinstance(interval_s, (int, float)) and interval_s >= 0):
-        raise TelemetryError(f"{where} must be a number of seconds >= 0 (0: every row), got {interval_s!r}")
+        raise TelemetryError(f"{where} must be a number of seconds >= 0 (0: every row), got {excerpt(interval_s)}")
 
 
 def reference_rows(time, interval_s) -> np.ndarray:

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from gyrocal.errors import excerpt
 from gyrocal.io.campaign_yaml import (
     CHANNEL_PATTERN,
     DEFAULT_NOISE_GROUP,
@@ -123,7 +124,7 @@ def _read_csv(path, required) -> pd.DataFrame:
             if kept[row][1].strip() == header.strip():
                 fail(path, "repeats the header (two files joined?)", where=f"line {line}",
                      todo="keep one header line, on line 1")
-            fail(path, f"line {line}, column '{column}': not a number: {frame[column].iloc[row]!r}")
+            fail(path, f"line {line}, column '{column}': not a number: {excerpt(frame[column].iloc[row])}")
     return frame
 
 
@@ -133,10 +134,10 @@ def _check_header(path, header: str):
     names = [name.strip() for name in header.split(",")]
     if "" in names:
         fail(path, f"column {names.index('') + 1} of the header has no name (a trailing or doubled comma?): "
-                   f"{header!r}", where="line 1")
+                   f"{excerpt(header)}", where="line 1")
     repeated = sorted({name for name in names if names.count(name) > 1})
     if repeated:
-        fail(path, f"the header names column(s) {repeated} more than once: {header!r}", where="line 1")
+        fail(path, f"the header names column(s) {repeated} more than once: {excerpt(header)}", where="line 1")
 
 
 def _check_finite(path, frame, columns, rows=None):
@@ -161,6 +162,19 @@ def _check_time(path, frame):
         fail(path, f"line {frame.attrs['lines'][row]}, column 'time': time {time[row]} does not increase "
                     f"(line {frame.attrs['lines'][row - 1]} has {time[row - 1]})")
     return time
+
+
+def _check_overlap(spath, st_time, gpath, gyro_time):
+    """The two files' times must overlap: where they do not, one clock is offset (a different epoch,
+    another unit) and no maneuver window can hold both; named before any maneuver is blamed."""
+    if st_time[0] <= gyro_time[-1] and gyro_time[0] <= st_time[-1]:
+        return
+    later, earlier = (gpath, spath) if gyro_time[0] > st_time[-1] else (spath, gpath)
+    gap = max(gyro_time[0] - st_time[-1], st_time[0] - gyro_time[-1])
+    fail(gpath, f"its times [{gyro_time[0]:.10g}, {gyro_time[-1]:.10g}] s and {spath.name}'s "
+                f"[{st_time[0]:.10g}, {st_time[-1]:.10g}] s do not overlap: {later.name} starts {gap:.6g} s after "
+                f"{earlier.name} ends, a time offset between the two clocks (another epoch or unit?)",
+         where="column 'time'", todo="give both files' times in seconds on one clock")
 
 
 def read_campaign(directory) -> Campaign:
@@ -210,12 +224,15 @@ def read_campaign(directory) -> Campaign:
     _check_finite(gpath, gy, list(gy.columns))
     gyro_time = _check_time(gpath, gy)
 
+    _check_overlap(spath, st_time, gpath, gyro_time)
     for m in maneuvers:
         lo = max(st_time[0], gyro_time[0])
         hi = min(st_time[-1], gyro_time[-1])
         if m.t_start < lo or m.t_end > hi:
             fail(cpath, f"maneuver {m.id}: [{m.t_start}, {m.t_end}] s lies outside the data, "
-                         f"which cover [{lo}, {hi}] s in both star_tracker.csv and gyro.csv")
+                         f"which cover [{lo}, {hi}] s in both star_tracker.csv and gyro.csv "
+                         f"(star_tracker.csv: [{st_time[0]}, {st_time[-1]}] s; gyro.csv: "
+                         f"[{gyro_time[0]}, {gyro_time[-1]}] s)")
 
     columns = {c: gy[c].to_numpy(dtype=float) for c in gy.columns if c != "time"}
     return Campaign(
