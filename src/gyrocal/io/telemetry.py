@@ -16,7 +16,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from gyrocal.errors import excerpt
+from gyrocal.errors import OutputError, excerpt
 from gyrocal.io.campaign_yaml import (
     CHANNEL_PATTERN,
     DEFAULT_NOISE_GROUP,
@@ -355,8 +355,10 @@ def write_campaign(campaign: Campaign, directory) -> Path:
         if directory.exists():
             shutil.rmtree(directory)
         tmp.rename(directory)
-    except BaseException:
+    except BaseException as exc:
         shutil.rmtree(tmp, ignore_errors=True)
+        if isinstance(exc, OSError) and not isinstance(exc, OutputError):
+            raise OutputError(directory, exc) from exc
         raise
     return directory
 
