@@ -52,3 +52,12 @@ def test_clean_simulated_campaigns_are_not_flagged(seed, tmp_path):
     simulate.run(DATA / "tiny.yaml", tmp_path, seed=seed)
     _, findings = checks.read_checked(tmp_path / "campaign")
     assert not [f for f in findings.items if f.check in ("stuck", "frozen", "spike")]
+
+
+def test_a_channel_dead_across_its_axis_is_refused_by_the_run_its_noise_never_makes(tiny, tmp_path):
+    """dtg2_pitch reads 0 through the roll maneuvers, where only its misalignment toward roll turns it:
+    the reference cannot tell, but 3200 repeats of one value are beyond its noise."""
+    message, (first, last) = refusal(tiny, tmp_path, stuck_channel("dtg2_pitch", ("roll_pos", "roll_neg")))
+    assert f"column 'dtg2_pitch', lines {first}-{last}: reads exactly 0 for 3200 samples" in message
+    assert "inside maneuver(s) roll_pos, roll_neg, where its own noise elsewhere repeats a value that long by " \
+           "chance once in 1e" in message

@@ -129,6 +129,42 @@ def _stuck_channels(campaign, windows, sf_bound, mis_bound, findings):
                     f"about {channel.axis}, its input axis ({'; '.join(failed)}): a dead or stuck channel. Remove the "
                     "channel from campaign.yaml and gyro.csv, or cut the maneuvers where it is stuck",
                     where=f"gyro.csv:{lines[start]}-{lines[end]}:{channel.name}")
+                continue
+            inside = [w.m.id for w in windows if time[end] > w.m.t_start and time[max(start - 1, 0)] < w.m.t_end]
+            log_chance = _repeat_log_chance(x, start, end)
+            if inside and log_chance + np.log10(len(x) * len(campaign.channels)) < np.log10(STUCK_FALSE_ALARMS):
+                value = "exactly 0" if x[start] == 0 else f"the constant {x[start]:.6g} rad"
+                findings.refuse(
+                    "stuck",
+                    f"gyro.csv, column '{channel.name}', lines {lines[start]}-{lines[end]}: reads {value} for "
+                    f"{end - start + 1} samples ({time[end] - time[max(start - 1, 0)]:.1f} s) inside maneuver(s) "
+                    f"{', '.join(inside)}, where its own noise elsewhere repeats a value that long by chance "
+                    f"once in 1e{-log_chance:.0f}: a dead or stuck channel. Remove the channel from campaign.yaml and "
+                    "gyro.csv, or cut the maneuvers where it is stuck",
+                    where=f"gyro.csv:{lines[start]}-{lines[end]}:{channel.name}")
+
+
+STUCK_FALSE_ALARMS = 0.01
+"""Expected false alarms per campaign of the test of a run's length against the channel's noise."""
+
+REPEAT_BLOCK = 100
+"""The rate at which a channel repeats its previous value is taken in blocks of this many samples,
+the highest of them: where the noise is smallest against the quantum (a hold), it repeats most."""
+
+
+def _repeat_log_chance(x, start, end) -> float:
+    """The log10 of the chance that the channel's noise repeats one value over rows ``start..end``: its highest rate
+    of repeats over `REPEAT_BLOCK` samples outside the run, to the power of the repeats in the run
+    (0 where the rest of the channel is too short to tell)."""
+    same = (x[1:] == x[:-1]).astype(float)
+    keep = np.ones(same.size, dtype=bool)
+    keep[max(start - 1, 0):end] = False
+    rest = same[keep]
+    n = rest.size // REPEAT_BLOCK * REPEAT_BLOCK
+    if n < 10 * REPEAT_BLOCK:
+        return 0.0
+    rate = float(rest[:n].reshape(-1, REPEAT_BLOCK).mean(axis=1).max())
+    return float((end - start) * np.log10(min(max(rate, 1.0 / REPEAT_BLOCK), 1.0)))
 
 
 def _body_turn(campaign, w, k0, k1):
