@@ -11,6 +11,7 @@ noise measured in the data themselves, not from one file."""
 
 import numpy as np
 
+from gyrocal.checks.conventions import convention_findings
 from gyrocal.checks.fit import EstimateError, check_blocks
 from gyrocal.checks.mounting import align
 from gyrocal.checks.outliers import EXCURSION_MAX_S, outlier_distances, screen, trend_distances
@@ -18,6 +19,7 @@ from gyrocal.checks.physics import rotation_findings
 from gyrocal.checks.sampling import clock_findings, extreme_findings, gap_findings, interval_findings
 from gyrocal.checks.saturation import saturation_findings
 from gyrocal.checks.sensing import physical_limits, sense
+from gyrocal.checks.stuck import stuck_findings
 from gyrocal.finding import Findings
 from gyrocal.inference.fit import classic
 from gyrocal.io.telemetry import UNIT_NORM_TOL, Campaign, TelemetryError, read_campaign
@@ -37,6 +39,8 @@ def check(campaign: Campaign, block_s: float | None = None) -> Findings:
         return findings
     gap_findings(campaign, findings)
     limits = physical_limits(campaign.channels, campaign.gyro.get("sensor_class"))  # the class's, not a DTG's
+    if convention_findings(campaign, limits, findings) or stuck_findings(campaign, limits, findings):
+        return findings  # the physics per maneuver would only restate them, once per maneuver
     range_rad_s = np.deg2rad(campaign.gyro["range_deg_s"]) if "range_deg_s" in campaign.gyro else None
     screened, sliced = [], []
     for m in campaign.maneuvers:

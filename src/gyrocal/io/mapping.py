@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gyrocal.errors import excerpt
 from gyrocal.io.telemetry import TelemetryError
 from gyrocal.io.yamlfile import check_schema, read_yaml
 
@@ -100,7 +101,7 @@ def declared_range_rad_s(mapping) -> float | None:
         return None
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
         raise TelemetryError(f"the mapping's gyro.range must be a positive number (in {gyro['unit']}"
-                             f"{'' if gyro['quantity'] == 'rate' else ' per second'}), got {value!r}")
+                             f"{'' if gyro['quantity'] == 'rate' else ' per second'}), got {excerpt(value)}")
     units = RATE_UNITS if gyro["quantity"] == "rate" else ANGLE_UNITS
     return float(value) * units[gyro["unit"]]
 
@@ -108,4 +109,4 @@ def declared_range_rad_s(mapping) -> float | None:
 def check_interval(interval_s, where: str):
     """A reference sample interval is ``None`` or a number of seconds >= 0 (0: every row)."""
     if interval_s is not None and not (isinstance(interval_s, (int, float)) and interval_s >= 0):
-        raise TelemetryError(f"{where} must be a number of seconds >= 0 (0: every row), got {interval_s!r}")
+        raise TelemetryError(f"{where} must be a number of seconds >= 0 (0: every row), got {excerpt(interval_s)}")

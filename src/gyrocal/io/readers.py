@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from gyrocal.errors import excerpt
 from gyrocal.io.yamlfile import TelemetryError
 
 __all__ = ["BINARY", "BINARY_WORDS", "FORMATS", "MISSING_TEXT", "Table", "file_type", "printed_quantum", "read_table"]
@@ -100,7 +101,7 @@ class Table:
             bad &= ~self._missing(variable, number, values)
         if bad.any():
             row = int(np.flatnonzero(bad)[0])
-            shown = repr(self.text.iloc[row, number - 1]) if self.text is not None else f"{values[row]}"
+            shown = excerpt(self.text.iloc[row, number - 1]) if self.text is not None else f"{values[row]}"
             raise TelemetryError.at(self.path, f"not a number: {shown} ({int(bad.sum())} such row{'s' if bad.sum() > 1 else ''})",
                                     self.where(variable, row, number, what),
                                     "fix or drop those rows, or check the mapping's column")

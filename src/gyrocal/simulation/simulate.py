@@ -17,6 +17,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP
+from gyrocal.io.outputs import write_text
 from gyrocal.io.scenario import load_scenario
 from gyrocal.io.telemetry import Campaign, Maneuver, write_campaign
 from gyrocal.model import channels as ch
@@ -365,7 +366,5 @@ def run(scenario_path, outdir, seed=None):
     campaign, truth = simulate(scenario, seed)
     outdir = Path(outdir)
     write_campaign(campaign, outdir / "campaign")
-    tmp = outdir / "truth.json.tmp"
-    tmp.write_text(json.dumps(truth, indent=2, sort_keys=True))
-    tmp.replace(outdir / "truth.json")
+    write_text(json.dumps(truth, indent=2, sort_keys=True), outdir / "truth.json")
     return campaign, truth

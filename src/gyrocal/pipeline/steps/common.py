@@ -9,7 +9,7 @@ import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
-from gyrocal.errors import InputError
+from gyrocal.errors import InputError, OutputError
 from gyrocal.io.outputs import write_json, write_text
 from gyrocal.maneuvers import preprocess
 from gyrocal.pipeline.steps import REFUSED
@@ -83,6 +83,9 @@ def refusal():
     except InputError as exc:
         log.error("%s\n%s", REFUSED, exc)
         sys.exit(f"{REFUSED}\n{exc}")
+    except OutputError as exc:  # a full disk: not the input's fault, but a message, not a traceback
+        log.error("%s", exc)
+        sys.exit(f"gyrocal: {exc}")
 
 
 VARIANT_STEPS = ("point_estimate", "posterior", "diagnostics")
