@@ -14,8 +14,22 @@ from gyrocal.model import channels as ch
 from gyrocal.model.spec import baseline
 
 __all__ = [
-    "CHECK_BLOCK_S", "OUTLIER_REACH", "RotationFit", "Sensed", "blocked_sums", "consistent", "fit_rotation", "gyro_at_st",
-    "interval_rotations", "neighbour_residual", "nominal_body_increments", "physical_limits", "reference_noise_rad",
+    "CHECK_BLOCK_S",
+    "OUTLIER_REACH",
+    "Response",
+    "RotationFit",
+    "Sensed",
+    "blocked_sums",
+    "consistent",
+    "consistent_any",
+    "fit_rotation",
+    "gyro_at_st",
+    "interval_rotations",
+    "neighbour_residual",
+    "nominal_body_increments",
+    "physical_limits",
+    "reference_noise_rad",
+    "response",
     "sense"
 ]
 
@@ -83,8 +97,7 @@ class Sensed:
     def where(self) -> str:
         """The maneuver, and the channel set where it is not the in-loop one, as findings name them."""
         m = self.data
-        turn = f"both {m.axis}" if m.direction == "both" else f"{m.direction}{m.axis}"
-        return f"maneuver {m.id} ({turn})" + (f", channels {'+'.join(m.sets[self.set_index])}" if self.set_index else "")
+        return f"maneuver {m.id} ({m.turn})" + (f", channels {'+'.join(m.sets[self.set_index])}" if self.set_index else "")
 
     @cached_property
     def error(self) -> np.ndarray:
@@ -148,6 +161,49 @@ def _within(fit: RotationFit, axis: int, sf_bound, mis_bound) -> bool:
     cross_ok = all(abs(fit.response[b]) <= mis_bound + DETECTION_SD * fit.response_sd[b] for b in others)
     determined = DETECTION_SD * fit.response_sd[axis] <= sf_bound
     return bool(scale_ok and cross_ok and determined and fit.axis == axis)
+
+
+@dataclass
+class Response:
+    """The gyros' rotation against the reference's over one maneuver, as a 3x3 response: least
+    squares of the gyro's interval rotations on the reference's about all three axes (and a
+    constant rate). ``matrix[b, a]``: gyro rotation about b per unit reference rotation about a,
+    1 + scale error on the diagonal, misalignments across."""
+
+    matrix: np.ndarray
+    sd: np.ndarray
+    determined: np.ndarray
+    """(3,) axes whose scale the motion determines within the physical bound (`DETECTION_SD` sds)."""
+
+    def within(self, sf_bound, mis_bound) -> bool:
+        """Scale near 1 and small cross terms on every determined axis, within the physical bounds
+        give or take `DETECTION_SD` standard errors; some axis must be determined."""
+        if not self.determined.any():
+            return False
+        for a in np.flatnonzero(self.determined):
+            if abs(self.matrix[a, a] - 1.0) > sf_bound + DETECTION_SD * self.sd[a, a]:
+                return False
+            if any(abs(self.matrix[b, a]) > mis_bound + DETECTION_SD * self.sd[b, a] for b in range(3) if b != a):
+                return False
+        return True
+
+
+def response(d_gyro, d_st, dt, sf_bound, bias=True) -> Response:
+    """The 3x3 `Response` of the gyros to the reference over blocks of `CHECK_BLOCK_S`, for any motion."""
+    dt, d_gyro, d_st = blocked_sums(dt, d_gyro, d_st)
+    x = np.column_stack([d_st, dt] if bias else [d_st])
+    coef, *_ = np.linalg.lstsq(x, d_gyro, rcond=None)
+    resid = d_gyro - x @ coef
+    sigma = 1.4826 * np.median(np.abs(resid - np.median(resid, axis=0)), axis=0) + 1e-15
+    info = np.diag(np.linalg.pinv(x.T @ x))[:3]
+    sd = np.sqrt(np.outer(sigma, info))
+    return Response(coef[:3].T, sd, DETECTION_SD * np.diag(sd) <= sf_bound)
+
+
+def consistent_any(d_gyro, d_st, dt, sf_bound, mis_bound) -> bool:
+    """`consistent` for any motion (free, several axes at once): the 3x3 `Response`, with a bias
+    fitted or without, within the physical bounds on every axis the motion determines."""
+    return any(response(d_gyro, d_st, dt, sf_bound, bias).within(sf_bound, mis_bound) for bias in (True, False))
 
 
 def physical_limits(channels):
