@@ -1,0 +1,58 @@
+"""Free-motion maneuvers (no axis label): the eigen-axis slew and tumble scenarios simulate campaigns
+that validate, classic.csv gives them no number, and a flipped channel is still named."""
+
+import numpy as np
+import pytest
+import yaml
+
+from gyrocal.checks.campaign import read_checked
+from gyrocal.inference.fit import classic
+from gyrocal.io.telemetry import TelemetryError, read_campaign, write_campaign
+from gyrocal.maneuvers import preprocess
+from gyrocal.model.spec import baseline
+from gyrocal.simulation import simulate
+
+SCENARIOS = "config/scenarios"
+
+
+@pytest.fixture(scope="module", params=["mom_eigen", "mom_tumble"])
+def free_campaign(request, tmp_path_factory):
+    out = tmp_path_factory.mktemp(request.param)
+    simulate.run(f"{SCENARIOS}/{request.param}.yaml", out)
+    return out / "campaign"
+
+
+def test_free_scenarios_write_campaigns_without_axis_labels_that_validate(free_campaign):
+    meta = yaml.safe_load((free_campaign / "campaign.yaml").read_text())
+    assert all("axis" not in m and "direction" not in m for m in meta["maneuvers"])
+    campaign, findings = read_checked(free_campaign)
+    assert all(m.free and m.turn == "free" for m in campaign.maneuvers)
+    assert sum("free motion" in w for w in findings.warnings) == len(campaign.maneuvers)
+
+
+def test_classic_gives_free_maneuvers_no_number_and_says_so(free_campaign):
+    campaign = read_campaign(free_campaign)
+    data = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
+    table = classic.classic_table(data, baseline(campaign.channels))
+    assert len(table) == 24 and table["value"].isna().all() and (table["n"] == 0).all()
+    assert table["note"].str.contains("no number from the paper's method").all()
+    assert not np.any(classic.classic_vector(table, baseline(campaign.channels)))
+
+
+def test_a_flipped_channel_in_free_motion_is_named(tmp_path):
+    campaign, _ = simulate.simulate(simulate.load_scenario(f"{SCENARIOS}/mom_eigen.yaml"))
+    campaign.gyro_columns["dtg2_pitch"] = -campaign.gyro_columns["dtg2_pitch"]
+    write_campaign(campaign, tmp_path / "c")
+    with pytest.raises(TelemetryError, match="dtg2_pitch turns opposite"):
+        read_checked(tmp_path / "c")
+
+
+def test_axis_without_direction_is_refused(tmp_path):
+    campaign, _ = simulate.simulate(simulate.load_scenario(f"{SCENARIOS}/mom_eigen.yaml"))
+    write_campaign(campaign, tmp_path / "c")
+    path = tmp_path / "c" / "campaign.yaml"
+    meta = yaml.safe_load(path.read_text())
+    meta["maneuvers"][0]["axis"] = "roll"
+    path.write_text(yaml.safe_dump(meta))
+    with pytest.raises(TelemetryError, match="direction"):
+        read_campaign(tmp_path / "c")
