@@ -6,9 +6,10 @@ import pytest
 import yaml
 
 from gyrocal.checks.campaign import read_checked
-from gyrocal.inference.fit import classic
+from gyrocal.inference.fit import classic, identification
 from gyrocal.io.telemetry import TelemetryError, read_campaign, write_campaign
 from gyrocal.maneuvers import preprocess
+from gyrocal.model import combinations
 from gyrocal.model.spec import baseline
 from gyrocal.simulation import simulate
 
@@ -56,3 +57,35 @@ def test_axis_without_direction_is_refused(tmp_path):
     path.write_text(yaml.safe_dump(meta))
     with pytest.raises(TelemetryError, match="direction"):
         read_campaign(tmp_path / "c")
+
+
+def _sliced(scenario):
+    campaign, _ = simulate.simulate(scenario)
+    return campaign, [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
+
+
+def test_free_motion_turning_every_axis_both_ways_leaves_no_term_prior_only():
+    campaign, data = _sliced(simulate.load_scenario(f"{SCENARIOS}/mom_eigen.yaml"))
+    assert identification.unflown(data, baseline(campaign.channels)) == {}
+    assert combinations.flown_directions(data) == {(a, s) for a in ("roll", "pitch", "yaw") for s in "+-"}
+
+
+def test_turning_only_about_plus_roll_leaves_the_other_scale_factors_prior_only_and_names_the_turns():
+    scenario = simulate.load_scenario("tests/data/tiny.yaml")
+    scenario["maneuvers"] = [m for m in scenario["maneuvers"] if m["id"] == "roll_pos"]
+    campaign, data = _sliced(scenario)
+    for d in data:  # the motion decides, not the label
+        d.axis, d.direction = None, None
+    reasons = identification.unflown(data, baseline(campaign.channels))
+    for c in campaign.channels:
+        if c.axis == "roll":
+            assert f"{c.name}.sf_pos" not in reasons
+            assert reasons[f"{c.name}.sf_neg"] == "no -roll turn in the data: turn about -roll"
+        else:
+            for name in ("sf_pos", "sf_neg"):
+                assert reasons[f"{c.name}.{name}"].startswith(f"no {'+' if name == 'sf_pos' else '-'}{c.axis} turn")
+            assert f"{c.name}.mis_roll" not in reasons
+    assert reasons["dtg1_roll.mis_pitch"] == "no pitch turn in the data: turn about pitch, either way"
+    assert combinations.flown_directions(data) == {("roll", "+")}
+    assert combinations.advice("sf_mean", "roll", combinations.flown_directions(data)) == \
+        "turn about -roll (the data turn only +roll)"

@@ -52,6 +52,13 @@ class ManeuverData:
         """The rotation as reports name it (``+yaw``, ``both roll``, ``free``)."""
         return turn_name(self.axis, self.direction)
 
+    def turned(self) -> dict:
+        """``{(axis, sign): angle}``: how far the body turned about each axis each way (rad, the in-loop
+        set's nominal increments summed by sign): the motion, whatever the label says."""
+        inc = body_increments(self, self.sets[0], ch.ChannelParams.zeros(self.channels))
+        return {(a, sign): float(np.abs(inc[:, i].clip(min=0) if sign == "+" else inc[:, i].clip(max=0)).sum())
+                for i, a in enumerate(AXES) for sign in "+-"}
+
     @property
     def dt(self) -> np.ndarray:
         return np.diff(self.gyro_time)

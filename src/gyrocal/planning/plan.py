@@ -252,8 +252,8 @@ def plan(scenario: dict, cfg: dict, model: str = "baseline", name: str = "") -> 
     maneuvers = planned_maneuvers(scenario)
     spec = ModelSpec.build(model, effects.resolve(model, cfg["models"][model], plugins), maneuvers[0].channels)
     spec = spec.with_sensor_class((scenario.get("gyro") or {}).get("sensor_class")).with_priors(cfg["priors"])
-    spec = spec.with_prior_only(identification.unflown(maneuvers, spec))
     stated = stated_noise(scenario, cfg["noise"])
+    spec = spec.with_prior_only(identification.unflown(maneuvers, spec, stated))
     candidates, skipped = [], {}
     for effect in known.values():
         if effect.name in spec.effect_names or effect.core:
