@@ -2,6 +2,7 @@
 that validate, classic.csv gives them no number, and a flipped channel is still named."""
 
 import numpy as np
+import pandas as pd
 import pytest
 import yaml
 
@@ -89,3 +90,22 @@ def test_turning_only_about_plus_roll_leaves_the_other_scale_factors_prior_only_
     assert combinations.flown_directions(data) == {("roll", "+")}
     assert combinations.advice("sf_mean", "roll", combinations.flown_directions(data)) == \
         "turn about -roll (the data turn only +roll)"
+
+
+def test_a_campaign_with_free_motion_is_reviewed_in_a_labs_words():
+    from gyrocal.report.context import FLIGHT_WORDS, LAB_WORDS, campaign_words
+    from gyrocal.report.review import paper_tables
+
+    scenario = simulate.load_scenario("tests/data/tiny.yaml")
+    campaign, data = _sliced(scenario)
+    assert campaign_words(data) is FLIGHT_WORDS and campaign_words(campaign.maneuvers) is FLIGHT_WORDS
+    data[0].axis, data[0].direction = None, None
+    words = campaign_words(data)
+    assert words is LAB_WORDS
+    text = " ".join(words.values()).lower()
+    assert not any(w in text for w in ("spacecraft", "uplink", "in-loop", "in loop", "star tracker"))
+    cal = pd.DataFrame([{"channel": c.name, "parameter": p, "point": 0.0, "mean": 0.0, "ci95_low": -1.0,
+                         "ci95_high": 1.0} for c in campaign.channels
+                        for p in ("sf_pos", "sf_neg", "mis_roll", "mis_pitch", "mis_yaw")])
+    tables = paper_tables(cal, campaign.channels, data[0].sets[0], axis_heading=words["axis"])
+    assert "body axis" in tables["table1_sf"].columns and "spacecraft axis" not in tables["table1_sf"].columns
