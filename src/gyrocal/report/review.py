@@ -197,7 +197,8 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         comparison=inputs.comparison.round(3), comparison_figure=drawn[-1],
         convention=inputs.correction["convention"], correction_path=str(inputs.correction_path),
         correction_sets=_correction_sets(inputs.correction),
-        effect_table=effect.drop(columns=["before norm", "after norm"]).assign(
+        effect_table=effect.drop(columns=["before norm", "after norm"]).rename(
+            columns={} if words["kind"] == "flight" else {"in loop": "first set"}).assign(
             **{"before norm (arcsec)": effect["before norm"].round(1),
                "after norm (arcsec)": effect["after norm"].round(1)}).round(1),
         mounting=mounting_text(info["mounting"]),
