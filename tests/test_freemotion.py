@@ -109,3 +109,34 @@ def test_a_campaign_with_free_motion_is_reviewed_in_a_labs_words():
                         for p in ("sf_pos", "sf_neg", "mis_roll", "mis_pitch", "mis_yaw")])
     tables = paper_tables(cal, campaign.channels, data[0].sets[0], axis_heading=words["axis"])
     assert "body axis" in tables["table1_sf"].columns and "spacecraft axis" not in tables["table1_sf"].columns
+
+
+def test_the_clock_offset_of_a_tumble_is_found_from_all_axes_together():
+    from gyrocal.checks.sampling import clock_offset_s
+    from gyrocal.checks.sensing import sense
+
+    scenario = simulate.load_scenario(f"{SCENARIOS}/mom_tumble.yaml")
+    scenario["effects"]["st_latency_s"] = 0.5
+    scenario["maneuvers"] = scenario["maneuvers"][:2]
+    _, data = _sliced(scenario)
+    offsets = [clock_offset_s(sense(d)) for d in data]
+    assert np.allclose(np.abs(offsets), 0.5, atol=0.05)
+
+
+def test_the_plan_reads_eigen_axis_slews_and_tumbles():
+    from gyrocal.planning import plan
+
+    for name in ("mom_eigen", "mom_tumble"):
+        scenario = plan.read_scenario(f"{SCENARIOS}/{name}.yaml")
+        assert all(m.axis is None for m in simulate.simulate(scenario)[0].maneuvers)
+
+
+def test_with_a_known_range_a_flat_top_below_it_is_no_clipping():
+    from gyrocal.checks.saturation import plateaus
+
+    rng = np.random.default_rng(1)
+    rate = np.sin(np.linspace(0, np.pi, 400)) * 1.2 + rng.normal(0, 0.002, 400)
+    rate = np.minimum(rate, 1.0)  # flat at 1 rad/s: clipped, or a steady peak the gyro can hold
+    assert plateaus("gyro_x", rate)  # judged at its own peak, it looks clipped
+    assert not plateaus("gyro_x", rate, range_rad_s=2.0)  # the range is twice that: it is not
+    assert plateaus("gyro_x", rate, range_rad_s=1.0)[0].declared
