@@ -140,3 +140,12 @@ def test_with_a_known_range_a_flat_top_below_it_is_no_clipping():
     assert plateaus("gyro_x", rate)  # judged at its own peak, it looks clipped
     assert not plateaus("gyro_x", rate, range_rad_s=2.0)  # the range is twice that: it is not
     assert plateaus("gyro_x", rate, range_rad_s=1.0)[0].declared
+
+
+def test_two_swapped_channels_in_free_motion_are_named(tmp_path):
+    campaign, _ = simulate.simulate(simulate.load_scenario(f"{SCENARIOS}/mom_eigen.yaml"))
+    columns = campaign.gyro_columns
+    columns["dtg1_roll"], columns["dtg2_pitch"] = columns["dtg2_pitch"].copy(), columns["dtg1_roll"].copy()
+    write_campaign(campaign, tmp_path / "c")
+    with pytest.raises(TelemetryError, match="channels dtg1_roll and dtg2_pitch look swapped"):
+        read_checked(tmp_path / "c")
