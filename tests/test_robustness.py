@@ -262,7 +262,7 @@ def test_a_prior_only_parameter_drags_no_identified_one(unflown_run, tiny_run, t
 def test_the_verdict_names_the_missing_maneuver(unflown_run):
     html = (unflown_run / "report.html").read_text()
     assert "NO-GO" in html
-    assert "dtg1_pitch.sf_neg (no -pitch maneuver)" in html
+    assert "dtg1_pitch.sf_neg (no -pitch turn in the data: turn about -pitch)" in html
     assert "No correction for dtg1_pitch, dtg2_pitch" in html
 
 

@@ -8,7 +8,7 @@ misalignment bounds the effects declare), one finding names it, with the file an
 import numpy as np
 
 from gyrocal.checks.physics import ALTERNATIVES
-from gyrocal.checks.sensing import consistent, interval_rotations, sense
+from gyrocal.checks.sensing import consistent, consistent_any, interval_rotations, reference_noise_rad, sense
 from gyrocal.finding import Findings
 from gyrocal.io.telemetry import Campaign, TelemetryError
 from gyrocal.maneuvers import preprocess
@@ -40,13 +40,23 @@ def convention_findings(campaign: Campaign, limits, findings: Findings) -> bool:
         return False
 
     def every(gyro_factor=1.0, order=None, signs=None):
+        """Each maneuver's consistency under one reading: about its labelled axis, or for free motion
+        as the 3x3 response, which must then determine a direction (`sensing.consistent_any`)."""
         results = []
         for s in sensed:
             d_st = s.d_st
             if order is not None:
                 d_st = interval_rotations(s.data.st_quat[:, order] * signs)
-            results.append(consistent(s.d_gyro / gyro_factor, d_st, s.dt, AXIS_INDEX[s.data.axis], sf_bound, mis_bound))
+            if s.data.axis is None:
+                results.append(consistent_any(s.d_gyro / gyro_factor, d_st, s.dt, sf_bound, mis_bound,
+                                              reference_noise_rad(s), need_determined=order is not None or gyro_factor != 1.0))
+            else:
+                results.append(consistent(s.d_gyro / gyro_factor, d_st, s.dt, AXIS_INDEX[s.data.axis], sf_bound, mis_bound))
         return results
+
+    def turned(s):
+        """The maneuver's most-turned body axis: its label, or for free motion the axis the reference turns most."""
+        return AXIS_INDEX[s.data.axis] if s.data.axis is not None else int(np.argmax(np.abs(s.d_st).sum(axis=0)))
 
     as_written = every()
     if all(as_written):
@@ -71,8 +81,8 @@ def convention_findings(campaign: Campaign, limits, findings: Findings) -> bool:
     g_lines = f"lines {lines['gyro.csv'][0]}-{lines['gyro.csv'][-1]}"
     for factor, cause in factors:
         if all(every(gyro_factor=factor)):
-            scale = np.median([np.ptp(np.cumsum(s.d_gyro[:, AXIS_INDEX[s.data.axis]]))
-                               / np.ptp(np.cumsum(s.d_st[:, AXIS_INDEX[s.data.axis]])) for s in sensed])
+            scale = np.median([np.ptp(np.cumsum(s.d_gyro[:, turned(s)])) / np.ptp(np.cumsum(s.d_st[:, turned(s)]))
+                               for s in sensed])
             findings.refuse(
                 "conventions",
                 f"gyro.csv, columns {', '.join(campaign.channel_names)}, {g_lines}: every maneuver's gyro rotation is "

@@ -30,6 +30,7 @@ __all__ = [
     "default_name",
     "fail",
     "read_meta",
+    "turn_name",
 ]
 
 NORM_REFUSE_TOL = 1e-3
@@ -55,8 +56,10 @@ GYRO_KEYS = {"arw_deg_sqrt_h", "range_deg_s", "rate_hz", "sensor_class"}
 @dataclass(frozen=True)
 class Maneuver:
     id: str
-    axis: str
-    direction: str
+    axis: str | None
+    """The single axis it turns about; None for free motion (any rate profile, holds optional)."""
+    direction: str | None
+    """``+``, ``-`` or ``both``; None for free motion."""
     t_start: float
     t_end: float
     in_loop: tuple = ()
@@ -64,14 +67,26 @@ class Maneuver:
     """The maneuvers sharing one noise level (a trial, a recording, a segment): a name."""
 
     @property
+    def free(self) -> bool:
+        """Free motion: no single axis and direction are declared; the motion itself says what it turns."""
+        return self.axis is None
+
+    @property
     def turn(self) -> str:
-        """The rotation as reports name it: ``+yaw``, ``-roll``, or ``both yaw``."""
-        return f"both {self.axis}" if self.direction == "both" else f"{self.direction}{self.axis}"
+        """The rotation as reports name it: ``+yaw``, ``-roll``, ``both yaw``, or ``free`` (free motion)."""
+        return turn_name(self.axis, self.direction)
 
     @property
     def sign(self) -> float:
-        """+1 or -1; 0 for a maneuver that turns both ways."""
+        """+1 or -1; 0 for a maneuver that turns both ways or moves freely."""
         return {"+": 1.0, "-": -1.0}.get(self.direction, 0.0)
+
+
+def turn_name(axis, direction) -> str:
+    """A maneuver's rotation as reports name it (`Maneuver.turn`): ``free`` without an axis."""
+    if axis is None:
+        return "free"
+    return f"both {axis}" if direction == "both" else f"{direction}{axis}"
 
 
 def fail(path, message, where: str = "", todo: str = ""):
@@ -115,9 +130,12 @@ def _parse_maneuvers(path, raw, channels) -> tuple:
         where = f"maneuvers[{i}]"
         if not isinstance(m, dict):
             fail(path, f"{where}: must be a mapping")
-        missing = {"id", "axis", "direction", "t_start", "t_end"} - set(m)
+        missing = {"id", "t_start", "t_end"} - set(m)
         if missing:
             fail(path, f"{where}: missing key(s) {sorted(missing)}")
+        if ("axis" in m) != ("direction" in m):
+            fail(path, f"{where}: has {'axis' if 'axis' in m else 'direction'} without "
+                       f"{'direction' if 'axis' in m else 'axis'}: a single-axis maneuver needs both, free motion neither")
         if set(m) - allowed:
             fail(path, f"{where}: unknown key(s) {sorted(set(m) - allowed)}")
         mid = str(m["id"])
@@ -127,9 +145,10 @@ def _parse_maneuvers(path, raw, channels) -> tuple:
         if mid in seen:
             fail(path, f"{where}.id: duplicate maneuver id")
         seen.add(mid)
-        if m["axis"] not in AXES:
+        labelled = "axis" in m
+        if labelled and m["axis"] not in AXES:
             fail(path, f"{where}.axis: must be one of {list(AXES)}, got {excerpt(m['axis'])}")
-        if str(m["direction"]) not in DIRECTIONS:
+        if labelled and str(m["direction"]) not in DIRECTIONS:
             fail(path, f"{where}.direction: must be \"+\", \"-\" or both, got {excerpt(m['direction'])}")
         for key in ("t_start", "t_end"):
             if not _is_number(m[key]):
@@ -150,7 +169,8 @@ def _parse_maneuvers(path, raw, channels) -> tuple:
         if not isinstance(group, str) or not NAME_PATTERN.fullmatch(group):
             fail(path, f"{where}.noise_group: a group's name holds only letters, digits and '_', got {excerpt(group)}",
                  todo="name the maneuvers that share a noise level alike, e.g. noise_group: trial_1")
-        maneuvers.append(Maneuver(mid, m["axis"], str(m["direction"]), t0, t1, in_loop, group))
+        maneuvers.append(Maneuver(mid, m["axis"] if labelled else None, str(m["direction"]) if labelled else None,
+                                  t0, t1, in_loop, group))
     ordered = sorted(maneuvers, key=lambda m: m.t_start)
     for first, second in itertools.pairwise(ordered):
         if second.t_start < first.t_end:

@@ -86,8 +86,7 @@ class Campaign:
                          for c in self.channels},
             "star_tracker": dict(self.star_tracker),
             "gyro": dict(self.gyro),
-            "maneuvers": [{"id": m.id, **({"axis": m.axis} if m.axis is not None else {}),  # free motion: neither
-                           **({"direction": m.direction} if m.direction is not None else {}),
+            "maneuvers": [{"id": m.id, **({} if m.free else {"axis": m.axis, "direction": m.direction}),
                            "t_start": float(m.t_start), "t_end": float(m.t_end),
                            **({"in_loop": list(m.in_loop)} if m.in_loop else {}),
                            **({"noise_group": m.noise_group} if m.noise_group != DEFAULT_NOISE_GROUP else {})}
