@@ -18,13 +18,23 @@ from gyrocal.inference.fit.identification import DETECTION_SD
 from gyrocal.io.telemetry import Campaign
 from gyrocal.model.units import AXIS_INDEX, arcsec_to_rad
 
-__all__ = ["SPIKE_FALSE_ALARMS", "stuck_findings"]
+__all__ = ["MIN_STUCK_S", "SPIKE_FALSE_ALARMS", "SPIKE_REFUSAL_FACTOR", "stuck_findings"]
 
 SPIKE_FALSE_ALARMS = 0.01
 """Expected false alarms per campaign of the single-cell test (over every channel's samples)."""
 
 MIN_RUN_SAMPLES = 5
 """A stuck channel repeats one value at least this many samples, and over two reference intervals."""
+
+MIN_STUCK_S = 1.0
+"""And for at least this long: a quantised MEMS gyro reads one value (often 0) for a few milliseconds
+as its rate crosses a quantum (BROAD's trials: runs of 5-6 samples at 286 Hz); a dead channel stays
+dead for the rest of a maneuver."""
+
+SPIKE_REFUSAL_FACTOR = 10.0
+"""A single cell is refused only where it leaves its neighbours by this many times what the motion
+and noise allow (a lost exponent or digit: 1e3 and more); a smaller excess is warned of, with its
+line: a real hand-held motion's jerk reaches a few times the reference's rate between its samples."""
 
 
 def _robust_sd(x) -> float:
@@ -106,6 +116,8 @@ def _stuck_channels(campaign, windows, sf_bound, mis_bound, findings):
         a = AXIS_INDEX[channel.axis]
         x = campaign.gyro_columns[channel.name]
         for start, end in _runs(x, MIN_RUN_SAMPLES):
+            if time[end] - time[max(start - 1, 0)] < MIN_STUCK_S:
+                continue
             failed = []
             for w in windows:
                 span = w.at(time[max(start - 1, 0)], time[end])
@@ -211,7 +223,7 @@ def _spikes(campaign, windows, sf_bound, findings):
     lines, time = campaign.lines["gyro.csv"], campaign.gyro_time
     n_tests = sum(w.g_rows.size for w in windows) * len(campaign.channels)
     z = max(DETECTION_SD, float(norm.isf(SPIKE_FALSE_ALARMS / (2 * max(n_tests, 1)))))
-    shown = 0
+    shown, mild = 0, []
     for w in windows:
         rows = w.g_rows[1:-1]
         rows = rows[rows >= 3]
@@ -231,6 +243,9 @@ def _spikes(campaign, windows, sf_bound, findings):
             allowed = (1 + sf_bound) * 2 * near * dt + z * (w.sigma_inc[c] * np.sqrt(1.5) + rate_noise * dt)
             for i in np.flatnonzero(~(jump <= allowed)):
                 row, value, typical = rows[i], x[rows[i]], neighbours[i]
+                if jump[i] <= SPIKE_REFUSAL_FACTOR * allowed[i]:
+                    mild.append(f"{lines[row]} ('{channel.name}', {value:.3g} rad against about {typical:.3g})")
+                    continue
                 shown += 1
                 if shown > 5:
                     continue
@@ -247,4 +262,8 @@ def _spikes(campaign, windows, sf_bound, findings):
                     where=f"gyro.csv:{lines[row]}:{channel.name}")
     if shown > 5:
         findings.refuse("spike", f"gyro.csv: {shown - 5} more single cells beyond what the reference's motion allows")
+    if mild:
+        findings.warn("spike", f"gyro.csv: {len(mild)} single cell(s) leave their neighbours by more than the reference's "
+                      f"motion allows, but by less than {SPIKE_REFUSAL_FACTOR:g} times it (a jerk or a glitch, kept): "
+                      f"lines {', '.join(mild[:5])}{' ...' if len(mild) > 5 else ''}")
 
