@@ -36,6 +36,7 @@ from gyrocal.model.units import (
 )
 
 __all__ = [
+    "STATED_ARW_FLOOR_DEG_SQRT_H",
     "ManeuverProfile",
     "build_profiles",
     "gauss_markov",
@@ -173,6 +174,11 @@ def _temperatures(t_first, t_last, dtgs, swing_K, rng):
     return temperatures
 
 
+STATED_ARW_FLOOR_DEG_SQRT_H = 1e-6
+"""The ARW ``campaign.yaml`` states for gyros simulated without noise: a stated noise must be positive
+(the fit weighs by it), and this is a hundred times below the best navigation-grade gyros' 1e-4
+deg/sqrt(h); the data themselves are simulated without any walk."""
+
 GYRO_BLOCK = 1 << 15
 """Gyro samples per block of the fine truth grid: each block's arrays are a few MB, so the
 simulator holds the fine grid's increments and attitudes and little else, however long the
@@ -307,7 +313,7 @@ def simulate(scenario: dict, seed=None):
         name=scenario["name"],
         channels=channels,
         star_tracker=stated_star_tracker(st_cfg),
-        gyro={"arw_deg_sqrt_h": gyro_cfg["arw_deg_sqrt_h"],
+        gyro={"arw_deg_sqrt_h": max(gyro_cfg["arw_deg_sqrt_h"], STATED_ARW_FLOOR_DEG_SQRT_H),
               **({"sensor_class": gyro_cfg["sensor_class"]} if gyro_cfg.get("sensor_class") else {})},
         maneuvers=tuple(Maneuver(p.id, p.axis, None if p.axis is None else "+" if p.sign > 0 else "-", p.t_start, p.t_end,
                                  tuple(scenario["in_loop"]), p.noise_group) for p in profiles),
