@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from gyrocal.criticism import agreement
 from gyrocal.errors import InputError
-from gyrocal.io import importer, telemetry
+from gyrocal.io import importer, rests, telemetry
 from gyrocal.pipeline import cli
 
 
@@ -384,7 +384,9 @@ def test_the_broad_trials_import_at_their_full_rate_with_their_occluded_rows_inv
     campaign, counts = importer.import_files("broad", tmp_path / "broad", files)
     assert [c["reference_missing"] for c in counts.values()] == [162, 306]
     assert [c["rows"] for c in counts.values()] == [c["reference_kept"] for c in counts.values()] == [56940, 56380]
+    walk = campaign.gyro.pop("arw_deg_sqrt_h")  # measured in the trial's own rests (rests.arw_at_rest)
     assert campaign.gyro == {"sensor_class": "mems", "rate_hz": pytest.approx(285.714285714)}
+    assert 0.3 < walk < 0.7  # deg/sqrt(h): a MEMS gyro's, not the DTG default 0.003
     assert [(m.id, m.noise_group, m.axis) for m in campaign.maneuvers] == [(f.stem, f.stem, None) for f in files]
     first, last = counts["01_undisturbed_slow_rotation_A"]["rests_s"]
     assert first == pytest.approx((0.0, 33.5), abs=0.1) and last == pytest.approx((160.5, 199.29), abs=0.1)
@@ -467,3 +469,12 @@ def test_compare_campaigns_compares_misalignments_in_one_body_frame(tmp_path, ca
     assert cli.main(["compare-campaigns", a, b]) == 0
     out = capsys.readouterr().out
     assert "B turned into A's body frame" in out and "+0, +0, +1080 arcsec" in out and "VERDICT: AGREE" in out
+
+
+def test_the_walk_at_rest_is_the_white_rate_noise_times_the_root_of_the_interval():
+    """White rate noise of sd 0.01 rad/s at 100 Hz walks 0.001 rad/sqrt(s) (ARW = sigma sqrt(dt))."""
+    rng = np.random.default_rng(7)
+    rate = rng.normal(0.0, 0.01, (12000, 3))
+    found = rests.Rests(runs=[(0, 6000), (9000, 12000)], sigma=np.full(3, 0.01), bias=np.zeros(3), threshold=0.0, smooth=1)
+    assert rests.arw_at_rest(rate, 0.01, found) == pytest.approx(0.001, rel=0.15)
+    assert rests.arw_at_rest(rate, 0.01, rests.Rests([(0, 500)], np.full(3, 0.01), np.zeros(3), 0.0, 1)) is None

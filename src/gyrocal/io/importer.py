@@ -75,7 +75,9 @@ def split_file(imp: Imported, options: dict) -> tuple:
         return [(0, len(imp.time))], None
     rate = imp.rate if imp.rate is not None else np.vstack([imp.increments[1:2] * 0, imp.increments[1:]
                                                             / np.diff(imp.time)[:, None]])
-    found = rests.find_rests(rate, float(np.median(np.diff(imp.time))), float(options.get("min_rest_s", rests.MIN_REST_S)))
+    step = float(np.median(np.diff(imp.time)))
+    found = rests.find_rests(rate, step, float(options.get("min_rest_s", rests.MIN_REST_S)))
+    found.arw_rad_sqrt_s = rests.arw_at_rest(rate, step, found)
     return rests.pieces(len(imp.time), found.runs), found
 
 
@@ -95,7 +97,7 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
     interval = mapping["reference"].get("sample_interval_s") if reference_interval_s is None else reference_interval_s
     check_interval(interval, "the reference sample interval")
     range_rad_s = declared_range_rad_s(mapping)
-    parts, maneuvers, counts, rates = [], [], {}, []
+    parts, maneuvers, counts, rates, walks = [], [], {}, [], []
     offset = 0.0
     for f in files:
         imp = read_file(f, mapping)
@@ -114,6 +116,8 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
                                       float(time[a]), float(time[b - 1]), noise_group=imp.stem))  # one noise level per recording
         step = float(np.median(np.diff(time)))
         rates.append(imp.rate_hz)
+        if found is not None and found.arw_rad_sqrt_s is not None:
+            walks.append(found.arw_rad_sqrt_s)
         counts[imp.stem] = {"rows": len(time), "maneuvers": [m.id for m in maneuvers[-len(spans):]],
                             "reference_dropouts": int((~imp.valid[keep] & ~imp.refused[keep] & ~imp.missing[keep]).sum()),
                             "reference_missing": int((keep & imp.missing).sum()),
@@ -131,7 +135,7 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
     for key in parts[0][1].extras:
         columns[key] = np.concatenate([imp.extras[key] for _, imp, _ in parts])
     campaign = Campaign(name=name, channels=channels, star_tracker=dict(mapping.get("star_tracker") or {}),
-                        gyro=_gyro_knowledge(mapping, range_rad_s, rates), maneuvers=tuple(maneuvers), st_time=st_time,
+                        gyro=_gyro_knowledge(mapping, range_rad_s, rates, walks), maneuvers=tuple(maneuvers), st_time=st_time,
                         st_quat=quat, st_valid=valid, gyro_time=time, gyro_columns=columns)
     return campaign, counts
 
@@ -140,11 +144,13 @@ RATE_AGREE = 1e-3
 """Files whose sampling rates differ by less than this share are at one rate (``gyro.rate_hz``)."""
 
 
-def _gyro_knowledge(mapping, range_rad_s, rates) -> dict:
-    """``campaign.yaml``'s ``gyro:`` from the mapping: its noise (``gyro_noise``), its sensor class,
-    its range, and its sampling rate (the mapping's ``rate_hz``, or the files' one rate where the
-    mapping reads the time off a rate)."""
+def _gyro_knowledge(mapping, range_rad_s, rates, walks=()) -> dict:
+    """``campaign.yaml``'s ``gyro:`` from the mapping: its noise (``gyro_noise``; where it states no ARW,
+    the largest the files' rests show, `rests.arw_at_rest`), its sensor class, its range, and its sampling
+    rate (the mapping's ``rate_hz``, or the files' one rate where the mapping reads the time off a rate)."""
     known = dict(mapping.get("gyro_noise") or {})
+    if "arw_deg_sqrt_h" not in known and walks:
+        known["arw_deg_sqrt_h"] = float(np.rad2deg(max(walks)) * 60.0)
     if mapping.get("sensor_class"):
         known["sensor_class"] = mapping["sensor_class"]
     if range_rad_s is not None:

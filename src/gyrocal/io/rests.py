@@ -19,7 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["MIN_REST_S", "QUIETEST_SHARE", "REST_BLOCK_S", "REST_SIGMAS", "SMOOTH_S", "Rests", "find_rests", "pieces"]
+__all__ = [
+    "ARW_AVERAGE_S", "MIN_REST_S", "QUIETEST_SHARE", "REST_BLOCK_S", "REST_SIGMAS", "SMOOTH_S",
+    "Rests", "arw_at_rest", "find_rests", "pieces",
+]
 
 REST_BLOCK_S = 0.5
 """The blocks the noise at rest is measured over."""
@@ -50,6 +53,8 @@ class Rests:
     """The averaged rate's norm below which a sample is at rest."""
     smooth: int
     """The samples averaged."""
+    arw_rad_sqrt_s: float | None = None
+    """The angle random walk the rests show (`arw_at_rest`), where the importer measured it."""
 
 
 def find_rests(rate: np.ndarray, step_s: float, min_rest_s: float = MIN_REST_S) -> Rests:
@@ -96,3 +101,26 @@ def _runs(mask: np.ndarray) -> list:
     """``[(start, end)]`` of each run of True in ``mask`` (end exclusive)."""
     edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
     return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()))
+
+
+ARW_AVERAGE_S = 1.0
+"""The averaging time of the ARW measured at rest (`arw_at_rest`): at 1 s the Allan deviation of white
+rate noise equals the ARW coefficient, before bias instability shows (tens of seconds for MEMS)."""
+
+
+def arw_at_rest(rate: np.ndarray, step_s: float, found: Rests) -> float | None:
+    """The angle random walk (rad/sqrt(s)) the rests show, the largest channel's: the sd of the rate's
+    `ARW_AVERAGE_S` means within the rests, times the square root of that time (the Allan deviation at
+    1 s, non-overlapping); None where the rests hold fewer than ten such means. A band-limited MEMS output
+    has correlated samples, so its per-sample sd times sqrt(dt) would understate the walk."""
+    k = max(1, round(ARW_AVERAGE_S / step_s))
+    steps = []
+    for a, b in found.runs:
+        n = (b - a) // k
+        if n > 1:
+            means = rate[a:a + n * k].reshape(n, k, -1).mean(axis=1)
+            steps.append(np.diff(means, axis=0))
+    if sum(len(d) for d in steps) < 10:
+        return None
+    allan = np.sqrt(0.5 * np.mean(np.concatenate(steps) ** 2, axis=0))
+    return float(np.max(allan) * np.sqrt(k * step_s))
