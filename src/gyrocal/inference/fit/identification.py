@@ -57,12 +57,15 @@ MOTION_SIGMA_ARCSEC = 10.0
 """The reference's noise per sample that `unflown` weighs the motion with where none is stated."""
 
 
-def motion_information(maneuvers, spec: ModelSpec, sigma_rad: float) -> dict:
+def motion_information(maneuvers, spec: ModelSpec, sigma_rad: float, arw_rad_sqrt_s: float = 0.0) -> dict:
     """Per channel, the information its scale factors and misalignments draw from the motion alone:
     each term's column is the rotation it multiplies (eq. 3: the channel's own axis, by sign for
     ``sf_pos``/``sf_neg``; the other axis for ``mis_<b>``), accumulated into the error angle at
     the reference's samples, each maneuver's start attitude and bias (a line in time) projected
-    out, over ``sigma_rad`` squared. ``{channel index: (parameter indices, A)}``."""
+    out, over the error's noise: the reference's ``sigma_rad`` and the gyro's walk over the window
+    (``arw^2 T / 6``, a walk's mean square over T less its line), so that a column made of the gyros'
+    own noise (a body at rest about that axis, a precise reference) does not count as motion.
+    ``{channel index: (parameter indices, A)}``."""
     out = {}
     columns = {}
     for data in maneuvers:
@@ -70,6 +73,7 @@ def motion_information(maneuvers, spec: ModelSpec, sigma_rad: float) -> dict:
         k, _ = data.st_interval()
         t = data.st_time - data.st_time[0]
         line = np.linalg.qr(np.column_stack([np.ones_like(t), t]))[0]
+        weight = 1.0 / np.sqrt(sigma_rad**2 + arw_rad_sqrt_s**2 * (t[-1] if t.size else 0.0) / 6.0)
         for i, p in enumerate(spec.parameters):
             if not p.core or p.channel is None or not _motion_term(p.name):
                 continue
@@ -77,10 +81,10 @@ def motion_information(maneuvers, spec: ModelSpec, sigma_rad: float) -> dict:
             x = {"sf_pos": own.clip(min=0), "sf_neg": own.clip(max=0), "sf": own}.get(p.name)
             x = inc[:, AXIS_INDEX[p.name[4:]]] if x is None else x
             at_st = np.cumsum(x)[k]
-            columns.setdefault(i, []).append(at_st - line @ (line.T @ at_st))
+            columns.setdefault(i, []).append(weight * (at_st - line @ (line.T @ at_st)))
     for i, parts in columns.items():
         out.setdefault(spec.parameters[i].channel, []).append((i, np.concatenate(parts)))
-    return {c: ([i for i, _ in items], np.array([[a @ b for _, b in items] for _, a in items]) / sigma_rad**2)
+    return {c: ([i for i, _ in items], np.array([[a @ b for _, b in items] for _, a in items]))
             for c, items in out.items()}
 
 
@@ -94,13 +98,14 @@ def unflown(maneuvers, spec: ModelSpec, stated: dict | None = None) -> dict:
     the others of its channel estimated with it: `joint_information`) is below `MOTION_RATIO_MIN`
     of its prior's (`uninformed` then judges the rest from the data's information at
     `INFORMATION_RATIO_MIN`). ``stated``: the noise knowledge (its star tracker's
-    sds weigh the motion; absent, `MOTION_SIGMA_ARCSEC`)."""
+    sds, absent `MOTION_SIGMA_ARCSEC`, and its ARW weigh the motion)."""
     stated = stated or {}
     sigma = arcsec_to_rad(np.sqrt((2 * stated.get("sigma_cross_arcsec", MOTION_SIGMA_ARCSEC) ** 2
                                    + stated.get("sigma_about_arcsec", MOTION_SIGMA_ARCSEC) ** 2) / 3))
     held = flown_directions(maneuvers)
     reasons = {}
-    for index, A in motion_information(maneuvers, spec, sigma).values():
+    arw = np.deg2rad(stated.get("arw_deg_sqrt_h", 0.0)) / 60.0
+    for index, A in motion_information(maneuvers, spec, sigma, arw).values():
         joint = joint_information(A, spec.prior_sd_si[index])
         for i, ratio in zip(index, joint):
             if ratio < MOTION_RATIO_MIN:
