@@ -240,7 +240,7 @@ def repo_yaml(*patterns):
     return sorted(p for pattern in patterns for p in ROOT.glob(pattern))
 
 
-SCENARIOS = [p for p in repo_yaml("config/scenarios/*.yaml", "tests/data/*.yaml", "benchmarks/data/*.yaml")
+SCENARIOS = [p for p in repo_yaml("config/scenarios/*.yaml", "tests/data/*.yaml", "studies/data/*.yaml")
              if {"maneuvers", "base"} & set(yaml.safe_load(p.read_text()))]
 
 
