@@ -27,7 +27,7 @@ def main():
     ax.loglog(x, table["seconds"].max() * x / x[-1], "k--", lw=1, label="linear (slope 1)")
     ax.set_xlabel("star-tracker samples (the default campaign flown 1, 2, 4, 8 times)")
     ax.set_ylabel("wall time, one BLAS thread (s)")
-    ax.legend(fontsize=7, loc="upper left")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1))
     ax.grid(True, which="both", lw=0.3)
     fig.savefig(HERE / "scaling.png", dpi=110, bbox_inches="tight")
 
