@@ -47,7 +47,7 @@ def sampler_figures():
     fitted = baseline_fit(ROOT / "config/scenarios/mom.yaml", cfg)
     maneuvers, est, priors, spec = fitted.maneuvers, fitted.estimate, fitted.priors, fitted.estimate.spec
     start = time.perf_counter()
-    post = posterior.sample(maneuvers, est, priors, cfg["sampler"], cfg["grid"], cfg["seed"])
+    post = posterior.run(posterior.prepare(maneuvers, est, priors, cfg["grid"]), cfg["sampler"], cfg["seed"])
     sampling_s = time.perf_counter() - start
     ess = inferencedata.summarize(inferencedata.posterior_dataset(post.ensemble_draws(), est.theta, spec),
                                   inferencedata.posterior_dataset(post.walker_draws(), est.theta, spec),

@@ -47,9 +47,9 @@ def stage_times(scenario: dict, cfg: dict) -> dict:
     from gyrocal.inference.fit.estimate import point_estimate
     from gyrocal.inference.noise.covariance import noise_knowledge
     from gyrocal.inference.sampling import inferencedata, posterior
+    from gyrocal.inference.sampling.posterior import model_priors
     from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline
-    from gyrocal.pipeline.steps.posterior import model_priors
     from gyrocal.simulation import simulate
 
     times = {}
@@ -72,8 +72,8 @@ def stage_times(scenario: dict, cfg: dict) -> dict:
     est = timed("point estimate (REML + WLS)", lambda: point_estimate(maneuvers, spec, stated, theta0))
     priors = model_priors(est, cfg["priors"])
     sampler_cfg = {**cfg["sampler"], "initial_steps": 100, "min_tau_multiple": 0, "max_steps": 100}
-    post = timed(f"posterior: grid + {cfg['sampler']['burn_steps']} burn-in + 100 steps", lambda: posterior.sample(
-        maneuvers, est, priors, sampler_cfg, cfg["grid"], cfg["seed"]))
+    post = timed(f"posterior: grid + {cfg['sampler']['burn_steps']} burn-in + 100 steps", lambda: posterior.run(
+        posterior.prepare(maneuvers, est, priors, cfg["grid"]), sampler_cfg, cfg["seed"]))
     draws = post.ensemble_draws()[:, :: max(1, post.ensemble_draws().shape[1] // 250)]
     timed("posterior: LOO terms, fit, predictive (1000 draws)", lambda: inferencedata._fit_and_predictive(
         post, maneuvers, draws, cfg["sampler"], cfg["seed"]))

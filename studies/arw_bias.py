@@ -79,10 +79,10 @@ def fit(scenario, seed, cfg, posterior_draws: bool) -> dict:
     from gyrocal.inference.fit import classic, estimate
     from gyrocal.inference.noise import covariance
     from gyrocal.inference.sampling import posterior
+    from gyrocal.inference.sampling.posterior import model_priors
     from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline
     from gyrocal.model.units import deg_h_to_rad_s
-    from gyrocal.pipeline.steps.posterior import model_priors
     from gyrocal.simulation import simulate
 
     campaign, truth = simulate.simulate(scenario, seed)
@@ -113,7 +113,7 @@ def fit(scenario, seed, cfg, posterior_draws: bool) -> dict:
                                                    classic.classic_start(maneuvers0, spec)).log_sigma[2]
     if posterior_draws:
         priors = model_priors(est, cfg["priors"])
-        post = posterior.sample(maneuvers, est, priors, cfg["sampler"], cfg["grid"], seed)
+        post = posterior.run(posterior.prepare(maneuvers, est, priors, cfg["grid"]), cfg["sampler"], seed)
         arw = np.exp(post.result.chains[..., -1])
         row["posterior_mean"] = np.log(arw.mean())
     stated_arw = covariance.stated_si(stated)[2]

@@ -33,8 +33,9 @@ from gyrocal.inference.fit.estimate import PointEstimate, linearize_all
 from gyrocal.inference.fit.likelihood import Stats, leave_one_out_log_evidence, log_evidence, maneuver_stats, total
 from gyrocal.inference.noise import covariance
 from gyrocal.inference.sampling import inferencedata, predictive
+from gyrocal.inference.sampling.posterior import model_priors
+from gyrocal.model import effects
 from gyrocal.pipeline.steps import common
-from gyrocal.pipeline.steps import posterior as posterior_step
 from gyrocal.simulation import simulate
 from gyrocal.study.hidden import calibrate, with_variant
 
@@ -99,11 +100,11 @@ def study(scenario: Path, effect: str, tmp: Path):
     print(f"2. PSIS-LOO, 60-s blocks: elpd diff {table.loc['extended', 'elpd_diff_vs_first']:.1f} "
           f"+- {table.loc['extended', 'elpd_diff_se']:.1f}; p_loo baseline {table.loc['baseline', 'p_loo']:.1f}, "
           f"extended {table.loc['extended', 'p_loo']:.1f}")
-    known = common.known_effects(cfg["plugins"])
+    known = effects.known(cfg["plugins"])
     lomo = {}
     for model in ("baseline", "extended"):
         est = PointEstimate.load(tmp / "out" / model / "point_estimate.npz", known)
-        priors = posterior_step.model_priors(est, cfg["priors"])
+        priors = model_priors(est, cfg["priors"])
         prior_mean, prior_sd = priors.mean - est.theta, priors.sd
         var = covariance.variances(est.log_sigma)
         lins, noises = linearize_all(maneuvers, est)
