@@ -19,7 +19,6 @@ import yaml
 from simulated import baseline_fit, evaluations_per_s
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
 
 
 def snakemake_run():

@@ -14,7 +14,7 @@ thing changed at a time, to find where a bias comes from:
 set, as a triad of single-axis gyros, where no second set's difference measures the walk.
 ``--gyro-hz 2.5`` samples the gyros so that every other 1-Hz star-tracker sample falls mid-interval.
 
-    python benchmarks/arw_bias.py [--scenario tests/data/tiny.yaml] [--seeds 20] [--posterior] [--out OUT.csv]
+    python studies/arw_bias.py [--scenario tests/data/tiny.yaml] [--seeds 20] [--posterior] [--out OUT.csv]
 
 Prints each column's ratio to the stated ARW (mean, its standard error, median, how many below 1)
 and writes one row per seed. docs/validation.md ("The fitted ARW") has the figures.
