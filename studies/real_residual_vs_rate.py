@@ -45,8 +45,30 @@ from gyrocal.model.units import ARCSEC_RAD
 AS2 = ARCSEC_RAD ** 2
 
 
+def labelled(directory: Path) -> Path:
+    """The campaign, or where its maneuvers have no axis labels (free motion, `gyrocal import broad`), a copy
+    in a temporary folder labelled ``axis: roll, direction: both`` (the CSVs linked): the labels steer the
+    checks and the classic start, not the WLS, and the schema still asks for them."""
+    import tempfile
+    meta = yaml.safe_load((directory / "campaign.yaml").read_text())
+    if all("axis" in m and "direction" in m for m in meta["maneuvers"]):
+        return directory
+    out = Path(tempfile.mkdtemp()) / directory.name
+    out.mkdir()
+    for m in meta["maneuvers"]:
+        m.setdefault("axis", "roll")
+        m.setdefault("direction", "both")
+    (out / "campaign.yaml").write_text(yaml.safe_dump(meta, sort_keys=False))
+    for f in directory.iterdir():
+        if f.name != "campaign.yaml":
+            (out / f.name).symlink_to(f.resolve())
+    print(f"{directory}: maneuvers without axis labels, read from a labelled copy {out}")
+    return out
+
+
 def load(directory: Path):
     """Maneuvers of the campaign, outliers left out where the checks pass; else aligned and unscreened."""
+    directory = labelled(directory)
     try:
         campaign, findings = checks.read_checked(directory)
         out = [o.time_s for o in findings.outliers]
@@ -140,7 +162,7 @@ def latency(r, R, w):
     return tau, se, 1.0 - (res @ res) / (dr @ dr)
 
 
-def g_sensitivity(data, r, R):
+def g_sensitivity(data, d, R):
     """Increment of the residual on R (integral of acc over the interval) K: share of the increments'
     variance the 9 coefficients explain, and its F statistic's p-value under no effect."""
     from scipy import stats
@@ -153,7 +175,7 @@ def g_sensitivity(data, r, R):
     Rm = R[1:]
     # d_j (inertial, 3) = Rm_j K dA_j: linear in K's 9 entries
     X = np.einsum("jab,jc->jabc", Rm, dA).reshape(len(dA), 3, 9).reshape(-1, 9)
-    d = np.diff(r, axis=0).ravel()
+    d = d.ravel()
     k, *_ = np.linalg.lstsq(X, d, rcond=None)
     res = d - X @ k
     share = 1.0 - (res @ res) / (d @ d)
@@ -166,19 +188,23 @@ def analyse(directory: Path, figure: Path, config: Path, smooth_s: float, nbins:
     noise_defaults = yaml.safe_load(config.read_text())["noise"]
     maneuvers, note = load(directory)
     print(f"campaign {directory}: {len(maneuvers)} maneuvers; {note}")
-    from gyrocal.io.telemetry import read_campaign as _rc
-    info = _rc(directory)
+    info = read_campaign(labelled(directory))
     stated = noise_knowledge({"star_tracker": info.star_tracker, "gyro": info.gyro}, noise_defaults)
     spec = ModelSpec.build("baseline", effects.resolve("baseline", list(effects.BASELINE), {}), maneuvers[0].channels)
     est = point_estimate(maneuvers, spec, stated, classic.classic_start(maneuvers, spec))
     names, index = preprocess.noise_groups(maneuvers)
+    print(f"baseline WLS: {est.nfev} evaluations, {est.message}; REML noise "
+          + ", ".join(f"{v:.4g}" for v in np.exp(est.log_sigma) / [ARCSEC_RAD, ARCSEC_RAD, np.pi / 180 / 60])
+          + " (arcsec, arcsec, deg/sqrt(h))" + ("" if est.group_offsets is None else
+                                                f", group factors {np.round(np.exp(est.group_offsets), 3).tolist()}"))
     stated_var = variances(np.log([stated["sigma_cross_arcsec"] * ARCSEC_RAD, stated["sigma_about_arcsec"] * ARCSEC_RAD,
                                    stated["arw_deg_sqrt_h"] * np.pi / 180 / 60]))
     print(f"stated noise: sigma_cross {stated['sigma_cross_arcsec']:.0f}, sigma_about {stated['sigma_about_arcsec']:.0f} "
           f"arcsec, ARW {stated['arw_deg_sqrt_h']:.2f} deg/sqrt(h)")
-    cols = {k: [] for k in ("y", "pred", "fit", "w2", "acc", "walk", "trial")}
+    cols = {k: [] for k in ("y", "y_lat", "pred", "fit", "w2", "acc", "walk", "trial")}
     print("\nper trial: rms increment per axis (arcsec), against the stated and REML noise models; latency; g-sensitivity")
-    print("| trial | n | rms incr | stated model | ratio | REML model | ratio | latency ms (se) | share | g-sens share, p |")
+    print("| trial | n | rms incr | stated model | ratio | REML model | ratio | latency ms (se) | share "
+          "| g-sens share, p; less latency |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     for m, (data, (r, R, walk)) in enumerate(zip(maneuvers, residuals(maneuvers, est))):
         w, acc = smoothed_rate(data, smooth_s)
@@ -188,19 +214,31 @@ def analyse(directory: Path, figure: Path, config: Path, smooth_s: float, nbins:
         fitted = est.maneuver_variances(m, index[m] if len(names) > 1 else 0)
         pred, fit = per_axis_model(stated_var, walk[1:]), per_axis_model(fitted, walk[1:])
         tau, tau_se, tau_share = latency(r, R, w)
-        g = g_sensitivity(data, r, R)
-        gtxt = "n/a" if g is None else f"{g[0]:.3f}, {g[1]:.2g}"
+        d_lat = d - tau * np.diff(np.einsum("jab,jb->ja", R, w), axis=0)
+        g, g_lat = g_sensitivity(data, d, R), g_sensitivity(data, d_lat, R)
+        gtxt = "n/a" if g is None else f"{g[0]:.3f}, {g[1]:.2g}; {g_lat[0]:.3f}, {g_lat[1]:.2g}"
         print(f"| {data.id} | {len(y)} | {np.sqrt(y.mean()) / ARCSEC_RAD:.0f} | {np.sqrt(pred.mean()) / ARCSEC_RAD:.0f} | "
               f"{np.sqrt(y.mean() / pred.mean()):.2f} | {np.sqrt(fit.mean()) / ARCSEC_RAD:.0f} | "
               f"{np.sqrt(y.mean() / fit.mean()):.2f} | {1e3 * tau:+.1f} ({1e3 * tau_se:.1f}) | {tau_share:.3f} | {gtxt} |")
-        for k, v in (("y", y), ("pred", pred), ("fit", fit), ("w2", 0.5 * (w2[1:] + w2[:-1])),
+        for k, v in (("y", y), ("y_lat", np.sum(d_lat ** 2, axis=1) / 3.0), ("pred", pred), ("fit", fit),
+                     ("w2", 0.5 * (w2[1:] + w2[:-1])),
                      ("acc", np.sqrt(0.5 * (np.sum(acc[1:] ** 2, 1) + np.sum(acc[:-1] ** 2, 1)))),
                      ("walk", stated_var["walk"] * walk[1:]), ("trial", np.full(len(y), m))):
             cols[k].append(v)
     c = {k: np.concatenate(v) for k, v in cols.items()}
-    wrms = np.sqrt(c["w2"])
+    tables, beta = report(c, len(maneuvers), nbins, "the baseline's residual increments")
+    lat_tables, lat_beta = report(dict(c, y=c["y_lat"]), len(maneuvers), nbins,
+                                  "the same increments less each trial's latency (tau above) times the change of R omega")
+    plot(tables, beta, lat_tables, figure, directory.name)
+    return tables, beta, lat_tables, lat_beta
+
+
+def report(c, n_trials, nbins, label):
+    """The binned tables and the WLS fits of one set of increments, ``c["y"]``."""
+    print(f"\n=== {label} ===")
     tables = {}
-    for name, x, unit, scale in (("rate", wrms, "deg/s", 180 / np.pi), ("acceleration", c["acc"], "deg/s^2", 180 / np.pi)):
+    for name, x, unit, scale in (("rate", np.sqrt(c["w2"]), "deg/s", 180 / np.pi),
+                                 ("acceleration", c["acc"], "deg/s^2", 180 / np.pi)):
         pos = x[x > 0]
         edges = np.quantile(pos, np.linspace(0, 1, nbins + 1))
         edges[-1] *= 1.0001
@@ -233,16 +271,16 @@ def analyse(directory: Path, figure: Path, config: Path, smooth_s: float, nbins:
           f"{c['y'].sum() / c['pred'].sum():.2f} in variance ({np.sqrt(c['y'].sum() / c['pred'].sum()):.2f} in sd), "
           f"without the rate term {(c['y'].sum() - rate_part) / c['pred'].sum():.2f} "
           f"({np.sqrt(max(c['y'].sum() - rate_part, 0) / c['pred'].sum()):.2f} in sd)")
-    per_trial_fit(c, maneuvers, max(2, nbins // 2))
-    plot(tables, beta, c, figure, directory.name)
-    return tables, beta, cov
+    per_trial_fit(c, n_trials, max(2, nbins // 2))
+    return tables, beta
 
 
-def per_trial_fit(c, maneuvers, nbins):
+
+def per_trial_fit(c, n_trials, nbins):
     """The same WLS with a sigma0 per trial and one sigma_t: a rate that differs between trials
     whose levels differ cannot pass for a rate dependence."""
     y, se, rows_x2, trial = [], [], [], []
-    for m in range(len(maneuvers)):
+    for m in range(n_trials):
         sel = c["trial"] == m
         x = np.sqrt(c["w2"][sel])
         edges = np.quantile(x, np.linspace(0, 1, nbins + 1))
@@ -257,7 +295,8 @@ def per_trial_fit(c, maneuvers, nbins):
             rows_x2.append((2 * c["w2"][sel][b] / 3).mean())
             trial.append(m)
     y, se, x2, trial = map(np.array, (y, se, rows_x2, trial))
-    A = np.column_stack([2.0 * (trial == m) for m in range(len(maneuvers))] + [x2])
+    rows_x2 = x2
+    A = np.column_stack([2.0 * (trial == m) for m in range(n_trials)] + [x2])
     W = 1.0 / se ** 2
     cov = np.linalg.inv(A.T @ (A * W[:, None]))
     beta = cov @ (A.T @ (W * y))
@@ -268,10 +307,17 @@ def per_trial_fit(c, maneuvers, nbins):
     print(f"\nWLS with a sigma0 per trial ({nbins} rate bins each): sigma0 = {s0} arcsec; sigma_t = {1e3 * st:.2f} +- "
           f"{1e3 * st_se:.2f} ms; sigma_t^2 / se = {beta[-1] / np.sqrt(cov[-1, -1]):.2f}; chi2 = {chi2:.1f} on "
           f"{len(y) - len(beta)} dof")
+    rate_part = beta[-1] * (2 * c["w2"] / 3).sum()
+    print(f"  its rate term holds {rate_part / c['y'].sum():.1%} of the observed increment variance; observed / stated "
+          f"{np.sqrt(c['y'].sum() / c['pred'].sum()):.2f} in sd, without the rate term "
+          f"{np.sqrt(max(c['y'].sum() - rate_part, 0) / c['pred'].sum()):.2f}")
+    slope = np.polyfit(np.log(np.sqrt(rows_x2 * 1.5)), np.log(np.maximum(y, 1e-30)), 1)[0]
+    print(f"  log-log slope of the binned variance (less the walk) on the rate, all trials' bins: {slope:.2f} "
+          f"(a timing jitter alone: 2 where it dominates)")
     return beta, cov
 
 
-def plot(tables, beta, c, figure: Path, title: str):
+def plot(tables, beta, lat_tables, figure: Path, title: str):
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -281,6 +327,9 @@ def plot(tables, beta, c, figure: Path, title: str):
         ax.errorbar(x, [r["var"] / AS2 for r in rows], yerr=[2 * r["se"] / AS2 for r in rows], fmt="o", label="observed")
         ax.plot(x, [r["pred"] / AS2 for r in rows], "s--", label="stated noise model")
         ax.plot(x, [r["fit"] / AS2 for r in rows], "^:", label="REML noise model")
+        lat = lat_tables[name][0]
+        ax.errorbar(np.array([r["x"] for r in lat]) * scale, [r["var"] / AS2 for r in lat],
+                    yerr=[2 * r["se"] / AS2 for r in lat], fmt="x", label="observed, less each trial's latency")
         if name == "rate":
             ax.plot(x, [(r["walk"] + 2 * beta[0] + beta[1] * r["x2"]) / AS2 for r in rows], "-",
                     label="fit: sigma0 + sigma_t |omega|")
