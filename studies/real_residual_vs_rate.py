@@ -17,7 +17,7 @@ residuals: a latency per trial (the increment regressed on ``R omega`` differenc
 ``tau`` leaves), and a g-sensitivity (the increment regressed on the accelerometer's integral over the
 interval, 9 coefficients per trial, where the campaign has ``acc_x, acc_y, acc_z``).
 
-    python studies/real_residual_vs_rate.py CAMPAIGN FIGURE.png [--config config/tstick.yaml]
+    python studies/real_residual_vs_rate.py CAMPAIGN FIGURE.png [--config config/tstick.yaml] [--arw 0.31]
 
 A campaign the checks refuse (BROAD's free motion, until the pipeline takes it) is read, aligned to body
 axes by the estimated mounting, and used without the outlier screen; the script says so.
@@ -184,8 +184,10 @@ def g_sensitivity(data, d, R):
     return share, float(stats.f.sf(f, 9, dof)), np.abs(k).max() / ARCSEC_RAD
 
 
-def analyse(directory: Path, figure: Path, config: Path, smooth_s: float, nbins: int):
+def analyse(directory: Path, figure: Path, config: Path, smooth_s: float, nbins: int, arw=None):
     noise_defaults = yaml.safe_load(config.read_text())["noise"]
+    if arw is not None:
+        noise_defaults["arw_deg_sqrt_h"] = arw
     maneuvers, note = load(directory)
     print(f"campaign {directory}: {len(maneuvers)} maneuvers; {note}")
     info = read_campaign(labelled(directory))
@@ -351,10 +353,12 @@ def main(argv=None):
     p.add_argument("figure", type=Path)
     p.add_argument("--config", type=Path, default=Path(__file__).resolve().parents[1] / "config" / "tstick.yaml",
                    help="a config whose noise section states the noise where campaign.yaml does not")
+    p.add_argument("--arw", type=float, help="the gyro's ARW, deg/sqrt(h), in place of the config's (BROAD: 0.31, "
+                   "from the rest phases' 0.087 deg/s a sample at 285.7 Hz)")
     p.add_argument("--smooth-s", type=float, default=0.05, help="half window of the rate at a sample, s")
     p.add_argument("--bins", type=int, default=8)
     a = p.parse_args(argv)
-    analyse(a.campaign, a.figure, a.config, a.smooth_s, a.bins)
+    analyse(a.campaign, a.figure, a.config, a.smooth_s, a.bins, a.arw)
     return 0
 
 
