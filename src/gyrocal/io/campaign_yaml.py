@@ -25,6 +25,7 @@ __all__ = [
     "NAME_PATTERN",
     "NORM_REFUSE_TOL",
     "RESERVED_NAMES",
+    "Labelled",
     "Maneuver",
     "TelemetryError",
     "default_name",
@@ -53,18 +54,9 @@ GYRO_KEYS = {"arw_deg_sqrt_h", "range_deg_s", "rate_hz", "sensor_class"}
 (`gyrocal.model.sensorclass`, whose default priors the fit takes)."""
 
 
-@dataclass(frozen=True)
-class Maneuver:
-    id: str
-    axis: str | None
-    """The single axis it turns about; None for free motion (any rate profile, holds optional)."""
-    direction: str | None
-    """``+``, ``-`` or ``both``; None for free motion."""
-    t_start: float
-    t_end: float
-    in_loop: tuple = ()
-    noise_group: str = DEFAULT_NOISE_GROUP
-    """The maneuvers sharing one noise level (a trial, a recording, a segment): a name."""
+class Labelled:
+    """What a maneuver's labels say, for anything with ``axis`` and ``direction`` (`Maneuver`, and the
+    preprocessed `gyrocal.maneuvers.preprocess.ManeuverData`)."""
 
     @property
     def free(self) -> bool:
@@ -75,6 +67,20 @@ class Maneuver:
     def turn(self) -> str:
         """The rotation as reports name it: ``+yaw``, ``-roll``, ``both yaw``, or ``free`` (free motion)."""
         return turn_name(self.axis, self.direction)
+
+
+@dataclass(frozen=True)
+class Maneuver(Labelled):
+    id: str
+    axis: str | None
+    """The single axis it turns about; None for free motion (any rate profile, holds optional)."""
+    direction: str | None
+    """``+``, ``-`` or ``both``; None for free motion."""
+    t_start: float
+    t_end: float
+    in_loop: tuple = ()
+    noise_group: str = DEFAULT_NOISE_GROUP
+    """The maneuvers sharing one noise level (a trial, a recording, a segment): a name."""
 
     @property
     def sign(self) -> float:

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation, Slerp
 
-from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP, turn_name
+from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP, Labelled
 from gyrocal.io.importer import reference_rows
 from gyrocal.io.telemetry import Campaign, TelemetryError
 from gyrocal.model import channels as ch
@@ -21,7 +21,7 @@ __all__ = [
 
 
 @dataclass
-class ManeuverData:
+class ManeuverData(Labelled):
     """One maneuver's window: gyro increments from ``t0`` and valid star-tracker samples."""
 
     id: str
@@ -41,16 +41,6 @@ class ManeuverData:
     counts: dict = field(default_factory=dict)
     noise_group: str = DEFAULT_NOISE_GROUP
     """The maneuvers sharing one noise level (campaign.yaml's ``noise_group``)."""
-
-    @property
-    def free(self) -> bool:
-        """Free motion: no axis or direction declared."""
-        return self.axis is None
-
-    @property
-    def turn(self) -> str:
-        """The rotation as reports name it (``+yaw``, ``both roll``, ``free``)."""
-        return turn_name(self.axis, self.direction)
 
     def turned(self) -> dict:
         """``{(axis, sign): angle}``: how far the body turned about each axis each way (rad, the in-loop
