@@ -159,3 +159,10 @@ def test_a_fleet_with_two_campaigns_of_one_name_is_refused(tiny, tmp_path):
     run = subprocess.run(SNAKEMAKE + ["-n", "-d", str(tmp_path / "work"), "--config", f"campaigns={tmp_path / 'fleet'}"],
                          capture_output=True, text=True, check=False)
     assert run.returncode != 0 and "are both campaign 'tiny'" in run.stderr
+
+
+def test_a_fleet_folder_that_does_not_exist_is_refused_without_a_traceback(tmp_path):
+    run = subprocess.run(SNAKEMAKE + ["-n", "-d", str(tmp_path / "work"), "--config", f"campaigns={tmp_path / 'nowhere'}"],
+                         capture_output=True, text=True, check=False)
+    assert run.returncode != 0 and "Traceback" not in run.stderr + run.stdout
+    assert f"campaigns={tmp_path / 'nowhere'} is not a directory" in run.stderr

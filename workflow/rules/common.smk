@@ -39,6 +39,9 @@ CAMPAIGNS = {}
 """Campaign name -> its directory, maneuver ids and whether the scenario simulates it."""
 FLEET = bool(config["campaigns"])
 if FLEET:
+    if not Path(config["campaigns"]).is_dir():
+        sys.exit(f"gyrocal: campaigns={config['campaigns']} is not a directory: give the folder that holds the "
+                 "campaign directories (each with a campaign.yaml)")
     _found = sorted(d for d in Path(config["campaigns"]).iterdir() if (d / "campaign.yaml").is_file())
     if not _found:
         sys.exit(f"gyrocal: no campaign directory (with a campaign.yaml) under {config['campaigns']}")
