@@ -475,6 +475,5 @@ def test_the_walk_at_rest_is_the_white_rate_noise_times_the_root_of_the_interval
     """White rate noise of sd 0.01 rad/s at 100 Hz walks 0.001 rad/sqrt(s) (ARW = sigma sqrt(dt))."""
     rng = np.random.default_rng(7)
     rate = rng.normal(0.0, 0.01, (12000, 3))
-    found = rests.Rests(runs=[(0, 6000), (9000, 12000)], sigma=np.full(3, 0.01), bias=np.zeros(3), threshold=0.0, smooth=1)
-    assert rests.arw_at_rest(rate, 0.01, found) == pytest.approx(0.001, rel=0.15)
-    assert rests.arw_at_rest(rate, 0.01, rests.Rests([(0, 500)], np.full(3, 0.01), np.zeros(3), 0.0, 1)) is None
+    assert rests.arw_at_rest(rate, 0.01, [(0, 6000), (9000, 12000)]) == pytest.approx(0.001, rel=0.15)
+    assert rests.arw_at_rest(rate, 0.01, [(0, 500)]) is None

@@ -75,6 +75,7 @@ def check_noise(maneuvers, est: PointEstimate):
     ratio = np.exp(est.log_sigma[:3] - covariance.log_sigma_of(est.stated_noise))
     off = noise_beyond(ratio, ratio, NOISE_PLAUSIBLE)
     if off.any():
+        _check_resolution(maneuvers, est, off)
         fitted = covariance.stated_scales(est.log_sigma[:3])
         stated = covariance.stated_scales(covariance.log_sigma_of(est.stated_noise))
         listed = "; ".join(f"{k} {fitted[k]:.3g} (stated {stated[k]:.3g})" for k, bad in zip(fitted, off) if bad)
@@ -82,7 +83,6 @@ def check_noise(maneuvers, est: PointEstimate):
         rms = [np.sqrt(np.mean((lin.body_error[:, 0] - lin.body_error[:, 0].mean(axis=0)) ** 2, axis=0))
                / units.ARCSEC_RAD for lin in lins]
         residuals = "; ".join(f"{d.id} {r[0]:.0f}, {r[1]:.0f}, {r[2]:.0f}" for d, r in zip(maneuvers, rms))
-        _check_resolution(maneuvers, est, ratio, off)
         if (ratio < 1.0).all():  # every scale below its stated one: the data are quiet, not misfit
             raise EstimateError(
                 f"point estimate of model {est.spec.model}: the data are far quieter than campaign.yaml states: "
@@ -96,7 +96,7 @@ def check_noise(maneuvers, est: PointEstimate):
             "validate) and read its warnings, or add the effect they point to")
 
 
-def _check_resolution(maneuvers, est: PointEstimate, ratio, off):
+def _check_resolution(maneuvers, est: PointEstimate, off):
     """Refuse naming the cause where a stated star-tracker noise lies below the gyros' own resolution: a
     pulse-counting gyro's rounding (`sensing.increment_quantum_rad`) adds white error the fit then gives the
     reference, and every off scale is within `NOISE_PLAUSIBLE` of the stated noise and that rounding added."""

@@ -75,9 +75,7 @@ def split_file(imp: Imported, options: dict) -> tuple:
         return [(0, len(imp.time))], None
     rate = imp.rate if imp.rate is not None else np.vstack([imp.increments[1:2] * 0, imp.increments[1:]
                                                             / np.diff(imp.time)[:, None]])
-    step = float(np.median(np.diff(imp.time)))
-    found = rests.find_rests(rate, step, float(options.get("min_rest_s", rests.MIN_REST_S)))
-    found.arw_rad_sqrt_s = rests.arw_at_rest(rate, step, found)
+    found = rests.find_rests(rate, float(np.median(np.diff(imp.time))), float(options.get("min_rest_s", rests.MIN_REST_S)))
     return rests.pieces(len(imp.time), found.runs), found
 
 

@@ -54,7 +54,7 @@ class Rests:
     smooth: int
     """The samples averaged."""
     arw_rad_sqrt_s: float | None = None
-    """The angle random walk the rests show (`arw_at_rest`), where the importer measured it."""
+    """The angle random walk the rests show (`arw_at_rest`; None where they are too short to tell)."""
 
 
 def find_rests(rate: np.ndarray, step_s: float, min_rest_s: float = MIN_REST_S) -> Rests:
@@ -75,7 +75,7 @@ def find_rests(rate: np.ndarray, step_s: float, min_rest_s: float = MIN_REST_S) 
     still = np.linalg.norm(averaged, axis=1) < threshold
     shortest = max(1, round(min_rest_s / step_s))
     runs = [(a, b) for a, b in _runs(still) if b - a >= shortest]
-    return Rests(runs, sigma, bias, threshold, smooth)
+    return Rests(runs, sigma, bias, threshold, smooth, arw_at_rest(rate, step_s, runs))
 
 
 def pieces(n: int, runs) -> list:
@@ -108,14 +108,14 @@ ARW_AVERAGE_S = 1.0
 rate noise equals the ARW coefficient, before bias instability shows (tens of seconds for MEMS)."""
 
 
-def arw_at_rest(rate: np.ndarray, step_s: float, found: Rests) -> float | None:
+def arw_at_rest(rate: np.ndarray, step_s: float, runs) -> float | None:
     """The angle random walk (rad/sqrt(s)) the rests show, the largest channel's: the sd of the rate's
-    `ARW_AVERAGE_S` means within the rests, times the square root of that time (the Allan deviation at
+    `ARW_AVERAGE_S` means within the rests ``runs`` (`Rests.runs`), times the square root of that time (the Allan deviation at
     1 s, non-overlapping); None where the rests hold fewer than ten such means. A band-limited MEMS output
     has correlated samples, so its per-sample sd times sqrt(dt) would understate the walk."""
     k = max(1, round(ARW_AVERAGE_S / step_s))
     steps = []
-    for a, b in found.runs:
+    for a, b in runs:
         n = (b - a) // k
         if n > 1:
             means = rate[a:a + n * k].reshape(n, k, -1).mean(axis=1)
