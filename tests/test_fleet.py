@@ -8,6 +8,7 @@ from pathlib import Path
 
 import matplotlib
 import pandas as pd
+import pytest
 from test_workflow import SHORT_CHAINS, SNAKEMAKE
 
 from gyrocal.pipeline.paths import CampaignPaths
@@ -36,6 +37,7 @@ def test_campaigns_reviewed_under_different_models_share_one_summary_and_figure(
     assert [ax.get_title() for ax in figure.axes if ax.axison] == ["dtg1_roll.bias_drift (ppm)", "dtg1_roll.sf_pos (ppm)"]
 
 
+@pytest.mark.full
 def test_a_fleet_runs_as_independent_campaigns_with_the_single_runs_numbers(tiny, short_chains, tmp_path):
     """Through Snakemake, and against the same campaign calibrated by the step functions in this
     process (`gyrocal.pipeline.run`): the rules and the library give the same numbers (the baseline

@@ -49,6 +49,7 @@ def test_without_accelerometer_columns_it_names_the_missing_one(tiny):
         effect_derivatives(effects.LIBRARY["g_sensitivity"], view(data))
 
 
+@pytest.mark.full
 def test_the_posterior_finds_a_known_g_sensitivity_and_no_other(tiny, tmp_path, config):
     mutations.corrupted_copy(tiny[0], tmp_path / "c", with_accelerometer)
     model = ["scale_factor", "misalignment", "bias", "g_sensitivity"]

@@ -174,6 +174,7 @@ def outlier_run(tiny, tmp_path_factory, config):
     return base / "out", lines
 
 
+@pytest.mark.full
 def test_five_star_tracker_outliers_are_listed_and_left_out(outlier_run):
     out, lines = outlier_run
     info = json.loads((out / "input.json").read_text())
@@ -184,6 +185,7 @@ def test_five_star_tracker_outliers_are_listed_and_left_out(outlier_run):
     assert "Star-tracker outliers left out of the fit (5)" in html
 
 
+@pytest.mark.full
 def test_five_outliers_move_no_estimate_by_more_than_half_an_sd(outlier_run, tiny_run):
     out, _ = outlier_run
     clean = pd.read_csv(tiny_run[0] / "baseline/calibration.csv")
@@ -291,6 +293,7 @@ def test_every_json_output_is_strict_json(tiny_run):
         json.loads(path.read_text(), parse_constant=refuse)
 
 
+@pytest.mark.full
 def test_same_config_and_seed_give_byte_identical_outputs(tiny, short_chains, tmp_path):
     """Byte for byte, and the posterior's netCDF (whose bytes hold a creation time) by its content
     and attributes."""
