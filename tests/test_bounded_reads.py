@@ -55,8 +55,20 @@ def test_a_star_tracker_file_in_utf16_says_save_it_as_utf8(tiny, tmp_path):
     path = directory / "star_tracker.csv"
     path.write_bytes(path.read_text().encode("utf-16"))
     message = refused(directory)
-    assert message.endswith("star_tracker.csv: line 1: is UTF-16 text (a byte-order mark or NUL bytes at its start), "
+    assert message.endswith("star_tracker.csv: line 1: is UTF-16 text (its byte-order mark), "
                             "not UTF-8. Save it as UTF-8 (in a spreadsheet: CSV UTF-8, comma-separated)")
+
+
+@pytest.mark.parametrize("encoding, named", [("utf-16", "UTF-16 text (its byte-order mark)"),
+                                             ("utf-16-le", "UTF-16 text (NUL bytes at its start)"),
+                                             ("utf-32", "UTF-32 text (its byte-order mark)"),
+                                             ("utf-32-be", "UTF-32 text (NUL bytes at its start)")])
+def test_a_wide_encoding_is_named_as_what_it_is(tiny, tmp_path, encoding, named):
+    directory = tmp_path / "c"
+    shutil.copytree(tiny[0], directory)
+    path = directory / "gyro.csv"
+    path.write_bytes(path.read_text().encode(encoding))
+    assert f"gyro.csv: line 1: is {named}, not UTF-8. Save it as UTF-8" in refused(directory)
 
 
 def test_a_star_tracker_file_separated_by_semicolons_says_save_it_comma_separated(tiny, tmp_path):

@@ -3,8 +3,8 @@ still cover the truth; never a traceback, never a hang.
 
 Hypothesis mutates the tiny campaign: it deletes rows, inserts NaNs, shuffles times, scales
 columns, drops columns, offsets clocks, cuts gaps, flips the quaternion order, holds a channel at
-one value (dead or stuck), freezes the reference and drops a gyro cell's exponent, one to three at
-a time. Each case runs under a time bound.
+one value (dead or stuck), freezes the reference, drops a gyro cell's exponent and saves a file in
+another encoding or with another delimiter, one to three at a time. Each case runs under a time bound.
 """
 
 import shutil
@@ -33,6 +33,14 @@ COVER_SD = 4.5
 """Every informed parameter must lie within this many WLS standard errors of the truth
 (4.5 sd: a false alarm once in about 4 000 campaigns of 20 parameters)."""
 
+ENCODINGS = {
+    "utf-16": lambda text: text.encode("utf-16"),
+    "utf-16-le": lambda text: text.encode("utf-16-le"),
+    "utf-32": lambda text: text.encode("utf-32"),
+    "semicolons": lambda text: text.replace(",", ";").encode(),
+    "tabs": lambda text: text.replace(",", "\t").encode(),
+}
+"""A spreadsheet's other ways to save a CSV file: what each does to the file's text."""
 FILES = st.sampled_from(["gyro.csv", "star_tracker.csv"])
 SEEDS = st.integers(0, 2**31 - 1)
 OPERATIONS = st.one_of(
@@ -47,12 +55,17 @@ OPERATIONS = st.one_of(
     st.tuples(st.just("stuck"), SEEDS, st.integers(5, 1500), st.sampled_from([0.0, 1e-6])),
     st.tuples(st.just("frozen"), SEEDS, st.integers(2, 40)),
     st.tuples(st.just("lost_exponent"), SEEDS),
+    st.tuples(st.just("encoding"), FILES, st.sampled_from(sorted(ENCODINGS))),
 )
 
 
 def apply(directory, operation):
     """One mutation of a campaign directory, in place."""
     kind, *args = operation
+    if kind == "encoding":  # the file saved again in another encoding or with another delimiter
+        path = directory / args[0]
+        path.write_bytes(ENCODINGS[args[1]](path.read_text()))
+        return
     name = args[0] if args and isinstance(args[0], str) else "gyro.csv"
     path = directory / name
     frame = pd.read_csv(path)
@@ -152,10 +165,18 @@ def truth(tiny):
 @example(operations=[("stuck", 1, 1500, 0.0)])
 @example(operations=[("frozen", 5, 30)])
 @example(operations=[("lost_exponent", 3)])
+@example(operations=[("encoding", "star_tracker.csv", "utf-16")])
+@example(operations=[("encoding", "gyro.csv", "semicolons")])
 def test_any_mutation_ends_in_a_clear_error_or_a_covering_estimate(operations, tiny, truth, tmp_path_factory):
     directory = tmp_path_factory.mktemp("mutated") / "campaign"
     shutil.copytree(tiny[0], directory)
+    encoded = {}  # a file is saved in one other encoding at most, after every edit of its numbers
     for operation in operations:
+        if operation[0] == "encoding":
+            encoded.setdefault(operation[1], operation)
+        else:
+            apply(directory, operation)
+    for operation in encoded.values():
         apply(directory, operation)
     with time_bound(CASE_SECONDS):
         try:

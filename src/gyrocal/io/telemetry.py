@@ -131,11 +131,30 @@ def _read_csv(path, required, max_bytes=None) -> pd.DataFrame:
     return frame
 
 
+BYTE_ORDER_MARKS = ((b"\xff\xfe\x00\x00", "UTF-32"), (b"\x00\x00\xfe\xff", "UTF-32"),
+                    (b"\xff\xfe", "UTF-16"), (b"\xfe\xff", "UTF-16"))
+"""Wide encodings by their byte-order mark, UTF-32's first: its little-endian mark begins with UTF-16's."""
+
+
+def _wide_encoding(raw: bytes) -> str:
+    """The wide encoding a file's first bytes show ('' if none): by its byte-order mark, or by NUL
+    bytes, which text in UTF-8 never holds (every other byte NUL in UTF-16, three of four in UTF-32)."""
+    for mark, name in BYTE_ORDER_MARKS:
+        if raw.startswith(mark):
+            return f"{name} text (its byte-order mark)"
+    head = raw[:4096]
+    if b"\x00" not in head:
+        return ""
+    name = "UTF-32" if head.count(0) > len(head) // 2 else "UTF-16"
+    return f"{name} text (NUL bytes at its start)"
+
+
 def _decode(path, raw: bytes) -> str:
-    """The file's text: UTF-8 (a leading byte-order mark is dropped); UTF-16 or other bytes are
-    refused with what to do."""
-    if raw[:2] in (b"\xff\xfe", b"\xfe\xff") or b"\x00" in raw[:4096]:
-        fail(path, "is UTF-16 text (a byte-order mark or NUL bytes at its start), not UTF-8",
+    """The file's text: UTF-8 (a leading byte-order mark is dropped); UTF-16, UTF-32 or other bytes
+    are refused with what to do."""
+    wide = _wide_encoding(raw)
+    if wide:
+        fail(path, f"is {wide}, not UTF-8",
              where="line 1", todo="save it as UTF-8 (in a spreadsheet: CSV UTF-8, comma-separated)")
     try:
         return raw.decode("utf-8-sig")
