@@ -158,6 +158,12 @@ def test_coverage_and_accuracy_of_a_calibrated_estimator():
     assert validation.pooled_efficiency(params) == pytest.approx(acc["efficiency"])
 
 
+def test_a_study_of_clean_campaigns_alone_has_an_empty_extended_coverage_table():
+    params = validation.parameter_table(_records(np.random.default_rng(13).normal(0, 2.0, 50), 2.0))
+    table = validation.extended_coverage(params)
+    assert table.empty and {"group", "kind", "rate", "max_abs_z"} <= set(table.columns)
+
+
 def test_overconfident_intervals_undercover():
     rng = np.random.default_rng(12)
     params = validation.parameter_table(_records(rng.normal(0, 2.0, 2000), 1.0))

@@ -244,6 +244,9 @@ def extended_coverage(params: pd.DataFrame) -> pd.DataFrame:
     """Coverage of each extended model on the campaigns that carry its effect, for its channel
     parameters and its added ones, with how much wider its intervals are than the baseline's."""
     ext = params[(params["group"] != "clean") & (params["model"] == params["group"])].copy()
+    if ext.empty:  # a study of clean campaigns alone (``effects: {}``) has no extended model
+        return pd.DataFrame(columns=["group", "kind", "level", "covered", "n", "rate", "rate_lo", "rate_hi",
+                                     "n_effective", "max_abs_z", "median_sd_over_baseline"])
     ext["kind"] = np.where(ext["core"], "channel parameters", "added effect")
     table = coverage(ext, by=["group", "kind"])
     base = params[(params["group"] != "clean") & (params["model"] == "baseline")]
