@@ -18,7 +18,7 @@ from gyrocal.model import units
 
 __all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "NOISE_RATIOS", "SHARE_BOUND_MARGIN", "EstimateError", "VariantSkipped",
            "check_blocks", "check_identified", "check_noise", "check_physical", "check_representable",
-           "check_variant_informed", "sampling_stopped", "share_at_bound"]
+           "check_variant_informed", "noise_beyond", "sampling_stopped", "share_at_bound"]
 
 
 class EstimateError(InputError):
@@ -54,11 +54,25 @@ NOISE_PLAUSIBLE = 1e3
 the sensors can have: the residuals are structure the model lacks."""
 
 
+def noise_beyond(low, high, band: float):
+    """Where a fitted noise scale is a misfit, the one rule of `check_noise` and of the misfit check
+    (`gyrocal.criticism.diagnostics.misfit_findings`): ``low`` and ``high`` bound its 95 % interval
+    as ratios to the stated scale, and it is off only where that interval excludes the stated value
+    (1) and lies wholly outside the tolerated band ``[1 / band, band]``, so that the data, not the
+    estimate's noise, say it is off by more than tolerated. An ARW of 0.79 +- 0.08 of the stated
+    (interval 0.63 to 0.95) against the band 0.80 to 1.25 is not off: it may be 0.9. Elementwise on arrays."""
+    low, high = np.asarray(low, dtype=float), np.asarray(high, dtype=float)
+    excludes_stated = (low > 1.0) | (high < 1.0)
+    return excludes_stated & ((low > band) | (high < 1.0 / band))
+
+
 def check_noise(maneuvers, est: PointEstimate):
-    """Stop before sampling when REML puts a noise scale `NOISE_PLAUSIBLE` times off the stated one;
-    the message gives each maneuver's residual RMS about roll, pitch and yaw."""
+    """Stop before sampling when REML puts a noise scale `NOISE_PLAUSIBLE` times off the stated one
+    (`noise_beyond`, its interval the point: REML gives none before sampling, and a factor of a
+    thousand is beyond any interval's width); the message gives each maneuver's residual RMS about
+    roll, pitch and yaw."""
     ratio = np.exp(est.log_sigma[:3] - covariance.log_sigma_of(est.stated_noise))
-    off = (ratio > NOISE_PLAUSIBLE) | (ratio < 1.0 / NOISE_PLAUSIBLE)
+    off = noise_beyond(ratio, ratio, NOISE_PLAUSIBLE)
     if off.any():
         fitted = covariance.stated_scales(est.log_sigma[:3])
         stated = covariance.stated_scales(covariance.log_sigma_of(est.stated_noise))

@@ -13,6 +13,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import chdtr, chdtrc, gammaln
 
+from gyrocal.checks.fit import noise_beyond
 from gyrocal.criticism import correlation, noiseranking
 from gyrocal.criticism.bands import band_findings
 from gyrocal.criticism.increments import smoothness_finding
@@ -276,8 +277,20 @@ def noise_rms_arcsec(maneuvers, stated_noise) -> float:
     return float(rad_to_arcsec(np.sqrt(st_var + arw**2 * np.mean(durations) / 15)))
 
 
-def misfit_findings(residual_rms, noise_rms, white, ranking, noise_posterior, stated_noise, cfg) -> list:
-    """Each misfit check as a `Finding`: its figure against the threshold of the config's ``diagnostics``."""
+def _nearest_to_band(low, high) -> float:
+    """A noise scale's figure against the band, either way: the end of its 95 % interval nearest the
+    stated value (1 where the interval holds it), as a factor of at least 1."""
+    if low <= 1.0 <= high:
+        return 1.0
+    near = low if low > 1.0 else high
+    return near if near >= 1 else 1 / near if near > 0 else np.inf
+
+
+def misfit_findings(residual_rms, noise_rms, white, ranking, noise_posterior, stated_noise, cfg,
+                    noise_interval=None) -> list:
+    """Each misfit check as a `Finding`: its figure against the threshold of the config's ``diagnostics``.
+    ``noise_interval``: each noise scale's 95 % posterior interval (low, high) by key; a scale
+    without one is judged on its point, ``noise_posterior``, alone (`checks.fit.noise_beyond`)."""
     findings = []
     ratio = residual_rms / noise_rms
     findings.append(Finding.judged(
@@ -285,16 +298,18 @@ def misfit_findings(residual_rms, noise_rms, white, ranking, noise_posterior, st
         f"residual RMS {residual_rms:.2f} arcsec is {ratio:.2f} times what the stated noise "
         f"predicts ({noise_rms:.2f}); limit {cfg['rms_ratio_max']}",
         figure=float(ratio), threshold=float(cfg["rms_ratio_max"]), unit="x predicted"))
+    band = cfg["noise_ratio_max"]
     for name in (s.key for s in NOISE_SCALES):
         fitted, stated = noise_posterior[name], stated_noise[name]
         r = fitted / stated
-        ok = 1 / cfg["noise_ratio_max"] <= r <= cfg["noise_ratio_max"]
+        low, high = (np.asarray((noise_interval or {}).get(name, (fitted, fitted)), dtype=float) / stated)
+        off = bool(noise_beyond(low, high, band))
         findings.append(Finding.judged(
-            f"noise:{name}", bool(ok),
-            f"the data ask for {name} = {fitted:.4g}, {r:.2f} times the stated {stated:.4g}; "
-            f"allowed {1 / cfg['noise_ratio_max']:.2f} to {cfg['noise_ratio_max']:.2f}",
-            figure=float(r if r >= 1 else 1 / r if r > 0 else np.inf), threshold=float(cfg["noise_ratio_max"]),
-            unit="x stated, either way"))
+            f"noise:{name}", not off,
+            f"the data ask for {name} = {fitted:.4g}, {r:.2f} times the stated {stated:.4g} "
+            f"(95 % interval {low:.2f} to {high:.2f}); off only where the interval lies outside "
+            f"{1 / band:.2f} to {band:.2f}",
+            figure=float(_nearest_to_band(low, high)), threshold=float(band), unit="x stated, either way"))
     findings.append(Finding.judged(
         "whiteness", bool(abs(white["z"]) <= cfg["whiteness_z_max"]),
         f"lag-1 autocorrelation of the standardised innovations {white['lag1']:+.3f} "
@@ -311,10 +326,11 @@ def misfit_findings(residual_rms, noise_rms, white, ranking, noise_posterior, st
     return findings
 
 
-def misfit_checks(residual_rms, noise_rms, white, ranking, noise_posterior, stated_noise, cfg) -> list:
+def misfit_checks(residual_rms, noise_rms, white, ranking, noise_posterior, stated_noise, cfg,
+                  noise_interval=None) -> list:
     """Each check as ``diagnostics.json`` records it: name, passed, and a sentence a reviewer can act on."""
     return [f.as_check() for f in misfit_findings(residual_rms, noise_rms, white, ranking, noise_posterior,
-                                                  stated_noise, cfg)]
+                                                  stated_noise, cfg, noise_interval)]
 
 
 def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.DataFrame, thresholds: dict,
@@ -335,7 +351,10 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
     keys = [s.key for s in NOISE_SCALES]
     noise_post = {s.key: float(summary.loc[f"noise.{s.key}", "mean"]) for s in CORRELATED_SCALES
                   if f"noise.{s.key}" in summary.index}
-    checks = misfit_checks(residual_rms, noise_rms, white, ranking, noise_post, estimate.stated_noise, thresholds)
+    noise_ci = {s.key: [float(summary.loc[f"noise.{s.key}", c]) for c in ("ci95_low", "ci95_high")]
+                for s in CORRELATED_SCALES if f"noise.{s.key}" in summary.index and "ci95_low" in summary.columns}
+    checks = misfit_checks(residual_rms, noise_rms, white, ranking, noise_post, estimate.stated_noise, thresholds,
+                           noise_ci)
     groups = {d.id: d.noise_group for d in maneuvers}
     checks += [f.as_check() for f in band_findings(fit, groups, thresholds["band_outside_max"])]
     checks.append(smoothness_finding(measured).as_check())
@@ -353,6 +372,7 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
         "checks": checks,
         "whiteness": white,
         "noise_posterior": noise_post,
+        "noise_posterior_ci95": noise_ci,
         "noise_stated": {k: estimate.stated_noise[k] for k in keys},
         "st_correlation_time_s": estimate.correlation_time_s,
         "residual_rms_per_maneuver_arcsec": per_maneuver,
