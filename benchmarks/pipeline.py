@@ -19,7 +19,6 @@ import yaml
 from simulated import baseline_fit, evaluations_per_s
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
 
 
 def snakemake_run():
@@ -48,7 +47,7 @@ def sampler_figures():
     fitted = baseline_fit(ROOT / "config/scenarios/mom.yaml", cfg)
     maneuvers, est, priors, spec = fitted.maneuvers, fitted.estimate, fitted.priors, fitted.estimate.spec
     start = time.perf_counter()
-    post = posterior.sample(maneuvers, est, priors, cfg["sampler"], cfg["grid"], cfg["seed"])
+    post = posterior.run(posterior.prepare(maneuvers, est, priors, cfg["grid"]), cfg["sampler"], cfg["seed"])
     sampling_s = time.perf_counter() - start
     ess = inferencedata.summarize(inferencedata.posterior_dataset(post.ensemble_draws(), est.theta, spec),
                                   inferencedata.posterior_dataset(post.walker_draws(), est.theta, spec),

@@ -15,8 +15,8 @@ shortened one ``tests/data/tiny.yaml``), simulated once and sampled by both on t
    gyrocal's linearised model with the gyro random walk cut 100-fold, since the straightforward
    model has none.
 
-gyrocal: `posterior.sample` as the pipeline runs it (the linearised model about the WLS point
-estimate, the nuisance integrated out in closed form, four ensembles), timed like
+gyrocal: `posterior.prepare` and `posterior.run` as the pipeline runs them (the linearised model about the
+WLS point estimate, the nuisance integrated out in closed form, four ensembles), timed like
 ``benchmarks/pipeline.py``: the sampling step, after the point estimate; evaluations per second
 of its `LogPosterior` on batches of 64 walkers.
 
@@ -119,13 +119,13 @@ class Figures:
 
 
 def gyrocal_figures(c: Campaign, cfg: dict) -> Figures:
-    """Run `posterior.sample` as the pipeline does; time it and its log posterior."""
+    """Run `posterior.prepare` and `posterior.run` as the pipeline does; time them and its log posterior."""
     from gyrocal.inference.fit.likelihood import campaign_stats, conditional_posterior
     from gyrocal.inference.noise.covariance import variances
     from gyrocal.inference.sampling import inferencedata, posterior
     est, spec = c.estimate, c.estimate.spec
     start = time.perf_counter()
-    post = posterior.sample(c.maneuvers, est, c.priors, cfg["sampler"], cfg["grid"], cfg["seed"])
+    post = posterior.run(posterior.prepare(c.maneuvers, est, c.priors, cfg["grid"]), cfg["sampler"], cfg["seed"])
     seconds = time.perf_counter() - start
     summary = inferencedata.summarize(inferencedata.posterior_dataset(post.ensemble_draws(), est.theta, spec),
                                       inferencedata.posterior_dataset(post.walker_draws(), est.theta, spec),

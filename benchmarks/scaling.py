@@ -1,17 +1,18 @@
 """Cost against telemetry length: prints figures, asserts nothing.
 
-    python benchmarks/scaling.py [--factors 1 2 4 8] [--longer]
+    python benchmarks/scaling.py [--factors 1 2 4 8] [--longer] [--repeats 1] [--csv OUT.csv]
 
 The default MOM-like scenario is flown k times over (its six maneuvers repeated, each copy
 its own maneuver), so the campaign holds k times the samples at the same rates; with
 ``--longer``, each of its six maneuvers holds k times as long instead (a cost that grows with
-one maneuver's length shows there, not in the number of maneuvers). Each
-stage of the pipeline runs through the library in this one process, and its wall time
-is printed per k with its ratio to k = 1 and the log-log slope against the number of
-star-tracker samples between the smallest and largest k (1 is linear). The sampler runs a
-fixed number of steps, so its figure is the cost per step; the leave-one-block-out log-likelihood (PSIS-LOO's pointwise terms) is
-timed on its own (with the fit table and predictive draws), since its cost grew with the
-square of the length before `selectedinverse`.
+one maneuver's length shows there, not in the number of maneuvers). Each stage of the
+pipeline runs through the library in this one process, and its wall time (the least of
+``--repeats`` runs, which a busy machine inflates least) is printed per k with its ratio to
+k = 1 and the log-log slope against the number of star-tracker samples between the smallest
+and largest k (1 is linear). The sampler runs a fixed number of steps, so its figure is the
+cost per step; the leave-one-block-out log-likelihood (PSIS-LOO's pointwise terms) is timed
+on its own (with the fit table and predictive draws), since its cost grew with the square of
+the length before `selectedinverse`.
 """
 
 import argparse
@@ -46,9 +47,9 @@ def stage_times(scenario: dict, cfg: dict) -> dict:
     from gyrocal.inference.fit.estimate import point_estimate
     from gyrocal.inference.noise.covariance import noise_knowledge
     from gyrocal.inference.sampling import inferencedata, posterior
+    from gyrocal.inference.sampling.posterior import model_priors
     from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline
-    from gyrocal.pipeline.steps.posterior import model_priors
     from gyrocal.simulation import simulate
 
     times = {}
@@ -71,8 +72,8 @@ def stage_times(scenario: dict, cfg: dict) -> dict:
     est = timed("point estimate (REML + WLS)", lambda: point_estimate(maneuvers, spec, stated, theta0))
     priors = model_priors(est, cfg["priors"])
     sampler_cfg = {**cfg["sampler"], "initial_steps": 100, "min_tau_multiple": 0, "max_steps": 100}
-    post = timed("posterior: grid + 400 burn-in + 100 steps", lambda: posterior.sample(
-        maneuvers, est, priors, sampler_cfg, cfg["grid"], cfg["seed"]))
+    post = timed(f"posterior: grid + {cfg['sampler']['burn_steps']} burn-in + 100 steps", lambda: posterior.run(
+        posterior.prepare(maneuvers, est, priors, cfg["grid"]), sampler_cfg, cfg["seed"]))
     draws = post.ensemble_draws()[:, :: max(1, post.ensemble_draws().shape[1] // 250)]
     timed("posterior: LOO terms, fit, predictive (1000 draws)", lambda: inferencedata._fit_and_predictive(
         post, maneuvers, draws, cfg["sampler"], cfg["seed"]))
@@ -83,13 +84,16 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--factors", type=int, nargs="+", default=[1, 2, 4, 8])
     parser.add_argument("--longer", action="store_true", help="k times longer holds, not k times the maneuvers")
+    parser.add_argument("--repeats", type=int, default=1, help="runs per factor; each stage's least time is kept")
+    parser.add_argument("--csv", help="also write the times here, a row per factor and stage (what docs/images/scaling.py draws)")
     args = parser.parse_args()
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     from gyrocal.simulation.simulate import load_scenario
     scenario = load_scenario(ROOT / "config/scenarios/mom.yaml")
     rows = {}
     for k in args.factors:
-        rows[k] = stage_times((longer if args.longer else repeated)(scenario, k), cfg)
+        runs = [stage_times((longer if args.longer else repeated)(scenario, k), cfg) for _ in range(args.repeats)]
+        rows[k] = ({stage: min(times[stage] for times, _ in runs) for stage in runs[0][0]}, runs[0][1])
         print(f"k={k}: {rows[k][1]} star-tracker samples, {sum(rows[k][0].values()):.1f} s in all", flush=True)
     first, last = args.factors[0], args.factors[-1]
     print(f"\n{'stage':45s}" + "".join(f"{f'{k}x (s)':>10s}" for k in args.factors) + f"{'ratio':>8s}{'slope':>7s}")
@@ -97,6 +101,11 @@ def main():
         t = [rows[k][0][stage] for k in args.factors]
         slope = np.log(t[-1] / t[0]) / np.log(rows[last][1] / rows[first][1])
         print(f"{stage:45s}" + "".join(f"{v:10.2f}" for v in t) + f"{t[-1] / t[0]:8.1f}{slope:7.2f}")
+    if args.csv:
+        import pandas as pd
+
+        pd.DataFrame([{"factor": k, "st_samples": n, "stage": stage, "seconds": round(t, 3)}
+                      for k, (times, n) in rows.items() for stage, t in times.items()]).to_csv(args.csv, index=False)
     print(f"\nratio: time at {last}x over time at {first}x; slope: log-log against the star-tracker samples, "
           "1 = linear in the telemetry length")
 

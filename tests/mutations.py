@@ -174,6 +174,48 @@ def st_excursion(d, size_arcsec=2000.0, duration_s=2.0):
     return [int(r) + 2 for r in rows]
 
 
+def stuck_channel(channel="dtg1_roll", maneuvers=("roll_pos", "roll_neg"), value=0.0):
+    """A dead channel: ``channel`` reads ``value`` from the start of the first of ``maneuvers`` to the
+    end of the last (through their turns about its axis). Returns the first and last line it covers."""
+    def mutate(d):
+        meta = _meta(d)
+        t0, t1 = _maneuver(meta, maneuvers[0])["t_start"], _maneuver(meta, maneuvers[-1])["t_end"]
+        gy = _read(d, "gyro.csv")
+        rows = np.flatnonzero((gy.time > t0) & (gy.time <= t1))
+        gy.loc[rows, channel] = value
+        _write(gy, d, "gyro.csv")
+        return int(rows[0]) + 2, int(rows[-1]) + 2
+    return mutate
+
+
+def frozen_reference(seconds=20.0, maneuver="yaw_pos"):
+    """The reference repeats one attitude (valid = 1) for ``seconds`` in the middle of ``maneuver``'s
+    turn. Returns the first and last line that repeat it (the first is the attitude held)."""
+    def mutate(d):
+        t0, t1 = _rotation_span(d, maneuver)
+        start = 0.5 * (t0 + t1) - 0.5 * seconds
+        st = _read(d, "star_tracker.csv")
+        rows = np.flatnonzero((st.time >= start) & (st.time < start + seconds))
+        st.loc[rows, ["q1", "q2", "q3", "q4"]] = st.loc[rows[0], ["q1", "q2", "q3", "q4"]].to_numpy(dtype=float)
+        st.loc[rows, "valid"] = 1
+        _write(st, d, "star_tracker.csv")
+        return int(rows[0]) + 2, int(rows[-1]) + 2
+    return mutate
+
+
+def lost_exponent(channel="dtg2_yaw", maneuver="yaw_pos"):
+    """One gyro cell mid-turn written without its exponent (1.7477e-03 as 1.7477). Returns its line."""
+    def mutate(d):
+        t0, t1 = _rotation_span(d, maneuver)
+        gy = _read(d, "gyro.csv")
+        row = int(np.flatnonzero(gy.time >= 0.5 * (t0 + t1))[0])
+        mantissa, _ = f"{gy.loc[row, channel]:.6e}".split("e")
+        gy.loc[row, channel] = float(mantissa)
+        _write(gy, d, "gyro.csv")
+        return row + 2
+    return mutate
+
+
 def yaml_edit(old, new):
     def mutate(d):
         text = (d / "campaign.yaml").read_text()
@@ -252,6 +294,10 @@ REFUSED = {
     "unquoted direction: -": unquoted_direction,
     "blank line, then a NaN": blank_line_then_nan,
     "t_start: true": t_start_true,
+    "a dead channel through the roll maneuvers": stuck_channel(),
+    "a channel stuck at a constant": stuck_channel("dtg2_pitch", ("pitch_pos",), 3e-6),
+    "a frozen reference mid-turn": frozen_reference(),
+    "a gyro cell that lost its exponent": lost_exponent(),
 }
 """Corruptions `gyrocal validate` must refuse, each with a message a user can act on."""
 

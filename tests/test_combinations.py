@@ -11,12 +11,12 @@ from scipy.spatial.transform import Rotation
 
 from gyrocal.criticism import agreement, verdict
 from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.inference.sampling.posterior import posterior_spec
 from gyrocal.io import calibration
 from gyrocal.model import channels as ch
 from gyrocal.model import combinations
 from gyrocal.model.spec import ModelSpec, baseline
 from gyrocal.pipeline import cli
-from gyrocal.pipeline.steps import common
 from gyrocal.report import fleet, resolution, review
 
 from conftest import run_campaign
@@ -91,22 +91,24 @@ def test_the_combinations_cramer_rao_bound_is_infinite_on_an_uninformed_directio
     assert np.isinf(bound[1])
 
 
-def test_advice_names_the_maneuver_that_would_resolve_each_combination():
-    assert combinations.advice("sf_asym", "roll", set()) == "fly a +roll and a -roll rotation of equal size"
-    assert combinations.advice("sf_mean", "roll", {("roll", "+")}) == "fly a -roll rotation (only +roll was flown)"
+def test_advice_names_the_motion_that_would_resolve_each_combination():
+    assert combinations.advice("sf_asym", "roll", set()) == "turn about +roll and -roll, as far each way"
+    assert combinations.advice("sf_mean", "roll", {("roll", "+")}) == "turn about -roll (the data turn only +roll)"
     both = {("roll", "+"), ("roll", "-")}
-    assert "holds at rest" in combinations.advice("sf_asym", "roll", both)
-    assert combinations.advice("mis_yaw", "roll", both) == "fly a rotation about yaw"
+    assert "with rest before, between and after" in combinations.advice("sf_asym", "roll", both)
+    assert combinations.advice("mis_yaw", "roll", both) == "turn about yaw, either way (the data hold no such turn)"
+    assert combinations.advice("mis_yaw", "roll", both | {("yaw", "-")}) == "turn more, or larger, about yaw"
     sentence = combinations.channel_sentence(TRIAD[0], [
         {"parameter": "sf_mean", "sd": 700.0, "ratio": 0.2, "unit": "ppm"},
         {"parameter": "sf_asym", "sd": 6000.0, "ratio": 0.85, "unit": "ppm"}], both)
     assert sentence.startswith("gyro_x: resolved sf_mean (sd 700 ppm); sf_asym (sf_pos - sf_neg) is not (sd 6000 ppm, "
-                               "0.85 of its prior's): fly the +roll and -roll rotations with holds")
+                               "0.85 of its prior's): turn about +roll and -roll with rest")
     wide = combinations.channel_sentence(TRIAD[0], [
         {"parameter": "sf_mean", "sd": 400.0, "ratio": 0.03, "unit": "ppm", "width": 1600.0, "limit": 2000.0},
         {"parameter": "mis_yaw", "sd": 220.0, "ratio": 0.06, "unit": "arcsec", "width": 880.0, "limit": 300.0}], both)
     assert wide == ("gyro_x: resolved sf_mean (sd 400 ppm); mis_yaw is informed (0.06 of its prior's sd) but its 95 % "
-                    "interval is 880 arcsec wide, over the 300 arcsec limit: fly a rotation about yaw.")
+                    "interval is 880 arcsec wide, over the 300 arcsec limit: turn about yaw, either way (the data hold no such "
+                    "turn).")
 
 
 def test_the_mounting_takes_up_the_triads_rotation_and_leaves_its_non_orthogonality():
@@ -169,7 +171,7 @@ def test_calibration_csv_with_derived_rows_goes_through_every_reader(tiny, short
     assert len(calibration.core_rows(spec, table)) == spec.n_core
     params = calibration.posterior_mean_params(spec, table)
     assert spec.core_vector(params) == pytest.approx(spec.to_si(table["mean"].to_numpy()[:spec.n_core]), rel=1e-12)
-    prior = common.posterior_spec(spec, cfg["priors"], path)
+    prior = posterior_spec(spec, cfg["priors"], path)
     assert [p.prior_sd for p in prior.parameters] == pytest.approx(table["sd"].to_numpy()[:len(spec)], rel=1e-12)
     assert all(not p.label.endswith(("sf_mean", "sf_asym")) for p in prior.parameters)
     assert cli.main(["compare-campaigns", str(path), str(path)]) == 0

@@ -240,7 +240,7 @@ def repo_yaml(*patterns):
     return sorted(p for pattern in patterns for p in ROOT.glob(pattern))
 
 
-SCENARIOS = [p for p in repo_yaml("config/scenarios/*.yaml", "tests/data/*.yaml", "benchmarks/data/*.yaml")
+SCENARIOS = [p for p in repo_yaml("config/scenarios/*.yaml", "tests/data/*.yaml", "studies/data/*.yaml", "examples/*/*.yaml")
              if {"maneuvers", "base"} & set(yaml.safe_load(p.read_text()))]
 
 
@@ -255,7 +255,7 @@ def test_the_shipped_mapping_and_a_written_campaign_pass_their_schemas(tiny):
     yamlfile.check_schema(yamlfile.read_yaml(tiny[0] / "campaign.yaml"), "campaign", label_ids=True)
 
 
-@pytest.mark.parametrize("path", repo_yaml("config/*.yaml", "docs/tutorial/*.yaml", "tests/data/*.yaml"),
+@pytest.mark.parametrize("path", repo_yaml("config/*.yaml", "examples/*/*.yaml", "tests/data/*.yaml"),
                          ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_config_in_the_repo_passes_the_loader(path):
     assert isinstance(yamlfile.load_yaml(path), dict)

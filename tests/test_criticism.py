@@ -14,19 +14,9 @@ from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.io.calibration import core_rows
 from gyrocal.model import effects
 from gyrocal.simulation import simulate
+from gyrocal.study.hidden import BASE, CASES
 
 from conftest import DATA, config_with, run_campaign
-
-BASE = ["scale_factor", "misalignment", "bias"]
-CASES = {
-    # scenario: (variant effect, names that count as the right diagnosis, plugin)
-    "bias_drift": ("bias_drift", {"bias_drift", "time"}, None),
-    "sf_nonlinearity": ("sf_nonlinearity", {"sf_nonlinearity", "rate_squared"}, None),
-    "st_latency": ("st_latency", {"st_latency", "acceleration"}, None),
-    "st_correlated_noise": ("st_correlated_noise", {"st_correlated_noise"}, None),
-    "temperature": ("sf_temperature", {"sf_temperature", "temp_dtg1", "temp_dtg2", "temp_dtg3"},
-                    DATA / "plugin_sf_temperature.py"),
-}
 
 FAST_CASE = "temperature"
 """The case the fast tier runs (a plugin's effect: the loop end to end, plugin loading included);
@@ -46,7 +36,7 @@ def runs(tmp_path_factory, config):
             root = tmp_path_factory.mktemp(case)
             simulate.run(DATA / f"hidden_{case}.yaml", root / "sim")
             cfg = config_with(config, {"baseline": BASE, "extended": BASE + [effect]},
-                              [str(plugin)] if plugin else [])
+                              [str(DATA / plugin)] if plugin else [])
             run_campaign(root / "sim" / "campaign", root / "out", cfg, ("baseline", "extended"),
                          root / "sim" / "truth.json")
             made[case] = root

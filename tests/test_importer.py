@@ -2,6 +2,7 @@
 is known."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -10,7 +11,8 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from gyrocal.criticism import agreement
-from gyrocal.io import importer, telemetry
+from gyrocal.errors import InputError
+from gyrocal.io import importer, rests, telemetry
 from gyrocal.pipeline import cli
 
 
@@ -184,6 +186,212 @@ def test_an_unknown_mapping_names_the_shipped_ones(capsys):
     assert code == 2 and "repoimu" in capsys.readouterr().err
 
 
+def broad_like(n=2500, rate_hz=100.0, missing=(10, 11, 700), motions=((500, 1000), (1500, 2000)), seed=1):
+    """BROAD's arrays (``imu_gyr`` rad/s, ``opt_quat`` scalar first with NaN rows at ``missing``,
+    ``imu_acc``, ``sampling_rate``): the gyro at rest (a bias and 0.002 rad/s of white noise) but in
+    the rows ``motions``, where it turns about x at 1 rad/s."""
+    rng = np.random.default_rng(seed)
+    rate = np.array([0.001, -0.002, 0.008]) + 0.002 * rng.standard_normal((n, 3))
+    for a, b in motions:
+        rate[a:b, 0] += 1.0
+    angle = np.cumsum(rate[:, 0]) / rate_hz
+    quat = Rotation.from_rotvec(np.outer(angle, [1.0, 0.0, 0.0])).as_quat()[:, [3, 0, 1, 2]]
+    quat[list(missing)] = np.nan
+    return {"imu_gyr": rate, "opt_quat": quat, "imu_acc": np.tile([0.0, 0.0, 9.81], (n, 1)),
+            "sampling_rate": np.array([[rate_hz]]), "info": "a synthetic trial"}
+
+
+def test_a_mat_file_with_nan_reference_rows_imports_them_invalid_and_counted_as_free_motion(tmp_path):
+    """BROAD's layout through the shipped ``broad`` mapping: the time counted at the file's
+    sampling_rate, the NaN rows written valid = 0 (not refused) and counted, the MEMS class and the
+    rate in campaign.yaml, and maneuvers with neither axis nor direction (free motion)."""
+    from scipy.io import savemat
+
+    savemat(tmp_path / "trial_A.mat", broad_like())
+    out = tmp_path / "campaign"
+    campaign, counts = importer.import_files("broad", out, [tmp_path / "trial_A.mat"])
+    assert counts["trial_A"]["reference_missing"] == 3 and counts["trial_A"]["reference_dropouts"] == 0
+    written = pd.read_csv(out / "star_tracker.csv")
+    assert list(np.flatnonzero(written["valid"] == 0)) == [10, 11, 700] and len(written) == 2500
+    assert written["time"].iloc[-1] == pytest.approx(24.99)
+    meta = yaml.safe_load((out / "campaign.yaml").read_text())
+    assert meta["gyro"] == {"sensor_class": "mems", "rate_hz": 100.0}
+    assert all("axis" not in m and "direction" not in m for m in meta["maneuvers"])
+    assert [m["noise_group"] for m in meta["maneuvers"]] == ["trial_A", "trial_A"]
+    assert "3 reference rows missing (NaN or empty: no attitude, flagged invalid)" in importer.report(
+        campaign, counts, out)
+
+
+def test_a_file_is_cut_in_the_middle_of_each_inner_rest_seen_by_the_gyro(tmp_path):
+    """Rest, motion (rows 500-999), rest, motion (1500-1999), rest at 100 Hz: averaged over 10
+    samples the rate leaves rest 5 rows before a motion and returns 5 rows after it, so the rests
+    are rows 0-495, 1005-1495 and 2005-2499; the file is cut in the middle of the inner one, at row
+    1250, and the rests at its ends stay in its two maneuvers."""
+    from scipy.io import savemat
+
+    savemat(tmp_path / "trial_A.mat", broad_like())
+    campaign, counts = importer.build_campaign([tmp_path / "trial_A.mat"], importer.read_mapping("broad"), "c")
+    c = counts["trial_A"]
+    assert c["rests_s"] == pytest.approx([(0.0, 4.95), (10.05, 14.95), (20.05, 24.99)])
+    assert [(m.id, m.t_start, m.t_end) for m in campaign.maneuvers] == [("trial_A_1", 0.0, pytest.approx(12.49)),
+                                                                        ("trial_A_2", pytest.approx(12.5), 24.99)]
+    assert np.rad2deg(c["rest_sigma_rad_s"]) == pytest.approx(np.rad2deg(0.002), rel=0.15)
+
+
+def test_a_free_maneuver_kept_whole_is_one_per_file(tmp_path):
+    from scipy.io import savemat
+
+    savemat(tmp_path / "trial_A.mat", broad_like())
+    mapping = importer.read_mapping("broad")
+    mapping["maneuver"] = {"free": True}
+    campaign, _ = importer.build_campaign([tmp_path / "trial_A.mat"], mapping, "c")
+    assert [(m.id, m.axis, m.direction, m.t_end) for m in campaign.maneuvers] == [("trial_A", None, None, 24.99)]
+
+
+def test_an_hdf5_file_stored_columns_by_rows_reads_as_the_mat_file(tmp_path):
+    """HDF5 as MATLAB v7.3 stores an N x 3 array (3 x N): turned, the same campaign as the .mat."""
+    import h5py
+    from scipy.io import savemat
+
+    arrays = broad_like()
+    savemat(tmp_path / "trial_A.mat", arrays)
+    with h5py.File(tmp_path / "trial_A.h5", "w") as f:
+        for name in ("imu_gyr", "opt_quat", "imu_acc", "sampling_rate"):
+            f[name] = np.asarray(arrays[name]).T
+    mapping = importer.read_mapping("broad")
+    from_mat, _ = importer.build_campaign([tmp_path / "trial_A.mat"], mapping, "c")
+    mapping["format"] = {"type": "hdf5"}
+    from_h5, counts = importer.build_campaign([tmp_path / "trial_A.h5"], mapping, "c")
+    assert counts["trial_A"]["reference_missing"] == 3
+    assert np.array_equal(from_h5.gyro_columns["gyro_x"], from_mat.gyro_columns["gyro_x"])
+    assert np.array_equal(from_h5.st_valid, from_mat.st_valid) and np.array_equal(from_h5.st_quat, from_mat.st_quat)
+
+
+def test_a_nan_gyro_value_is_refused_naming_the_variable_row_and_column(tmp_path):
+    from scipy.io import savemat
+
+    arrays = broad_like()
+    arrays["imu_gyr"][7, 1] = np.nan
+    savemat(tmp_path / "trial_A.mat", arrays)
+    with pytest.raises(InputError, match=r"trial_A.mat: variable imu_gyr, row 8, column 2 \(gyro gyro_y\): not a "
+                                         r"number: nan \(1 such row\). Fix or drop those rows"):
+        importer.build_campaign([tmp_path / "trial_A.mat"], importer.read_mapping("broad"), "c")
+
+
+def test_a_variable_the_file_lacks_is_refused_naming_those_it_holds(tmp_path):
+    from scipy.io import savemat
+
+    arrays = broad_like()
+    arrays["gyr"] = arrays.pop("imu_gyr")
+    savemat(tmp_path / "trial_A.mat", arrays)
+    with pytest.raises(InputError, match=r"the mapping's gyro is variable 'imu_gyr', which the file does not "
+                                         r"hold. The file holds \['imu_acc', 'opt_quat', 'sampling_rate'\]"):
+        importer.build_campaign([tmp_path / "trial_A.mat"], importer.read_mapping("broad"), "c")
+
+
+def test_a_reference_with_fewer_rows_than_the_gyro_is_refused_naming_both_variables(tmp_path):
+    from scipy.io import savemat
+
+    arrays = broad_like()
+    arrays["opt_quat"] = arrays["opt_quat"][::2]
+    savemat(tmp_path / "trial_A.mat", arrays)
+    with pytest.raises(InputError, match=r"variable opt_quat \(reference quaternion\): variable opt_quat has 1250 "
+                                         r"rows, variable imu_gyr 2500: .* Resample one onto the other's times"):
+        importer.build_campaign([tmp_path / "trial_A.mat"], importer.read_mapping("broad"), "c")
+
+
+def test_empty_or_nan_reference_cells_in_a_csv_are_invalid_rows_and_other_text_is_refused(tmp_path):
+    repoimu_like(tmp_path / "Trial_A.csv", dropouts=())
+    lines = (tmp_path / "Trial_A.csv").read_text().splitlines()
+    for row, cell in ((10, ""), (11, "NaN")):
+        fields = lines[row + 2].split(";")
+        fields[2] = cell
+        lines[row + 2] = ";".join(fields)
+    (tmp_path / "Trial_A.csv").write_text("\n".join(lines) + "\n")
+    campaign, counts = importer.build_campaign([tmp_path / "Trial_A.csv"], importer.read_mapping("repoimu"), "c")
+    assert counts["Trial_A"]["reference_missing"] == 2 and list(np.flatnonzero(campaign.st_valid == 0)) == [10, 11]
+    assert counts["Trial_A"]["reference_precision"].startswith("10 significant digits")  # not "NaN"'s
+    fields = lines[14].split(";")
+    fields[2] = "oops"
+    lines[14] = ";".join(fields)
+    (tmp_path / "Trial_A.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=r"line 15, column 3 \(reference quaternion\): not a number: 'oops'"):
+        importer.build_campaign([tmp_path / "Trial_A.csv"], importer.read_mapping("repoimu"), "c")
+
+
+def test_the_mapping_sets_the_sensor_class_noise_and_rate_of_campaign_yaml(tmp_path):
+    repoimu_like(tmp_path / "Trial_A.csv")
+    mapping = importer.read_mapping("repoimu")
+    mapping.update(sensor_class="fog", rate_hz=100.0, gyro_noise={"arw_deg_sqrt_h": 0.02},
+                   star_tracker={"sigma_cross_arcsec": 5.0, "sigma_about_arcsec": 40.0})
+    (tmp_path / "mine.yaml").write_text(yaml.safe_dump(mapping))
+    importer.import_files(tmp_path / "mine.yaml", tmp_path / "out", [tmp_path / "Trial_A.csv"])
+    again = telemetry.read_campaign(tmp_path / "out")
+    assert again.gyro == {"arw_deg_sqrt_h": 0.02, "sensor_class": "fog", "rate_hz": 100.0}
+    assert again.star_tracker["sigma_about_arcsec"] == 40.0 and again.maneuvers[0].axis == "roll"
+
+
+@pytest.mark.parametrize("time, maneuver, match", [
+    ({"column": 1, "rate_hz": 100.0}, None, r"the time is given 2 ways \(column, rate_hz\)"),
+    ({"column": 1}, {"free": True, "direction": "+"}, "a free maneuver has no direction"),
+])
+def test_a_mapping_that_gives_the_time_twice_or_a_free_maneuver_a_direction_is_refused(tmp_path, time, maneuver,
+                                                                                       match):
+    mapping = importer.read_mapping("repoimu")
+    mapping["time"] = time
+    if maneuver:
+        mapping["maneuver"] = maneuver
+    (tmp_path / "mine.yaml").write_text(yaml.safe_dump(mapping))
+    with pytest.raises(InputError, match=match):
+        importer.read_mapping(tmp_path / "mine.yaml")
+
+
+def test_a_time_that_does_not_increase_is_refused_with_its_line(tmp_path):
+    t, _, _ = repoimu_like(tmp_path / "Trial_A.csv")
+    lines = (tmp_path / "Trial_A.csv").read_text().splitlines()
+    fields = lines[2 + 40].split(";")
+    fields[0] = f"{t[39]:.10g}"
+    lines[2 + 40] = ";".join(fields)
+    (tmp_path / "Trial_A.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(InputError, match=r"Trial_A.csv: line 43, column 1 \(time\): the time 3.39 s does not increase "
+                                         r"\(the row before holds 3.39 s\). Sort the rows"):
+        importer.build_campaign([tmp_path / "Trial_A.csv"], importer.read_mapping("repoimu"), "c")
+
+
+def test_gyrocal_import_of_a_mat_file_prints_its_missing_rows_rests_and_maneuvers(tmp_path, capsys):
+    from scipy.io import savemat
+
+    savemat(tmp_path / "trial_A.mat", broad_like())
+    assert cli.main(["import", "broad", str(tmp_path / "out"), str(tmp_path / "trial_A.mat")]) == 0
+    out = capsys.readouterr().out
+    assert "wrote " in out and "2 maneuvers" in out and "sensor class mems" in out
+    assert "trial_A                  2500 rows at 100 Hz, 0 reference dropouts" in out
+    assert "3 reference rows missing" in out and "0.00 to 4.95 s, 10.05 to 14.95 s, 20.05 to 24.99 s" in out
+    assert "trial_A_1 (free motion, 0.00 to 12.49 s), trial_A_2 (free motion, 12.50 to 24.99 s)" in out
+    assert "reference quaternions stored as binary floats: 0 renormalised" in out
+
+
+BROAD = Path(__file__).resolve().parents[2] / "shared" / "data" / "broad"
+
+
+@pytest.mark.skipif(not BROAD.is_dir(), reason=f"the BROAD trials are not at {BROAD} (see docs/usage.md, "
+                                               "'gyrocal import')")
+def test_the_broad_trials_import_at_their_full_rate_with_their_occluded_rows_invalid(tmp_path):
+    """The two BROAD trials: 285.714 Hz, every reference row kept, 162 and 306 NaN rows (markers
+    occluded) flagged invalid, one free maneuver and one noise group each (their rests open and
+    close them; the gyro finds the motion where the data set's own ``movement`` flag does)."""
+    files = [BROAD / "01_undisturbed_slow_rotation_A.mat", BROAD / "06_undisturbed_fast_rotation_A.mat"]
+    campaign, counts = importer.import_files("broad", tmp_path / "broad", files)
+    assert [c["reference_missing"] for c in counts.values()] == [162, 306]
+    assert [c["rows"] for c in counts.values()] == [c["reference_kept"] for c in counts.values()] == [56940, 56380]
+    walk = campaign.gyro.pop("arw_deg_sqrt_h")  # measured in the trial's own rests (rests.arw_at_rest)
+    assert campaign.gyro == {"sensor_class": "mems", "rate_hz": pytest.approx(285.714285714)}
+    assert 0.3 < walk < 0.7  # deg/sqrt(h): a MEMS gyro's, not the DTG default 0.003
+    assert [(m.id, m.noise_group, m.axis) for m in campaign.maneuvers] == [(f.stem, f.stem, None) for f in files]
+    first, last = counts["01_undisturbed_slow_rotation_A"]["rests_s"]
+    assert first == pytest.approx((0.0, 33.5), abs=0.1) and last == pytest.approx((160.5, 199.29), abs=0.1)
+
+
 def calibration(means, sds, prior_only=None):
     n = len(means)
     return pd.DataFrame({"channel": ["gyro_x"] * n, "parameter": [f"p{i}" for i in range(n)], "unit": ["ppm"] * n,
@@ -261,3 +469,12 @@ def test_compare_campaigns_compares_misalignments_in_one_body_frame(tmp_path, ca
     assert cli.main(["compare-campaigns", a, b]) == 0
     out = capsys.readouterr().out
     assert "B turned into A's body frame" in out and "+0, +0, +1080 arcsec" in out and "VERDICT: AGREE" in out
+
+
+def test_the_walk_at_rest_is_the_white_rate_noise_times_the_root_of_the_interval():
+    """White rate noise of sd 0.01 rad/s at 100 Hz walks 0.001 rad/sqrt(s) (ARW = sigma sqrt(dt))."""
+    rng = np.random.default_rng(7)
+    rate = rng.normal(0.0, 0.01, (12000, 3))
+    found = rests.Rests(runs=[(0, 6000), (9000, 12000)], sigma=np.full(3, 0.01), bias=np.zeros(3), threshold=0.0, smooth=1)
+    assert rests.arw_at_rest(rate, 0.01, found) == pytest.approx(0.001, rel=0.15)
+    assert rests.arw_at_rest(rate, 0.01, rests.Rests([(0, 500)], np.full(3, 0.01), np.zeros(3), 0.0, 1)) is None

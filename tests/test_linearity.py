@@ -31,10 +31,10 @@ def test_split_recovers_the_linear_and_quadratic_parts():
 @pytest.fixture(scope="module")
 def tiny_estimate(tiny_run):
     from gyrocal.inference.fit.estimate import PointEstimate
-    from gyrocal.pipeline.steps.common import known_effects
+    from gyrocal.model import effects
     out, npz = tiny_run
     return [ManeuverData.load(p) for p in npz], PointEstimate.load(out / "baseline" / "point_estimate.npz",
-                                                                    known_effects([]))
+                                                                    effects.known([]))
 
 
 def test_on_the_tiny_campaign_the_linear_model_moves_no_parameter(tiny_estimate):

@@ -15,7 +15,6 @@ from scipy.spatial.transform import Rotation
 
 from gyrocal.criticism import diagnostics
 from gyrocal.inference import errormodel
-from gyrocal.inference.fit import trustregion
 from gyrocal.inference.fit.estimate import trust_region
 from gyrocal.inference.fit.likelihood import Stats, campaign_stats
 from gyrocal.inference.fit.trustregion import TERMINATION_MESSAGES
@@ -358,7 +357,7 @@ def test_chi2_log_sf_stays_finite_and_exact_where_scipy_underflows(x, df):
 def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time():
     import emcee
 
-    from gyrocal.inference.sampling.posterior import _autocorr_times
+    from gyrocal.inference.sampling.posterior import _autocorr_times, _sokal_window
 
     rng = np.random.default_rng(3)
     noise_draws = rng.standard_normal((200, 6, 3))
@@ -371,6 +370,9 @@ def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time(
     chain[:, 2, 1] = 3.7  # one walker stuck: that parameter's time is undefined, and only that one
     times = _autocorr_times(chain)
     assert np.isnan(times[1]) and np.isfinite(times[[0, 2]]).all()
+    taus = np.array([[1.0, 1.2, 1.3, 1.3, 1.3], [1.0, 3.0, 6.0, 9.0, 12.0]])  # the second's window never closes
+    np.testing.assert_array_equal(_sokal_window(taus, 2.0), [3, 0])  # emcee's auto_window: [3, 0]
+    np.testing.assert_array_equal(_sokal_window(taus, 5.0), [0, 0])  # ... and [0, 0]
 
 
 def test_fitted_noise_proposal_is_the_draws_mean_and_covariance_and_refuses_scales_that_never_moved():
@@ -436,10 +438,9 @@ def test_trust_region_takes_least_squares_steps_to_the_bit_and_fits_an_exponenti
     np.testing.assert_allclose(x, lm.x, rtol=1e-10)
 
 
-def test_trust_region_with_noise_stops_where_scipy_does_and_at_its_optimum(monkeypatch):
+def test_trust_region_with_noise_stops_where_scipy_does_and_at_its_optimum():
     """With noise the optimum is no longer the truth: trust_region's is least_squares' (trf, to the bit;
-    lm, to the tolerance). Without scipy's private helpers it falls back to least_squares itself, with a
-    warning, and returns the same."""
+    lm, to the tolerance)."""
     t = np.linspace(0.0, 5.0, 30)
     y = 2.0 * np.exp(-0.7 * t) + 0.3 + np.random.default_rng(0).normal(0, 0.05, t.size)
     fun, jac = _exponential(t, y)
@@ -450,8 +451,4 @@ def test_trust_region_with_noise_stops_where_scipy_does_and_at_its_optimum(monke
     lm = least_squares(fun, x0, jac=lambda p: jac(p).toarray(), method="lm", ftol=1e-15, xtol=1e-15, gtol=1e-15)
     np.testing.assert_allclose(ours[0], lm.x, rtol=1e-7)
     assert ours[1] == pytest.approx(lm.cost, rel=1e-12)
-    monkeypatch.setattr(trustregion, "lsq", None)
-    with pytest.warns(RuntimeWarning, match="least_squares instead"):
-        fallback = trust_region(fun, jac, x0, ftol=1e-10, xtol=1e-10, gtol=1e-10, max_nfev=100, lsmr_tol=1e-12)
-    np.testing.assert_array_equal(fallback[0], ours[0])
-    assert fallback[1:4] == ours[1:4]
+    assert ours[1:4] == (scipy_trf.cost, scipy_trf.nfev, scipy_trf.status)

@@ -14,6 +14,7 @@ from gyrocal.inference.fit import estimate
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.fit.likelihood import campaign_stats
 from gyrocal.inference.noise import covariance
+from gyrocal.inference.sampling.posterior import model_priors
 from gyrocal.io import calibration, telemetry
 from gyrocal.model import channels as ch
 from gyrocal.model import combinations, correction, effects
@@ -160,7 +161,7 @@ def test_sequential_campaign_takes_priors_from_an_earlier_posterior(tiny_run, co
     first = pd.read_csv(out / "baseline/calibration.csv")
     earlier = first[first["channel"] != "dtg3_roll"]
     earlier.to_csv(tmp_path / "earlier.csv", index=False)
-    priors = posterior_step.model_priors(est, config["priors"], tmp_path / "earlier.csv")
+    priors = model_priors(est, config["priors"], tmp_path / "earlier.csv")
     spec = est.spec
     assert set(earlier["parameter"]) >= {"sf_mean", "sf_asym"}   # derived rows are in the file, and ignored
     for r in calibration.parameter_rows(earlier).itertuples():
@@ -172,7 +173,7 @@ def test_sequential_campaign_takes_priors_from_an_earlier_posterior(tiny_run, co
     assert priors.sd[own] == pytest.approx([5000 * PPM, 5000 * PPM, 1000 / 206264.806, 1000 / 206264.806])
     earlier.assign(unit="deg").to_csv(tmp_path / "wrong_unit.csv", index=False)
     with pytest.raises(ValueError, match=r"dtg1_roll\.sf_pos is in deg, but this model declares it in ppm"):
-        posterior_step.model_priors(est, config["priors"], tmp_path / "wrong_unit.csv")
+        model_priors(est, config["priors"], tmp_path / "wrong_unit.csv")
 
 
 def test_wls_is_within_3_sd_of_the_truth_on_the_default_scenario(mom, mom_run):

@@ -88,7 +88,7 @@ def test_a_direction_never_flown_leaves_its_scale_factors_at_their_prior(cfg):
     scenario["maneuvers"] = [m for m in scenario["maneuvers"] if m["id"] != "pitch_neg"]
     table = plan.plan(scenario, cfg).table().set_index(["channel", "parameter"])
     for channel in ("dtg1_pitch", "dtg2_pitch"):
-        assert table.loc[(channel, "sf_neg"), "prior_only"] == "no -pitch maneuver"
+        assert table.loc[(channel, "sf_neg"), "prior_only"] == "no -pitch turn in the data: turn about -pitch"
         assert table.loc[(channel, "sf_neg"), "predicted_sd"] == pytest.approx(5000.0)
         assert table.loc[(channel, "sf_pos"), "predicted_sd"] < 100.0
 

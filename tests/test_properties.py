@@ -2,8 +2,9 @@
 still cover the truth; never a traceback, never a hang.
 
 Hypothesis mutates the tiny campaign: it deletes rows, inserts NaNs, shuffles times, scales
-columns, drops columns, offsets clocks, cuts gaps and flips the quaternion order, one to
-three at a time. Each case runs under a time bound.
+columns, drops columns, offsets clocks, cuts gaps, flips the quaternion order, holds a channel at
+one value (dead or stuck), freezes the reference and drops a gyro cell's exponent, one to three at
+a time. Each case runs under a time bound.
 """
 
 import shutil
@@ -13,7 +14,7 @@ from contextlib import contextmanager
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import HealthCheck, event, given, settings
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from gyrocal import checks
@@ -43,6 +44,9 @@ OPERATIONS = st.one_of(
     st.tuples(st.just("clock"), st.sampled_from([-30.0, -5.0, 2.5, 10.0])),
     st.tuples(st.just("gap"), SEEDS, st.sampled_from([2, 10, 100])),
     st.tuples(st.just("flip_quaternion")),
+    st.tuples(st.just("stuck"), SEEDS, st.integers(5, 1500), st.sampled_from([0.0, 1e-6])),
+    st.tuples(st.just("frozen"), SEEDS, st.integers(2, 40)),
+    st.tuples(st.just("lost_exponent"), SEEDS),
 )
 
 
@@ -74,6 +78,31 @@ def apply(directory, operation):
         rng = np.random.default_rng(args[0])
         start = rng.integers(len(frame) - args[1])
         frame = frame.drop(index=range(start, start + args[1]))
+    elif kind == "stuck":  # a channel reads one value for a stretch (dead, or its last value held)
+        path = directory / "gyro.csv"
+        frame = pd.read_csv(path)
+        rng = np.random.default_rng(args[0])
+        channels = [c for c in frame.columns if c.startswith("dtg")]
+        if channels:
+            start = rng.integers(len(frame) - args[1])
+            frame.loc[start:start + args[1] - 1, channels[rng.integers(len(channels))]] = args[2]
+    elif kind == "frozen":  # the reference repeats one attitude, valid = 1
+        path = directory / "star_tracker.csv"
+        frame = pd.read_csv(path)
+        rng = np.random.default_rng(args[0])
+        if {"q1", "q2", "q3", "q4"} <= set(frame):
+            start = int(rng.integers(len(frame) - args[1]))
+            rows = range(start, start + args[1])
+            frame.loc[rows, ["q1", "q2", "q3", "q4"]] = frame.loc[start, ["q1", "q2", "q3", "q4"]].to_numpy(dtype=float)
+    elif kind == "lost_exponent":  # one gyro cell written without its exponent
+        path = directory / "gyro.csv"
+        frame = pd.read_csv(path)
+        rng = np.random.default_rng(args[0])
+        channels = [c for c in frame.columns if c.startswith("dtg")]
+        if channels:
+            row, column = rng.integers(len(frame)), channels[rng.integers(len(channels))]
+            value = frame.loc[row, column]
+            frame.loc[row, column] = float(f"{value:.6e}".split("e")[0]) if value else value
     elif kind == "flip_quaternion":
         path = directory / "star_tracker.csv"
         frame = pd.read_csv(path)
@@ -120,6 +149,9 @@ def truth(tiny):
 @settings(max_examples=40, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(operations=st.lists(OPERATIONS, min_size=1, max_size=3))
+@example(operations=[("stuck", 1, 1500, 0.0)])
+@example(operations=[("frozen", 5, 30)])
+@example(operations=[("lost_exponent", 3)])
 def test_any_mutation_ends_in_a_clear_error_or_a_covering_estimate(operations, tiny, truth, tmp_path_factory):
     directory = tmp_path_factory.mktemp("mutated") / "campaign"
     shutil.copytree(tiny[0], directory)

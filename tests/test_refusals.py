@@ -3,8 +3,9 @@ it ends in success or in one `gyrocal.errors.InputError` naming the file; never 
 
 Hypothesis edits the tiny campaign's text: it deletes, repeats or truncates lines, puts odd
 characters (a comma, a colon, an anchor, a tab, a NaN, a huge number) into campaign.yaml,
-star_tracker.csv or gyro.csv, and replaces a CSV value by an extreme one (1e300, -1e308, inf, an
-empty field), one to three edits at a time.
+star_tracker.csv or gyro.csv, replaces a CSV value by an extreme one (1e300, -1e308, inf, an
+empty field) or by its mantissa (a lost exponent), and saves a file in UTF-16, with a byte-order
+mark or with another separator, one to three edits at a time.
 """
 
 import shutil
@@ -37,6 +38,8 @@ EDITS = st.one_of(
     st.tuples(st.just("replace_char"), FILES, st.integers(0, 10**7), TEXT),
     st.tuples(st.just("replace_field"), st.sampled_from(["star_tracker.csv", "gyro.csv"]), st.integers(0, 10**7),
               st.sampled_from(["1e300", "-1e308", "nan", "inf", "0", "1e-300", "", "2", "-1"])),
+    st.tuples(st.just("lose_exponent"), st.sampled_from(["star_tracker.csv", "gyro.csv"]), st.integers(0, 10**7)),
+    st.tuples(st.just("encode"), FILES, st.integers(0, 0), st.sampled_from(["utf-16", "utf-8-sig", ";", "\t"])),
 )
 
 
@@ -44,7 +47,10 @@ def edit(directory, operation):
     """One edit of a campaign file's text, in place."""
     kind, name, where, *text = operation
     path = directory / name
-    content = path.read_text()
+    try:
+        content = path.read_text()
+    except UnicodeDecodeError:  # saved in UTF-16 by an earlier edit: left so
+        return
     lines = content.splitlines(keepends=True)
     if kind in ("delete_line", "repeat_line") and not lines:
         return
@@ -61,6 +67,18 @@ def edit(directory, operation):
         fields[(where // len(lines)) % len(fields)] = text[0]
         lines[k] = ",".join(fields) + "\n"
         content = "".join(lines)
+    elif kind == "lose_exponent":  # a cell written without its exponent: 9.84e-05 as 9.84
+        k = 1 + where % (len(lines) - 1)
+        fields = lines[k].rstrip("\n").split(",")
+        j = (where // len(lines)) % len(fields)
+        fields[j] = fields[j].lower().split("e")[0]
+        lines[k] = ",".join(fields) + "\n"
+        content = "".join(lines)
+    elif kind == "encode":  # saved as a spreadsheet might: UTF-16, a byte-order mark, another separator
+        if text[0] in ("utf-16", "utf-8-sig"):
+            path.write_bytes(content.encode(text[0]))
+            return
+        content = content.replace(",", text[0]) if name.endswith(".csv") else content
     elif kind == "truncate":
         content = content[:int(where * len(content))]
     else:
@@ -73,6 +91,9 @@ def edit(directory, operation):
           suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 @given(operations=st.lists(EDITS, min_size=1, max_size=3))
 @example(operations=[("replace_field", "gyro.csv", 10876, "1e300")])  # an impossible value mid-turn
+@example(operations=[("lose_exponent", "gyro.csv", 1250 + 10001 * 3)])  # dtg2_yaw mid-turn of yaw_pos
+@example(operations=[("encode", "star_tracker.csv", 0, "utf-16")])
+@example(operations=[("encode", "gyro.csv", 0, ";")])
 def test_any_edit_of_the_files_ends_in_success_or_a_refusal_naming_the_file(operations, tiny, tmp_path_factory):
     directory = tmp_path_factory.mktemp("edited") / "campaign"
     shutil.copytree(tiny[0], directory)

@@ -40,6 +40,10 @@ EXPECTED = {
     "unquoted direction: -": 'quote a direction, direction: "-"',
     "blank line, then a NaN": "line 22, column 'dtg1_roll': value is NaN",
     "t_start: true": "t_start: must be a time in seconds, got True",
+    "a dead channel through the roll maneuvers": "column 'dtg1_roll', lines 3402-6601: reads exactly 0",
+    "a channel stuck at a constant": "reads the constant 3e-06 rad",
+    "a frozen reference mid-turn": "the attitude repeats exactly for 20 samples",
+    "a gyro cell that lost its exponent": "lost its exponent",
 }
 
 
@@ -258,7 +262,7 @@ def test_a_prior_only_parameter_drags_no_identified_one(unflown_run, tiny_run, t
 def test_the_verdict_names_the_missing_maneuver(unflown_run):
     html = (unflown_run / "report.html").read_text()
     assert "NO-GO" in html
-    assert "dtg1_pitch.sf_neg (no -pitch maneuver)" in html
+    assert "dtg1_pitch.sf_neg (no -pitch turn in the data: turn about -pitch)" in html
     assert "No correction for dtg1_pitch, dtg2_pitch" in html
 
 

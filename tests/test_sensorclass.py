@@ -92,3 +92,55 @@ def test_a_scenarios_sensor_class_reaches_the_campaign_and_the_plan(tmp_path):
     predicted = plan.plan(scenario, plan.read_config(ROOT / "config" / "config.yaml")).table()
     sd = predicted.set_index(["channel", "parameter"])["prior_sd"]
     assert sd[("dtg1_roll", "sf_pos")] == 10000.0 and sd[("dtg1_roll", "mis_yaw")] == 2000.0
+
+
+def test_each_class_declares_its_limits_and_bounds_its_priors_by_them():
+    """The DTG's limits are the effects' declarations (what the checks used before classes had
+    limits); every other class bounds its scale-factor and misalignment priors by its own."""
+    from gyrocal.checks.sensing import physical_limits
+    from gyrocal.model.sensorclass import CLASSES, limits
+    from gyrocal.model.units import arcsec_to_rad
+
+    assert (limits(None).sf_bound_ppm, limits("dtg").mis_bound_arcsec) == (effects.SF_BOUND_PPM, 3600.0)
+    for name, c in CLASSES.items():
+        assert c.arw_deg_sqrt_h[0] < c.arw_deg_sqrt_h[1] and c.bias_bound_deg_h > 0 and c.max_rate_deg_s > 0
+        sf, mis, _ = physical_limits(CHANNELS, name)
+        assert sf == pytest.approx(c.sf_bound_ppm * 1e-6) and mis == pytest.approx(arcsec_to_rad(c.mis_bound_arcsec))
+        for (effect, _), (_, bound) in SENSOR_CLASSES[name].items():
+            if effect == "scale_factor":
+                assert bound == c.sf_bound_ppm
+    assert physical_limits(CHANNELS) == physical_limits(CHANNELS, "dtg")
+    assert [CLASSES[n].sf_bound_ppm for n in ("rlg", "fog", "dtg", "mems")] == [5000.0, 10000.0, 30000.0, 50000.0]
+
+
+def scaled(tiny, tmp_path, error, sensor_class):
+    """The tiny campaign with every gyro reading ``1 + error`` times too large (a scale error of
+    ``error`` on every channel, both directions), declared of ``sensor_class``."""
+    import pandas as pd
+
+    campaign_dir = with_gyro(tiny, tmp_path / sensor_class, {"sensor_class": sensor_class})
+    gyro = pd.read_csv(campaign_dir / "gyro.csv")
+    channels = [c for c in gyro.columns if c != "time"]
+    gyro[channels] *= 1.0 + error
+    gyro.to_csv(campaign_dir / "gyro.csv", index=False, float_format="%.17g")
+    return campaign_dir
+
+
+@pytest.mark.parametrize("error, sensor_class, refused", [
+    (0.02, "mems", False), (0.02, "fog", True), (0.02, "rlg", True),
+    (0.04, "mems", False), (0.04, "dtg", True),
+])
+def test_the_physics_check_takes_the_scale_bound_of_the_declared_class(tiny, tmp_path, error, sensor_class, refused):
+    """A MEMS campaign with a 2 % or 4 % scale error passes the physics check with no config (its
+    bound is 5 %); a FOG or RLG one at 2 % (bounds 1 % and 0.5 %) and a DTG one at 4 % (3 %) are
+    refused, the check naming the class's bound."""
+    from gyrocal import checks
+    from gyrocal.model.sensorclass import limits
+
+    directory = scaled(tiny, tmp_path, error, sensor_class)
+    if not refused:
+        checks.read_checked(directory)
+        return
+    bound = limits(sensor_class).sf_bound_ppm * 1e-6
+    with pytest.raises(InputError, match=rf"physical: \w+ 1 \+/- {bound:.2g}"):
+        checks.read_checked(directory)

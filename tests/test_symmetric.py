@@ -68,5 +68,5 @@ def test_a_symmetric_sf_needs_a_maneuver_about_its_axis_in_either_direction(tiny
     about_roll = [d for d in maneuvers if d.axis != "roll"]
     reasons = identification.unflown(about_roll, spec)
     assert {k: v for k, v in reasons.items() if k.endswith(".sf")} == {
-        f"{c.name}.sf": "no roll maneuver" for c in spec.channels if c.axis == "roll"}
+        f"{c.name}.sf": "no roll turn in the data: turn about roll, either way" for c in spec.channels if c.axis == "roll"}
     assert not {k for k in identification.unflown(maneuvers, spec) if k.endswith(".sf")}

@@ -1,7 +1,7 @@
 """A user's effect, in a plugin file: the scale factor follows the DTG's temperature.
 
-Not part of gyrocal's library; the tests and the tutorial load it with
-``plugins: [tests/data/plugin_sf_temperature.py]``.
+Not part of gyrocal's library; the tests load it with ``plugins: [tests/data/plugin_sf_temperature.py]``
+(the tutorial's copy is ``examples/temperature/plugin_sf_temperature.py``).
 """
 
 import numpy as np

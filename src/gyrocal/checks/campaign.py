@@ -5,18 +5,20 @@ or a scalar-first quaternion from a scalar-last one. Here each maneuver's gyro r
 summed between star-tracker samples, is compared with the star tracker's own rotation
 over the same interval (`physics`), the sampling and clocks are checked (`sampling`), and
 star-tracker outliers are screened (`outliers`). Each finding says what was found and its
-likely cause. The thresholds come from the physical bounds the effects declare and from the
+likely cause. The thresholds come from the physical bounds of the campaign's sensor class
+(`gyrocal.model.sensorclass`, a DTG's where it declares none) and from the
 noise measured in the data themselves, not from one file."""
 
-import numpy as np
 
+from gyrocal.checks.conventions import convention_findings
 from gyrocal.checks.fit import EstimateError, check_blocks
 from gyrocal.checks.mounting import align
 from gyrocal.checks.outliers import EXCURSION_MAX_S, outlier_distances, screen, trend_distances
 from gyrocal.checks.physics import rotation_findings
 from gyrocal.checks.sampling import clock_findings, extreme_findings, gap_findings, interval_findings
-from gyrocal.checks.saturation import saturation_findings
+from gyrocal.checks.saturation import gyro_range_rad_s, saturation_findings
 from gyrocal.checks.sensing import physical_limits, sense
+from gyrocal.checks.stuck import stuck_findings
 from gyrocal.finding import Findings
 from gyrocal.inference.fit import classic
 from gyrocal.io.telemetry import UNIT_NORM_TOL, Campaign, TelemetryError, read_campaign
@@ -35,8 +37,10 @@ def check(campaign: Campaign, block_s: float | None = None) -> Findings:
     if extreme_findings(campaign, findings) or interval_findings(campaign, findings):
         return findings
     gap_findings(campaign, findings)
-    limits = physical_limits(campaign.channels)
-    range_rad_s = np.deg2rad(campaign.gyro["range_deg_s"]) if "range_deg_s" in campaign.gyro else None
+    limits = physical_limits(campaign.channels, campaign.gyro.get("sensor_class"))  # the class's, not a DTG's
+    if convention_findings(campaign, limits, findings) or stuck_findings(campaign, limits, findings):
+        return findings  # the physics per maneuver would only restate them, once per maneuver
+    range_rad_s = gyro_range_rad_s(campaign)
     screened, sliced = [], []
     for m in campaign.maneuvers:
         try:
@@ -52,7 +56,10 @@ def check(campaign: Campaign, block_s: float | None = None) -> Findings:
         sensed = every_set[0]
         clock_findings(sensed, findings)
         missing = classic.missing_holds(data)
-        if data.direction == "both":
+        if data.free:
+            findings.warn("holds", f"maneuver {m.id}: free motion: the paper's classic method does not apply "
+                                     "to it (the full-trajectory fit does)")
+        elif data.direction == "both":
             findings.warn("holds", f"maneuver {m.id}: turns both ways: the paper's classic method does not apply "
                                      "to it (the full-trajectory fit does)")
         elif missing:

@@ -8,6 +8,7 @@ without them."""
 
 import numpy as np
 
+from gyrocal.checks.sensing import increment_quantum_rad
 from gyrocal.errors import InputError
 from gyrocal.inference.fit import identification, noisefit
 from gyrocal.inference.fit.estimate import PointEstimate, linearize_all
@@ -81,11 +82,40 @@ def check_noise(maneuvers, est: PointEstimate):
         rms = [np.sqrt(np.mean((lin.body_error[:, 0] - lin.body_error[:, 0].mean(axis=0)) ** 2, axis=0))
                / units.ARCSEC_RAD for lin in lins]
         residuals = "; ".join(f"{d.id} {r[0]:.0f}, {r[1]:.0f}, {r[2]:.0f}" for d, r in zip(maneuvers, rms))
+        _check_resolution(maneuvers, est, ratio, off)
+        if (ratio < 1.0).all():  # every scale below its stated one: the data are quiet, not misfit
+            raise EstimateError(
+                f"point estimate of model {est.spec.model}: the data are far quieter than campaign.yaml states: "
+                f"{listed}. The residuals (RMS about roll, pitch, yaw, arcsec: {residuals}) are below any noise these "
+                "sensors can have: state the noise the sensors have (campaign.yaml: star_tracker and gyro), and for "
+                "data simulated without noise, the noise of the data themselves")
         raise EstimateError(
             f"point estimate of model {est.spec.model}: the fitted noise is not a noise these sensors can have: "
             f"{listed}. The residuals hold structure far above the noise that the model lacks (RMS about roll, "
             f"pitch, yaw, arcsec: {residuals}){_correlation_advice(maneuvers, lins, est)}; validate the campaign (gyrocal "
             "validate) and read its warnings, or add the effect they point to")
+
+
+def _check_resolution(maneuvers, est: PointEstimate, ratio, off):
+    """Refuse naming the cause where a stated star-tracker noise lies below the gyros' own resolution: a
+    pulse-counting gyro's rounding (`sensing.increment_quantum_rad`) adds white error the fit then gives the
+    reference, and every off scale is within `NOISE_PLAUSIBLE` of the stated noise and that rounding added."""
+    quantum = max(increment_quantum_rad(d.increments) for d in maneuvers)
+    rounding = quantum / np.sqrt(12.0)
+    stated = np.exp(covariance.log_sigma_of(est.stated_noise))[:2]
+    if rounding <= 0 or not off[:2].any() or off[2] or not (stated < rounding).any():
+        return
+    floor = np.hypot(stated, rounding)
+    if np.all(np.exp(est.log_sigma[:2]) <= NOISE_PLAUSIBLE * floor):
+        fitted = covariance.stated_scales(est.log_sigma[:3])
+        raise EstimateError(
+            f"point estimate of model {est.spec.model}: the star tracker's stated noise "
+            f"({', '.join(f'{k} {v:.3g}' for k, v in est.stated_noise.items() if k.startswith('sigma_'))}) lies below the "
+            f"gyros' own resolution: their increments in gyro.csv come in steps of {quantum / units.ARCSEC_RAD:.3g} arcsec, "
+            f"whose rounding adds {rounding / units.ARCSEC_RAD:.3g} arcsec to every attitude error, and the fit gives the "
+            f"reference {fitted['sigma_cross_arcsec']:.3g} (across) and {fitted['sigma_about_arcsec']:.3g} (about). State "
+            f"the star tracker's noise in campaign.yaml at no less than {rounding / units.ARCSEC_RAD:.3g} arcsec "
+            "(star_tracker: sigma_cross_arcsec, sigma_about_arcsec)")
 
 
 def _correlation_advice(maneuvers, lins, est: PointEstimate) -> str:

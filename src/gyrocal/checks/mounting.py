@@ -80,7 +80,7 @@ def judge_declared(campaign: Campaign, mounting: Rotation, residual: Rotation, r
     """None where the declared mounting agrees with the data, within what misalignments can carry;
     otherwise the refusal: by how much and about which axes the data disagree, whether another
     common convention of the same quaternion fits, and what to write instead."""
-    mis_bound = physical_limits(campaign.channels)[1]
+    mis_bound = physical_limits(campaign.channels, campaign.gyro.get("sensor_class"))[1]
     if carried(residual, residual_sd_deg, mis_bound):
         return None
     off_deg = np.rad2deg(residual.as_rotvec())

@@ -5,7 +5,7 @@ with their line and kept out of the fit."""
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import median_filter
+import pandas as pd
 from scipy.special import chdtr, chdtri, gammaincinv
 
 from gyrocal.checks.sensing import OUTLIER_REACH, Sensed, neighbour_residual
@@ -14,7 +14,8 @@ from gyrocal.model.units import rad_to_arcsec
 
 __all__ = [
     "EXCURSION_EDGE_CUT", "EXCURSION_MAX_S", "EXCURSION_TREND_S", "OUTLIER_FALSE_ALARMS", "OUTLIER_MAX_RUN", "Outlier",
-    "chi2_quantile", "excursion_runs", "isolated_runs", "mahalanobis2", "outlier_distances", "robust_covariance", "runs",
+    "chi2_quantile", "excursion_runs", "isolated_runs", "mahalanobis2", "outlier_distances", "robust_covariance",
+    "running_median", "runs",
     "screen", "trend_distances"
 ]
 
@@ -102,8 +103,18 @@ def trend_distances(sensed: Sensed):
     biases bend the error slowly and the median follows them; a reference excursion leaves it."""
     err = sensed.error
     window = int(min(len(err), max(3, round(EXCURSION_TREND_S / float(np.median(sensed.dt))))))
-    dev = err - median_filter(err, size=(window | 1, 1), mode="nearest")
+    dev = err - running_median(err, window | 1)
     return dev, mahalanobis2(dev, robust_covariance(dev))
+
+
+def running_median(x: np.ndarray, window: int) -> np.ndarray:
+    """The centred running median of each column over an odd ``window``, the ends padded with the
+    first and last rows (`scipy.ndimage.median_filter`'s ``nearest``, to the bit): pandas' rolling
+    median keeps a sorted window, O(N log W) where the filter's selection is O(N W) (42 of validate's
+    47 s on a 200-s trial at 286 Hz with the 15-s window)."""
+    half = window // 2
+    padded = np.concatenate([np.repeat(x[:1], half, axis=0), x, np.repeat(x[-1:], half, axis=0)])
+    return pd.DataFrame(padded).rolling(window, center=True).median().to_numpy()[half:half + len(x)]
 
 
 def excursion_runs(near, beyond, jumps, st_time, max_s: float) -> np.ndarray:

@@ -7,11 +7,13 @@ from gyrocal.checks.sensing import (
     Sensed,
     blocked_sums,
     consistent,
+    consistent_any,
     fit_rotation,
     gyro_at_st,
     interval_rotations,
     nominal_body_increments,
     reference_noise_rad,
+    response,
 )
 from gyrocal.finding import Findings
 from gyrocal.io.telemetry import Campaign
@@ -34,8 +36,11 @@ cumulative angles are tried as well (they depend on the sample rate)."""
 
 def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Findings) -> bool:
     """Angle, axis, direction and units of one maneuver's rotation, gyro against star tracker;
-    whether it is consistent."""
+    whether it is consistent. A free-motion maneuver (no axis label) is compared as a 3x3 response
+    (`free_rotation_findings`)."""
     m = campaign.maneuver(sensed.data.id)
+    if m.free:
+        return free_rotation_findings(campaign, sensed, limits, findings)
     a = AXIS_INDEX[m.axis]
     sf_bound, mis_bound, sf_sd = limits
     d_st, dt, d_gyro = sensed.d_st, sensed.dt, sensed.d_gyro
@@ -85,32 +90,92 @@ def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Find
     return False
 
 
+def free_rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Findings) -> bool:
+    """One free-motion maneuver's rotation, gyro against reference, for any motion: the 3x3 response
+    (`sensing.response`) must have its scale near 1 and small cross terms on every axis the motion
+    determines, within the physical bounds (`sensing.physical_limits`). Otherwise a unit slip, a
+    flipped channel, swapped axes, a cumulative angle or a quaternion order is named where one
+    explains it (`_diagnose` with no axis); whether it is consistent."""
+    sf_bound, mis_bound, sf_sd = limits
+    where = sensed.where
+    m = campaign.maneuver(sensed.data.id)
+    min_angle = reference_noise_rad(sensed) / sf_sd
+    st_excursion = np.ptp(np.cumsum(sensed.d_st, axis=0), axis=0)
+    gyro_excursion = np.ptp(np.cumsum(sensed.d_gyro, axis=0), axis=0)
+    if st_excursion.max() < min_angle and gyro_excursion.max() < min_angle:
+        findings.refuse("rotation",
+            f"{where}: neither the reference nor the gyros rotate in [{m.t_start}, {m.t_end}] s "
+            f"(at most {np.rad2deg(st_excursion.max()):.3g} deg; a scale factor needs at least "
+            f"{np.rad2deg(min_angle):.2g} deg to be told better than its prior): is the window on a hold?")
+        return False
+    if consistent_any(sensed.d_gyro, sensed.d_st, sensed.dt, sf_bound, mis_bound, reference_noise_rad(sensed)):
+        return True
+    hint = _diagnose(campaign, sensed, None, sf_bound, mis_bound) or undersampled(sensed)
+    if hint:
+        findings.refuse("rotation", f"{where}: {hint}")
+        return False
+    fit = response(sensed.d_gyro, sensed.d_st, sensed.dt, sf_bound, noise_rad=reference_noise_rad(sensed))
+    def vector(v):
+        return "[" + ", ".join(f"{x:+.4g}" for x in v) + "]"
+
+    rows = "; ".join(f"per unit about {vector(fit.directions[:, k])}: {vector(fit.matrix[:, k])}"
+                     for k in np.flatnonzero(fit.determined))
+    findings.refuse("rotation",
+        f"{where}: the gyros' rotation, body axes, "
+        f"{f'({rows})' if rows else 'determined along no direction of the motion'} (physical: the direction "
+        f"itself, its scale within 1 +/- {sf_bound:.2g}, the misalignments within {rad_to_arcsec(mis_bound):.0f} "
+        "arcsec). Check the channel columns, their axes in campaign.yaml and the reference's mounting")
+    return False
+
+
+def _agrees(d_gyro, d_st, dt, axis, sf_bound, mis_bound, noise_rad=0.0) -> bool:
+    """`consistent` about the labelled ``axis``, or for free motion (``axis`` None) `consistent_any`."""
+    if axis is None:
+        return consistent_any(d_gyro, d_st, dt, sf_bound, mis_bound, noise_rad, need_determined=True)
+    return consistent(d_gyro, d_st, dt, axis, sf_bound, mis_bound)
+
+
 def _diagnose(campaign, sensed: Sensed, a, sf_bound, mis_bound) -> str:
-    """The likely cause of an inconsistent rotation: the first reinterpretation that makes it consistent."""
+    """The likely cause of an inconsistent rotation: the first reinterpretation that makes it consistent.
+    ``a``: the labelled axis, or None for free motion (every axis the motion determines is compared,
+    each axis's sign is tried, and so is each pair of axes swapped)."""
     data, d_gyro, d_st, dt = sensed.data, sensed.d_gyro, sensed.d_st, sensed.dt
-    scale = np.ptp(np.cumsum(d_gyro[:, a])) / np.ptp(np.cumsum(d_st[:, a]))
+    noise = reference_noise_rad(sensed)
+
+    along = int(np.argmax(np.ptp(np.cumsum(d_st, axis=0), axis=0))) if a is None else a
+    scale = np.ptp(np.cumsum(d_gyro[:, along])) / np.ptp(np.cumsum(d_st[:, along]))
     dt_gyro = float(np.median(data.dt))
     candidates = list(ALTERNATIVES) + [
         (1.0 / dt_gyro, f"rates in rad/s rather than increments? ({1 / dt_gyro:.4g} is the gyro's sample rate)"),
         (180.0 / np.pi / dt_gyro, "rates in deg/s rather than increments in rad?")]
     for factor, cause in candidates:
-        if consistent(d_gyro / factor, d_st, dt, a, sf_bound, mis_bound):
+        if _agrees(d_gyro / factor, d_st, dt, a, sf_bound, mis_bound, noise):
             return f"the gyro rotation is {scale:.4g} times the star tracker's: {cause}"
-    negated = d_gyro * np.where(np.arange(3) == a, -1.0, 1.0)
-    if consistent(negated, d_st, dt, a, sf_bound, mis_bound):
-        channel = data.sets[sensed.set_index][a]
-        signed = float(d_gyro[:, a] @ d_st[:, a] / (d_st[:, a] @ d_st[:, a]))
-        return (f"channel {channel} turns opposite to the star tracker about {AXES[a]} ({signed:+.4g} times its "
-                f"rotation): its sign is flipped. Negate its column in gyro.csv, or check its axis in campaign.yaml")
+    for flipped in (range(3) if a is None else (a,)):
+        negated = d_gyro * np.where(np.arange(3) == flipped, -1.0, 1.0)
+        if _agrees(negated, d_st, dt, a, sf_bound, mis_bound, noise):
+            channel = data.sets[sensed.set_index][flipped]
+            signed = float(d_gyro[:, flipped] @ d_st[:, flipped] / (d_st[:, flipped] @ d_st[:, flipped]))
+            return (f"channel {channel} turns opposite to the star tracker about {AXES[flipped]} ({signed:+.4g} times "
+                    "its rotation): its sign is flipped. Negate its column in gyro.csv, or check its axis in "
+                    "campaign.yaml")
+    if a is None:
+        for i, j in ((0, 1), (0, 2), (1, 2)):
+            swapped = d_gyro[:, [j if k == i else i if k == j else k for k in range(3)]]
+            if _agrees(swapped, d_st, dt, a, sf_bound, mis_bound, noise):
+                first, second = data.sets[sensed.set_index][i], data.sets[sensed.set_index][j]
+                return (f"the gyros' {AXES[i]} and {AXES[j]} rotations match the star tracker's {AXES[j]} and "
+                        f"{AXES[i]}: channels {first} and {second} look swapped. Check their axes in campaign.yaml "
+                        "and their columns in gyro.csv")
     i0 = int(np.searchsorted(campaign.gyro_time, data.gyro_time[0]))
     raw = campaign.increments(slice(i0, i0 + len(data.gyro_time)))
     differenced = gyro_at_st(data, nominal_body_increments(data, np.diff(raw, axis=0), sensed.set_index))
-    if consistent(differenced, d_st, dt, a, sf_bound, mis_bound):
+    if _agrees(differenced, d_st, dt, a, sf_bound, mis_bound, noise):
         return ("the gyro columns hold a cumulative angle, not the increment since the previous row: "
                 "their differences match the star tracker")
     for order, cause in (([1, 2, 3, 0], "scalar first (q0, q1, q2, q3)"), ([3, 0, 1, 2], "in another order")):
         d_reordered = interval_rotations(data.st_quat[:, order])
-        if consistent(d_gyro, d_reordered, dt, a, sf_bound, mis_bound):
+        if _agrees(d_gyro, d_reordered, dt, a, sf_bound, mis_bound, noise):
             return (f"the star-tracker quaternions look {cause}: read in that order they match the gyros; "
                     "the contract's q1..q4 are scalar last (docs/interface.md section 1)")
     return ""

@@ -28,8 +28,8 @@ from gyrocal.inference.fit.identification import DETECTION_SD
 from gyrocal.model.units import AXES
 
 __all__ = [
-    "BAND_NOISE", "DECLARED_MIN_RUN", "FLAT_BAND", "FLAT_NOISE", "LEVEL_NOISE", "MIN_RUN", "REFERENCE_BAND",
-    "Plateau", "channel_noise", "plateaus", "reference_evidence", "saturation_findings",
+    "BAND_NOISE", "DECLARED_MIN_RUN", "FLAT_BAND", "FLAT_NOISE", "LEVEL_NOISE", "MIN_RUN", "QUIET_SHARE",
+    "REFERENCE_BAND", "Plateau", "channel_noise", "gyro_range_rad_s", "plateaus", "reference_evidence", "saturation_findings",
 ]
 
 FLAT_BAND = 0.01
@@ -57,6 +57,18 @@ LEVEL_NOISE = 10.0
 barely turns, the "peak" is noise."""
 REFERENCE_BAND = 0.05
 """The reference-based test compares the sensors where the gyro is within this share of its peak."""
+QUIET_SHARE = 0.5
+"""Without a known range, the reference-based test judges only the axes whose peak rate is at least
+this share of the maneuver's fastest axis: a gyro clips at its range, never at the peak of a quiet
+stretch (an axis another of the same gyros outruns has not reached the range)."""
+
+
+def gyro_range_rad_s(campaign):
+    """The gyros' range (rad/s) as the campaign knows it, one number or one per channel name, or
+    None: ``campaign.yaml``'s ``gyro.range_deg_s``. The one place the checks read it (a sensor
+    class's range would be added here)."""
+    declared = (campaign.gyro or {}).get("range_deg_s")
+    return None if declared is None else float(np.deg2rad(declared))
 
 
 @dataclass(frozen=True)
@@ -128,8 +140,8 @@ def plateaus(name: str, rate, range_rad_s=None) -> list:
             if spans:
                 found.append(_plateau(name, sign, float(range_rad_s), True, x, spans, noise))
                 continue
-        if noise == 0 or peak < LEVEL_NOISE * noise:
-            continue
+        if noise == 0 or peak < LEVEL_NOISE * noise or range_rad_s is not None:
+            continue  # with a known range, only the range: a peak below it is no clipping
         near = x >= peak - max(FLAT_BAND * peak, BAND_NOISE * noise)
         spans = [(a, b) for a, b in _runs(near) if b - a >= MIN_RUN]
         if spans:
@@ -166,7 +178,7 @@ def saturation_findings(sensed: Sensed, sf_bound, findings: Findings, range_rad_
             if found:
                 findings.refuse("saturation", _why(data, c.name, found))
                 return True
-    return reference_evidence(sensed, sf_bound, findings)
+    return reference_evidence(sensed, sf_bound, findings, range_rad_s)
 
 
 def _why(data, channel: str, found: list) -> str:
@@ -186,18 +198,28 @@ def _why(data, channel: str, found: list) -> str:
             f"before the first clipped sample, at {t_first:.2f} s")
 
 
-def reference_evidence(sensed: Sensed, sf_bound, findings: Findings) -> bool:
+def reference_evidence(sensed: Sensed, sf_bound, findings: Findings, range_rad_s=None) -> bool:
     """A gyro that reaches its range clips: where its rate sits near its peak, the reference turns
     faster than the gyro says, in the gyro's direction, by more than any scale error and more
     than `DETECTION_SD` times the noise of as many independent reference intervals (on an axis
     that barely turns, the "peak" is noise; conservative, since over consecutive intervals the
     reference's noise partly cancels). Needs a reference dense enough to resolve the clipped
-    stretch; it is the only test of a noise-free gyro. Returns whether it clipped."""
+    stretch; it is the only test of a noise-free gyro. Only an axis whose peak can be the range is
+    judged: with ``range_rad_s`` (one number, or one per channel name), one within `REFERENCE_BAND`
+    of it; without, one at least `QUIET_SHARE` of the fastest axis's peak. Returns whether it clipped."""
     data = sensed.data
     rate = np.abs(sensed.body / data.dt[:, None])
     at_st = rate[data.st_interval()[0][1:]]
+    sets = getattr(data, "sets", None)
+    fastest = rate.max()
     for a in range(3):
         peak = rate[:, a].max()
+        if isinstance(range_rad_s, dict):
+            limit = range_rad_s.get(sets[getattr(sensed, "set_index", 0)][a]) if sets else None
+        else:
+            limit = range_rad_s
+        if peak < ((1 - REFERENCE_BAND) * limit if limit is not None else QUIET_SHARE * fastest):
+            continue
         near = at_st[:, a] >= (1 - REFERENCE_BAND) * peak
         turned_gyro = np.abs(sensed.d_gyro[near, a]).sum()
         if near.sum() < 5 or turned_gyro == 0:
@@ -208,7 +230,6 @@ def reference_evidence(sensed: Sensed, sf_bound, findings: Findings) -> bool:
         shortfall = turned_st - (1 + 2 * sf_bound) * turned_gyro
         if shortfall > DETECTION_SD * noise * np.sqrt(near.sum()):
             clipped = int((rate[:, a] >= (1 - REFERENCE_BAND) * peak).sum())
-            sets = getattr(data, "sets", None)
             channel = f" (channel {sets[getattr(sensed, 'set_index', 0)][a]})" if sets else ""
             findings.refuse("saturation",
                 f"maneuver {data.id}: {clipped} gyro samples about {AXES[a]}{channel} sit within {REFERENCE_BAND:.0%} of the "

@@ -14,8 +14,23 @@ from gyrocal.model import channels as ch
 from gyrocal.model.spec import baseline
 
 __all__ = [
-    "CHECK_BLOCK_S", "OUTLIER_REACH", "RotationFit", "Sensed", "blocked_sums", "consistent", "fit_rotation", "gyro_at_st",
-    "interval_rotations", "neighbour_residual", "nominal_body_increments", "physical_limits", "reference_noise_rad",
+    "CHECK_BLOCK_S",
+    "OUTLIER_REACH",
+    "SIGNAL_TO_NOISE_MIN",
+    "Response",
+    "RotationFit",
+    "Sensed",
+    "blocked_sums",
+    "consistent",
+    "consistent_any",
+    "fit_rotation",
+    "gyro_at_st",
+    "increment_quantum_rad", "interval_rotations",
+    "neighbour_residual",
+    "nominal_body_increments",
+    "physical_limits",
+    "reference_noise_rad",
+    "response",
     "sense"
 ]
 
@@ -83,8 +98,7 @@ class Sensed:
     def where(self) -> str:
         """The maneuver, and the channel set where it is not the in-loop one, as findings name them."""
         m = self.data
-        turn = f"both {m.axis}" if m.direction == "both" else f"{m.direction}{m.axis}"
-        return f"maneuver {m.id} ({turn})" + (f", channels {'+'.join(m.sets[self.set_index])}" if self.set_index else "")
+        return f"maneuver {m.id} ({m.turn})" + (f", channels {'+'.join(m.sets[self.set_index])}" if self.set_index else "")
 
     @cached_property
     def error(self) -> np.ndarray:
@@ -150,9 +164,76 @@ def _within(fit: RotationFit, axis: int, sf_bound, mis_bound) -> bool:
     return bool(scale_ok and cross_ok and determined and fit.axis == axis)
 
 
-def physical_limits(channels):
-    """Largest physical scale error and misalignment (SI), as the baseline effects declare them."""
-    spec = baseline(channels)
+@dataclass
+class Response:
+    """The gyros' rotation against the reference's over one maneuver, as a 3x3 response: least
+    squares of the gyro's interval rotations on the reference's (and a constant rate), in the
+    principal directions of the reference's motion (an eigen-axis slew spans one, a tumble up to
+    three). ``matrix[:, k]``: gyro rotation per unit reference rotation along ``directions[:, k]``,
+    that direction itself plus the scale errors and misalignments it meets."""
+
+    directions: np.ndarray
+    """(3, 3) unit vectors in body axes, columns, the most-turned first."""
+    matrix: np.ndarray
+    sd: np.ndarray
+    determined: np.ndarray
+    """(3,) directions along which the motion determines the response within the physical scale
+    bound (`DETECTION_SD` sds) and the reference's motion stands `SIGNAL_TO_NOISE_MIN` clear of its noise."""
+
+    def within(self, sf_bound, mis_bound, need_determined=False) -> bool:
+        """Along every determined direction u, each body axis b of the response within what eq. 3
+        allows, ``u_b`` give or take ``sf_bound |u_b| + mis_bound sum_(c != b) |u_c|``, and
+        `DETECTION_SD` standard errors. A motion too weak to determine any direction gives no
+        evidence against the gyros (the no-rotation check stands for a window on a hold), unless
+        ``need_determined`` (a reinterpretation of the data must show it fits)."""
+        if need_determined and not self.determined.any():
+            return False
+        for k in np.flatnonzero(self.determined):
+            u = self.directions[:, k]
+            allowed = sf_bound * np.abs(u) + mis_bound * (np.abs(u).sum() - np.abs(u))
+            if np.any(np.abs(self.matrix[:, k] - u) > allowed + DETECTION_SD * self.sd[:, k]):
+                return False
+        return True
+
+
+SIGNAL_TO_NOISE_MIN = 100.0
+"""A direction of the motion is judged only where the reference's rotation along it, per block, has
+this many times the variance of its noise: below, the noise biases the slope (errors in variables)
+by more than a percent, beyond the scale bound of a DTG."""
+
+
+def response(d_gyro, d_st, dt, sf_bound, bias=True, noise_rad=0.0) -> Response:
+    """The 3x3 `Response` of the gyros to the reference over blocks of `CHECK_BLOCK_S`, for any motion;
+    ``noise_rad``: one reference sample's noise (`reference_noise_rad`)."""
+    dt, d_gyro, d_st = blocked_sums(dt, d_gyro, d_st)
+    _, _, vt = np.linalg.svd(d_st, full_matrices=False)
+    largest = np.argmax(np.abs(vt), axis=1)
+    directions = (vt * np.sign(vt[np.arange(len(vt)), largest])[:, None]).T  # each its largest component positive
+    z = d_st @ directions
+    x = np.column_stack([z, dt] if bias else [z])
+    gram = x.T @ x
+    coef, *_ = np.linalg.lstsq(x, d_gyro, rcond=None)
+    resid = d_gyro - x @ coef
+    noise = 2 * noise_rad**2  # a block's rotation telescopes: the noise of its two ends
+    sigma = 1.4826 * np.median(np.abs(resid - np.median(resid, axis=0)), axis=0) + 1e-15
+    sd = np.outer(sigma, np.sqrt(np.diag(np.linalg.pinv(gram))[:3]))
+    along = np.sqrt(np.einsum("bk,bk->k", directions**2, sd**2))
+    signal = np.diag(gram)[:3] / len(dt) / np.maximum(noise, 1e-30) - 1.0
+    return Response(directions, coef[:3].T, sd, (DETECTION_SD * along <= sf_bound) & (signal >= SIGNAL_TO_NOISE_MIN))
+
+
+def consistent_any(d_gyro, d_st, dt, sf_bound, mis_bound, noise_rad=0.0, need_determined=False) -> bool:
+    """`consistent` for any motion (free, several axes at once): the 3x3 `Response`, with a bias
+    fitted or without, within the physical bounds on every axis the motion determines."""
+    return any(response(d_gyro, d_st, dt, sf_bound, bias, noise_rad).within(sf_bound, mis_bound, need_determined)
+               for bias in (True, False))
+
+
+def physical_limits(channels, sensor_class=None):
+    """Largest physical scale error and misalignment (SI), and the scale factor's prior sd, of the
+    campaign's sensor class (`gyrocal.model.sensorclass`; None: a DTG's, as the baseline effects
+    declare them)."""
+    spec = baseline(channels).with_sensor_class(sensor_class)
     bounds = {p.name: b for p, b in zip(spec.parameters, spec.bound_si)}
     sds = {p.name: s for p, s in zip(spec.parameters, spec.prior_sd_si)}
     mis = max(v for k, v in bounds.items() if k.startswith("mis_"))
@@ -190,3 +271,18 @@ def neighbour_residual(x, reach=OUTLIER_REACH) -> np.ndarray:
     return resid
 
 
+def increment_quantum_rad(increments: np.ndarray) -> float:
+    """The angle step (rad) a pulse-counting gyro's increments come in: the largest step of which every
+    channel's every increment is a whole multiple (within a thousandth of it), where the increments take
+    at most a quarter as many values as they have samples; 0 for increments logged at full precision.
+    Its rounding adds ``step / sqrt(12)`` to every attitude error, white."""
+    steps = []
+    for column in np.asarray(increments, dtype=float).reshape(len(increments), -1).T:
+        values = np.unique(np.abs(column[np.isfinite(column)]))
+        if values.size < 2 or values.size > column.size // 4:
+            return 0.0
+        step = float(np.min(np.diff(values)))
+        if step <= 0 or np.max(np.abs(values / step - np.round(values / step))) > 1e-3:
+            return 0.0
+        steps.append(step)
+    return max(steps) if steps else 0.0

@@ -2,4 +2,7 @@
 (`noise`), the deterministic fits (`fit`) and the sampler (`sampling`), above the error model and
 its Jacobian (`errormodel`); `interval` chooses the reference interval with a pilot fit."""
 
-__all__ = ["errormodel", "fit", "interval", "noise", "sampling"]
+from gyrocal.inference.errormodel import Linearization, linearize
+from gyrocal.inference.interval import choose
+
+__all__ = ["Linearization", "choose", "linearize"]

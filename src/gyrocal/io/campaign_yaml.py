@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from gyrocal.errors import excerpt
 from gyrocal.io.yamlfile import TelemetryError, check_schema, read_yaml
 from gyrocal.model.channels import Channel, channel_sets
 from gyrocal.model.sensorclass import SENSOR_CLASSES
@@ -29,6 +30,7 @@ __all__ = [
     "default_name",
     "fail",
     "read_meta",
+    "turn_name",
 ]
 
 NORM_REFUSE_TOL = 1e-3
@@ -54,8 +56,10 @@ GYRO_KEYS = {"arw_deg_sqrt_h", "range_deg_s", "rate_hz", "sensor_class"}
 @dataclass(frozen=True)
 class Maneuver:
     id: str
-    axis: str
-    direction: str
+    axis: str | None
+    """The single axis it turns about; None for free motion (any rate profile, holds optional)."""
+    direction: str | None
+    """``+``, ``-`` or ``both``; None for free motion."""
     t_start: float
     t_end: float
     in_loop: tuple = ()
@@ -63,14 +67,26 @@ class Maneuver:
     """The maneuvers sharing one noise level (a trial, a recording, a segment): a name."""
 
     @property
+    def free(self) -> bool:
+        """Free motion: no single axis and direction are declared; the motion itself says what it turns."""
+        return self.axis is None
+
+    @property
     def turn(self) -> str:
-        """The rotation as reports name it: ``+yaw``, ``-roll``, or ``both yaw``."""
-        return f"both {self.axis}" if self.direction == "both" else f"{self.direction}{self.axis}"
+        """The rotation as reports name it: ``+yaw``, ``-roll``, ``both yaw``, or ``free`` (free motion)."""
+        return turn_name(self.axis, self.direction)
 
     @property
     def sign(self) -> float:
-        """+1 or -1; 0 for a maneuver that turns both ways."""
+        """+1 or -1; 0 for a maneuver that turns both ways or moves freely."""
         return {"+": 1.0, "-": -1.0}.get(self.direction, 0.0)
+
+
+def turn_name(axis, direction) -> str:
+    """A maneuver's rotation as reports name it (`Maneuver.turn`): ``free`` without an axis."""
+    if axis is None:
+        return "free"
+    return f"both {axis}" if direction == "both" else f"{direction}{axis}"
 
 
 def fail(path, message, where: str = "", todo: str = ""):
@@ -89,10 +105,10 @@ def _parse_channels(path, raw) -> tuple:
         if not isinstance(entry, dict) or "axis" not in entry or set(entry) - {"dtg", "axis"}:
             fail(path, f"{where}: needs the key 'axis' (roll, pitch or yaw) and may have 'dtg' (the DTG's number)")
         if entry["axis"] not in AXES:
-            fail(path, f"{where}.axis: must be one of {list(AXES)}, got {entry['axis']!r}")
+            fail(path, f"{where}.axis: must be one of {list(AXES)}, got {excerpt(entry['axis'])}")
         dtg = entry.get("dtg")
         if dtg is not None and (not isinstance(dtg, int) or isinstance(dtg, bool)):
-            fail(path, f"{where}.dtg: must be a whole number, got {dtg!r}")
+            fail(path, f"{where}.dtg: must be a whole number, got {excerpt(dtg)}")
         match = CHANNEL_PATTERN.fullmatch(str(name))
         if match and (int(match.group(1)), match.group(2)) != (dtg, entry["axis"]):
             fail(path, f"{where}: a name dtg<N>_<axis> needs dtg: N and that axis; got dtg/axis "
@@ -114,9 +130,12 @@ def _parse_maneuvers(path, raw, channels) -> tuple:
         where = f"maneuvers[{i}]"
         if not isinstance(m, dict):
             fail(path, f"{where}: must be a mapping")
-        missing = {"id", "axis", "direction", "t_start", "t_end"} - set(m)
+        missing = {"id", "t_start", "t_end"} - set(m)
         if missing:
             fail(path, f"{where}: missing key(s) {sorted(missing)}")
+        if ("axis" in m) != ("direction" in m):
+            fail(path, f"{where}: has {'axis' if 'axis' in m else 'direction'} without "
+                       f"{'direction' if 'axis' in m else 'axis'}: a single-axis maneuver needs both, free motion neither")
         if set(m) - allowed:
             fail(path, f"{where}: unknown key(s) {sorted(set(m) - allowed)}")
         mid = str(m["id"])
@@ -126,20 +145,21 @@ def _parse_maneuvers(path, raw, channels) -> tuple:
         if mid in seen:
             fail(path, f"{where}.id: duplicate maneuver id")
         seen.add(mid)
-        if m["axis"] not in AXES:
-            fail(path, f"{where}.axis: must be one of {list(AXES)}, got {m['axis']!r}")
-        if str(m["direction"]) not in DIRECTIONS:
-            fail(path, f"{where}.direction: must be \"+\", \"-\" or both, got {m['direction']!r}")
+        labelled = "axis" in m
+        if labelled and m["axis"] not in AXES:
+            fail(path, f"{where}.axis: must be one of {list(AXES)}, got {excerpt(m['axis'])}")
+        if labelled and str(m["direction"]) not in DIRECTIONS:
+            fail(path, f"{where}.direction: must be \"+\", \"-\" or both, got {excerpt(m['direction'])}")
         for key in ("t_start", "t_end"):
             if not _is_number(m[key]):
-                fail(path, f"{where}.{key}: must be a time in seconds, got {m[key]!r}")
+                fail(path, f"{where}.{key}: must be a time in seconds, got {excerpt(m[key])}")
         t0, t1 = float(m["t_start"]), float(m["t_end"])
         if not t1 > t0:
             fail(path, f"{where}: t_end ({t1}) must be after t_start ({t0})")
         in_loop = tuple(m.get("in_loop") or ())
         for name in in_loop:
             if name not in channel_names:
-                fail(path, f"{where}.in_loop: unknown channel {name!r} (channels: {channel_names})")
+                fail(path, f"{where}.in_loop: unknown channel {excerpt(name)} (channels: {channel_names})")
         if in_loop:
             axes = sorted(axis_of[name] for name in in_loop)
             if axes != sorted(AXES):
@@ -147,9 +167,10 @@ def _parse_maneuvers(path, raw, channels) -> tuple:
                            f"(axes {[axis_of[name] for name in in_loop]})")
         group = m.get("noise_group", DEFAULT_NOISE_GROUP)
         if not isinstance(group, str) or not NAME_PATTERN.fullmatch(group):
-            fail(path, f"{where}.noise_group: a group's name holds only letters, digits and '_', got {group!r}",
+            fail(path, f"{where}.noise_group: a group's name holds only letters, digits and '_', got {excerpt(group)}",
                  todo="name the maneuvers that share a noise level alike, e.g. noise_group: trial_1")
-        maneuvers.append(Maneuver(mid, m["axis"], str(m["direction"]), t0, t1, in_loop, group))
+        maneuvers.append(Maneuver(mid, m["axis"] if labelled else None, str(m["direction"]) if labelled else None,
+                                  t0, t1, in_loop, group))
     ordered = sorted(maneuvers, key=lambda m: m.t_start)
     for first, second in itertools.pairwise(ordered):
         if second.t_start < first.t_end:
@@ -183,21 +204,21 @@ def read_meta(directory) -> dict:
     for key in ("star_tracker", "gyro"):
         if meta.get(key) is not None and not isinstance(meta[key], dict):
             fail(cpath, f"{key}: must be a mapping of its noise knowledge (e.g. {key}: "
-                         f"{{{'arw_deg_sqrt_h' if key == 'gyro' else 'sigma_cross_arcsec'}: ...}}), got {meta[key]!r}")
+                         f"{{{'arw_deg_sqrt_h' if key == 'gyro' else 'sigma_cross_arcsec'}: ...}}), got {excerpt(meta[key])}")
     gyro = meta.get("gyro") or {}
     if set(gyro) - GYRO_KEYS:
         fail(cpath, f"gyro: unknown key(s) {sorted(set(gyro) - GYRO_KEYS)}")
     if "sensor_class" in gyro and gyro["sensor_class"] not in SENSOR_CLASSES:
-        fail(cpath, f"gyro.sensor_class: one of {sorted(SENSOR_CLASSES)}, got {gyro['sensor_class']!r}")
+        fail(cpath, f"gyro.sensor_class: one of {sorted(SENSOR_CLASSES)}, got {excerpt(gyro['sensor_class'])}")
     for key in ("arw_deg_sqrt_h", "range_deg_s", "rate_hz"):
         if key in gyro and not _positive_number(gyro[key]):
             fail(cpath, f"gyro.{key}: must be a positive number")
     name = str(meta.get("name") or default_name(directory))
     where = f"name (line {document.line(['name'])})" if meta.get("name") else "name (from the directory's)"
     if not NAME_PATTERN.fullmatch(name):
-        fail(cpath, f"only letters, digits and '_' are allowed, got {name!r}", where)
+        fail(cpath, f"only letters, digits and '_' are allowed, got {excerpt(name)}", where)
     if name in RESERVED_NAMES:
-        fail(cpath, f"{name!r} is reserved: results/{name} is where gyrocal writes "
+        fail(cpath, f"{excerpt(name)} is reserved: results/{name} is where gyrocal writes "
                     + {"fleet": "a fleet's summary", "plan": "gyrocal plan's tables",
                        "study": "the validation study"}[name], where, "give the campaign another name: name: ...")
     return {"name": name, "channels": channels,
@@ -232,7 +253,7 @@ def _parse_star_tracker(path, raw, line_of=lambda keys: "?") -> dict:
         b = raw["boresight_body"]
         if not isinstance(b, list) or len(b) != 3 or not all(_is_number(v) for v in b) or not any(b):
             fail(path, f"star_tracker.boresight_body: must be a non-zero 3-vector of numbers in body axes, "
-                        f"e.g. [0, 0, 1]; got {b!r}")
+                        f"e.g. [0, 0, 1]; got {excerpt(b)}")
         b = np.asarray(b, dtype=float)
         norm = float(np.linalg.norm(b))
         if abs(norm - 1.0) > NORM_REFUSE_TOL:
@@ -246,5 +267,5 @@ def _parse_star_tracker(path, raw, line_of=lambda keys: "?") -> dict:
         if q != "estimate" and (not isinstance(q, list) or len(q) != 4 or not all(_is_number(v) for v in q)
                                 or abs(np.linalg.norm(q) - 1.0) > NORM_REFUSE_TOL):
             fail(path, "star_tracker.mounting: the reference frame's attitude in body axes, a unit quaternion "
-                        f"[q1, q2, q3, q4] (scalar last), or estimate; got {q!r}")
+                        f"[q1, q2, q3, q4] (scalar last), or estimate; got {excerpt(q)}")
     return out

@@ -8,21 +8,37 @@ import shutil
 from contextlib import contextmanager
 from pathlib import Path
 
+from gyrocal.errors import OutputError
+
 __all__ = ["atomic", "atomic_dir", "strict", "write_csv", "write_json", "write_text", "write_with"]
 
 
 @contextmanager
 def atomic(path):
-    """Yield a temporary path beside ``path``; rename it into place on success only."""
+    """Yield a temporary path beside ``path``; rename it into place on success only. A write that
+    fails (a full disk: ENOSPC) removes the temporary and raises `OutputError` naming ``path`` and
+    the cause."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.tmp")
     try:
+        path.parent.mkdir(parents=True, exist_ok=True)
         yield tmp
         os.replace(tmp, path)
+    except OutputError:
+        raise
+    except OSError as exc:
+        raise OutputError(path, exc) from exc
     finally:
-        if tmp.exists():
+        _remove(tmp)
+
+
+def _remove(tmp):
+    """Remove a temporary file (or the link in its place), whatever it holds."""
+    try:
+        if tmp.exists() or tmp.is_symlink():
             tmp.unlink()
+    except OSError:
+        pass
 
 
 @contextmanager
@@ -33,11 +49,15 @@ def atomic_dir(path):
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.tmp")
     shutil.rmtree(tmp, ignore_errors=True)
-    tmp.mkdir()
     try:
+        tmp.mkdir()
         yield tmp
         shutil.rmtree(path, ignore_errors=True)
         os.replace(tmp, path)
+    except OutputError:
+        raise
+    except OSError as exc:
+        raise OutputError(path, exc) from exc
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
 

@@ -16,6 +16,7 @@ import numpy as np
 import pandas as pd
 import yaml
 
+from gyrocal.errors import OutputError, excerpt
 from gyrocal.io.campaign_yaml import (
     CHANNEL_PATTERN,
     DEFAULT_NOISE_GROUP,
@@ -85,7 +86,7 @@ class Campaign:
                          for c in self.channels},
             "star_tracker": dict(self.star_tracker),
             "gyro": dict(self.gyro),
-            "maneuvers": [{"id": m.id, "axis": m.axis, "direction": m.direction,
+            "maneuvers": [{"id": m.id, **({} if m.free else {"axis": m.axis, "direction": m.direction}),
                            "t_start": float(m.t_start), "t_end": float(m.t_end),
                            **({"in_loop": list(m.in_loop)} if m.in_loop else {}),
                            **({"noise_group": m.noise_group} if m.noise_group != DEFAULT_NOISE_GROUP else {})}
@@ -93,19 +94,22 @@ class Campaign:
         }
 
 
-def _read_csv(path, required) -> pd.DataFrame:
+def _read_csv(path, required, max_bytes=None) -> pd.DataFrame:
     """Read a CSV whose every cell is a number; ``frame.attrs["lines"]`` holds each row's line in
     the file (the header is line 1; blank lines, which pandas skips, still count)."""
     if not path.exists():
         fail(path, "file not found")
     if not path.is_file():
         fail(path, "is not a file (a directory?)", todo=f"put the {path.name} file itself at this path")
+    if max_bytes is not None:
+        _check_size(path, max_bytes)
+    text = _decode(path, path.read_bytes())
     try:
-        text = path.read_text()
         frame = pd.read_csv(io.StringIO(text), **READ_CSV_EXACT)
-    except (pd.errors.ParserError, pd.errors.EmptyDataError, UnicodeDecodeError) as exc:
-        fail(path, f"cannot be read as CSV: {exc}")
+    except (pd.errors.ParserError, pd.errors.EmptyDataError) as exc:
+        fail(path, f"cannot be read as CSV: {excerpt(str(exc), 200)}")
     header = text.splitlines()[0] if text.strip() else ""
+    _check_delimiter(path, header)
     _check_header(path, header)
     kept = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()][1:]
     frame.attrs["lines"] = np.array([i for i, _ in kept])[:len(frame)]
@@ -123,8 +127,74 @@ def _read_csv(path, required) -> pd.DataFrame:
             if kept[row][1].strip() == header.strip():
                 fail(path, "repeats the header (two files joined?)", where=f"line {line}",
                      todo="keep one header line, on line 1")
-            fail(path, f"line {line}, column '{column}': not a number: {frame[column].iloc[row]!r}")
+            fail(path, f"line {line}, column '{column}': not a number: {excerpt(frame[column].iloc[row])}")
     return frame
+
+
+def _decode(path, raw: bytes) -> str:
+    """The file's text: UTF-8 (a leading byte-order mark is dropped); UTF-16 or other bytes are
+    refused with what to do."""
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff") or b"\x00" in raw[:4096]:
+        fail(path, "is UTF-16 text (a byte-order mark or NUL bytes at its start), not UTF-8",
+             where="line 1", todo="save it as UTF-8 (in a spreadsheet: CSV UTF-8, comma-separated)")
+    try:
+        return raw.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = raw[:exc.start].count(b"\n") + 1
+        fail(path, f"is not UTF-8 text (byte {exc.start}: {raw[exc.start:exc.start + 1]!r})", where=f"line {line}",
+             todo="save it as UTF-8")
+
+
+DELIMITERS = {";": "';'", "\t": "a tab", "|": "'|'"}
+
+
+def _check_delimiter(path, header: str):
+    """A header with no comma but another separator: a CSV saved with a locale's separator."""
+    if "," in header:
+        return
+    for sep, name in DELIMITERS.items():
+        if sep in header:
+            fail(path, f"separates its columns with {name}, not commas: {excerpt(header)}", where="line 1",
+                 todo="save it comma-separated, with decimal points")
+
+
+READ_FLOOR_BYTES = 256 * 2**20
+"""A CSV up to this size is read whole (about twice its size in memory); a larger one only when the
+declared rate and the maneuvers' span need it (`size_cap`)."""
+
+MARGIN_S = 6 * 3600.0
+"""Data a campaign file may hold beyond its maneuvers, either side (a whole recording day's share)."""
+
+
+def size_cap(path, rate_hz, maneuvers) -> tuple:
+    """The most bytes ``path`` may hold, and the rate and span that judge it: `READ_FLOOR_BYTES`, or
+    what its rate (``rate_hz``, declared; else its first rows' median step) over the maneuvers' span
+    and `MARGIN_S` either side needs, at twice its first rows' length per row; read from its first
+    64 KiB only."""
+    with open(path, "rb") as handle:
+        head = handle.read(2**16).splitlines()[1:-1]
+    rows = [line.split(b",")[0] for line in head if line.strip()]
+    try:
+        times = np.array([float(t) for t in rows])
+    except ValueError:
+        return READ_FLOOR_BYTES  # the full read names the bad cell
+    if rate_hz is None:
+        steps = np.diff(times)
+        steps = steps[steps > 0]
+        rate_hz = 1.0 / float(np.median(steps)) if steps.size else 1.0
+    span = max(m.t_end for m in maneuvers) - min(m.t_start for m in maneuvers) + 2 * MARGIN_S if maneuvers else MARGIN_S
+    per_row = 2.0 * max(np.mean([len(line) + 1 for line in head]) if head else 200.0, 1.0)
+    return int(max(READ_FLOOR_BYTES, rate_hz * 1.01 * span * per_row)), rate_hz, span
+
+
+def _check_size(path, cap):
+    """Refuse a file larger than ``cap`` (`size_cap`) before reading it."""
+    limit, rate_hz, span = cap
+    size = path.stat().st_size
+    if size > limit:
+        fail(path, f"is {size / 2**30:.2f} GiB, more than a campaign needs: at {rate_hz:.4g} Hz over the maneuvers' "
+                   f"span and {MARGIN_S / 3600:g} h either side ({span:.0f} s) it holds at most {limit / 2**20:.0f} MiB",
+             todo="cut it to the maneuvers' windows (with a margin), or split the campaign")
 
 
 def _check_header(path, header: str):
@@ -133,10 +203,10 @@ def _check_header(path, header: str):
     names = [name.strip() for name in header.split(",")]
     if "" in names:
         fail(path, f"column {names.index('') + 1} of the header has no name (a trailing or doubled comma?): "
-                   f"{header!r}", where="line 1")
+                   f"{excerpt(header)}", where="line 1")
     repeated = sorted({name for name in names if names.count(name) > 1})
     if repeated:
-        fail(path, f"the header names column(s) {repeated} more than once: {header!r}", where="line 1")
+        fail(path, f"the header names column(s) {repeated} more than once: {excerpt(header)}", where="line 1")
 
 
 def _check_finite(path, frame, columns, rows=None):
@@ -153,6 +223,22 @@ def _check_finite(path, frame, columns, rows=None):
         fail(path, f"line {line}, column '{columns[col]}': value is NaN or infinite")
 
 
+MAX_EXTRA_ABS = 1e12
+"""No reading a regressor can use (a temperature, a voltage, a current, in any unit) is this large: an
+extra column's value beyond it is a corrupt cell, and squared in the regression it would overflow."""
+
+
+def _check_extras(path, frame, columns):
+    """Extra columns (candidate regressors) hold plausible readings: within `MAX_EXTRA_ABS`."""
+    for column in columns:
+        values = frame[column].to_numpy(dtype=float)
+        bad = np.flatnonzero(np.abs(values) > MAX_EXTRA_ABS)
+        if bad.size:
+            fail(path, f"line {frame.attrs['lines'][bad[0]]}, column '{column}': {values[bad[0]]:.6g} is larger than "
+                       f"any reading a regressor can use ({MAX_EXTRA_ABS:g}; {bad.size} such row(s)): a corrupt cell",
+                 todo="correct the cell, or remove the column")
+
+
 def _check_time(path, frame):
     time = frame["time"].to_numpy(dtype=float)
     steps = np.diff(time)
@@ -161,6 +247,26 @@ def _check_time(path, frame):
         fail(path, f"line {frame.attrs['lines'][row]}, column 'time': time {time[row]} does not increase "
                     f"(line {frame.attrs['lines'][row - 1]} has {time[row - 1]})")
     return time
+
+
+def _check_overlap(spath, st_time, gpath, gyro_time):
+    """The two files' times must overlap: where they do not, one clock is offset (a different epoch,
+    another unit) and no maneuver window can hold both; named before any maneuver is blamed."""
+    if st_time[0] <= gyro_time[-1] and gyro_time[0] <= st_time[-1]:
+        return
+    later, earlier = (gpath, spath) if gyro_time[0] > st_time[-1] else (spath, gpath)
+    gap = max(gyro_time[0] - st_time[-1], st_time[0] - gyro_time[-1])
+    fail(gpath, f"its times [{gyro_time[0]:.10g}, {gyro_time[-1]:.10g}] s and {spath.name}'s "
+                f"[{st_time[0]:.10g}, {st_time[-1]:.10g}] s do not overlap: {later.name} starts {gap:.6g} s after "
+                f"{earlier.name} ends, a time offset between the two clocks (another epoch or unit?)",
+         where="column 'time'", todo="give both files' times in seconds on one clock")
+
+
+def _cap(path, section, maneuvers):
+    """`size_cap` of a campaign file that is larger than `READ_FLOOR_BYTES`, or None (read it whole)."""
+    if not path.is_file() or path.stat().st_size <= READ_FLOOR_BYTES:
+        return None
+    return size_cap(path, (section or {}).get("rate_hz"), maneuvers)
 
 
 def read_campaign(directory) -> Campaign:
@@ -172,7 +278,7 @@ def read_campaign(directory) -> Campaign:
     names = [c.name for c in channels]
 
     spath = directory / "star_tracker.csv"
-    st = _read_csv(spath, ["time"] + QUAT_COLUMNS)
+    st = _read_csv(spath, ["time"] + QUAT_COLUMNS, _cap(spath, meta["star_tracker"], maneuvers))
     unknown = set(st.columns) - {"time", "valid", *QUAT_COLUMNS}
     if unknown:
         fail(spath, f"unknown column(s) {sorted(unknown)}; expected time, q1..q4 and optional valid")
@@ -202,20 +308,24 @@ def read_campaign(directory) -> Campaign:
     quat[renormalised] /= norm[renormalised, None]
 
     gpath = directory / "gyro.csv"
-    gy = _read_csv(gpath, ["time"] + names)
+    gy = _read_csv(gpath, ["time"] + names, _cap(gpath, meta["gyro"], maneuvers))
     unknown_channels = [c for c in gy.columns if CHANNEL_PATTERN.match(c) and c not in names]
     if unknown_channels:
         fail(gpath, f"column(s) {unknown_channels} look like gyro channels but campaign.yaml "
                      f"does not declare them (channels: {names})")
     _check_finite(gpath, gy, list(gy.columns))
+    _check_extras(gpath, gy, [c for c in gy.columns if c != "time" and c not in names])
     gyro_time = _check_time(gpath, gy)
 
+    _check_overlap(spath, st_time, gpath, gyro_time)
     for m in maneuvers:
         lo = max(st_time[0], gyro_time[0])
         hi = min(st_time[-1], gyro_time[-1])
         if m.t_start < lo or m.t_end > hi:
             fail(cpath, f"maneuver {m.id}: [{m.t_start}, {m.t_end}] s lies outside the data, "
-                         f"which cover [{lo}, {hi}] s in both star_tracker.csv and gyro.csv")
+                         f"which cover [{lo}, {hi}] s in both star_tracker.csv and gyro.csv "
+                         f"(star_tracker.csv: [{st_time[0]}, {st_time[-1]}] s; gyro.csv: "
+                         f"[{gyro_time[0]}, {gyro_time[-1]}] s)")
 
     columns = {c: gy[c].to_numpy(dtype=float) for c in gy.columns if c != "time"}
     return Campaign(
@@ -245,8 +355,10 @@ def write_campaign(campaign: Campaign, directory) -> Path:
         if directory.exists():
             shutil.rmtree(directory)
         tmp.rename(directory)
-    except BaseException:
+    except BaseException as exc:
         shutil.rmtree(tmp, ignore_errors=True)
+        if isinstance(exc, OSError) and not isinstance(exc, OutputError):
+            raise OutputError(directory, exc) from exc
         raise
     return directory
 

@@ -19,10 +19,11 @@ MIN_HOLD_SAMPLES = 3
 
 def hold_windows(data: ManeuverData, channel_set=None):
     """Star-tracker masks of the inertial holds before and after the rotation: where the
-    maneuver-axis rate is below `MOVING_RATE_FRACTION` of its peak."""
+    maneuver-axis rate (for free motion, the rate's magnitude) is below `MOVING_RATE_FRACTION` of its peak."""
     channel_set = channel_set or data.sets[0]
     inc = body_increments(data, channel_set, ch.ChannelParams.zeros(data.channels))
-    rate = np.abs(inc[:, AXIS_INDEX[data.axis]] / data.dt)
+    turned = np.linalg.norm(inc, axis=1) if data.axis is None else inc[:, AXIS_INDEX[data.axis]]
+    rate = np.abs(turned / data.dt)
     moving = np.flatnonzero(rate > MOVING_RATE_FRACTION * rate.max())
     t_first, t_last = data.gyro_time[moving[0]], data.gyro_time[moving[-1] + 1]
     return data.st_time < t_first, data.st_time > t_last

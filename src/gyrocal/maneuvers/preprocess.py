@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation, Slerp
 
-from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP
+from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP, turn_name
 from gyrocal.io.importer import reference_rows
 from gyrocal.io.telemetry import Campaign, TelemetryError
 from gyrocal.model import channels as ch
@@ -25,8 +25,9 @@ class ManeuverData:
     """One maneuver's window: gyro increments from ``t0`` and valid star-tracker samples."""
 
     id: str
-    axis: str
-    direction: str
+    axis: str | None
+    """The labelled axis; None for free motion (`gyrocal.io.campaign_yaml.Maneuver`)."""
+    direction: str | None
     channels: tuple
     in_loop: tuple
     gyro_time: np.ndarray
@@ -40,6 +41,23 @@ class ManeuverData:
     counts: dict = field(default_factory=dict)
     noise_group: str = DEFAULT_NOISE_GROUP
     """The maneuvers sharing one noise level (campaign.yaml's ``noise_group``)."""
+
+    @property
+    def free(self) -> bool:
+        """Free motion: no axis or direction declared."""
+        return self.axis is None
+
+    @property
+    def turn(self) -> str:
+        """The rotation as reports name it (``+yaw``, ``both roll``, ``free``)."""
+        return turn_name(self.axis, self.direction)
+
+    def turned(self) -> dict:
+        """``{(axis, sign): angle}``: how far the body turned about each axis each way (rad, the in-loop
+        set's nominal increments summed by sign): the motion, whatever the label says."""
+        inc = body_increments(self, self.sets[0], ch.ChannelParams.zeros(self.channels))
+        return {(a, sign): float(np.abs(inc[:, i].clip(min=0) if sign == "+" else inc[:, i].clip(max=0)).sum())
+                for i, a in enumerate(AXES) for sign in "+-"}
 
     @property
     def dt(self) -> np.ndarray:
@@ -60,7 +78,7 @@ class ManeuverData:
 
     def save(self, path):
         np.savez_compressed(
-            path, id=self.id, axis=self.axis, direction=self.direction,
+            path, id=self.id, axis=self.axis or "", direction=self.direction or "",
             channel_names=[c.name for c in self.channels], channel_dtg=[-1 if c.dtg is None else c.dtg for c in self.channels],
             channel_axis=[c.axis for c in self.channels], in_loop=list(self.in_loop),
             gyro_time=self.gyro_time, increments=self.increments, st_time=self.st_time,
@@ -75,7 +93,7 @@ class ManeuverData:
         z = np.load(path, allow_pickle=False)
         channels = tuple(ch.Channel(str(n), None if int(d) < 0 else int(d), str(a))
                          for n, d, a in zip(z["channel_names"], z["channel_dtg"], z["channel_axis"]))
-        return cls(str(z["id"]), str(z["axis"]), str(z["direction"]), channels,
+        return cls(str(z["id"]), str(z["axis"]) or None, str(z["direction"]) or None, channels,
                    tuple(str(n) for n in z["in_loop"]), z["gyro_time"], z["increments"], z["st_time"],
                    z["st_quat"], z["attitude0_quat"],
                    {str(n): v for n, v in zip(z["extra_names"], z["extra_values"])},

@@ -30,9 +30,27 @@ import numpy as np
 from gyrocal.model.spec import ModelSpec
 from gyrocal.model.units import AXES
 
-__all__ = ["COMBINATION_NAMES", "NAMED", "RESOLVED_RATIO_MAX", "Combination", "advice", "channel_sentence",
-           "combination_draws", "combination_values", "crlb_sd", "data_information", "directions", "flown_directions",
-           "mounting_separability", "prior_relative", "prior_sd", "scale_combinations", "triad_rotation", "weights"]
+__all__ = [
+    "COMBINATION_NAMES",
+    "NAMED",
+    "RESOLVED_RATIO_MAX",
+    "TURNED_MIN_DEG",
+    "Combination",
+    "advice",
+    "channel_sentence",
+    "combination_draws",
+    "combination_values",
+    "crlb_sd",
+    "data_information",
+    "directions",
+    "flown_directions",
+    "mounting_separability",
+    "prior_relative",
+    "prior_sd",
+    "scale_combinations",
+    "triad_rotation",
+    "weights",
+]
 
 RESOLVED_RATIO_MAX = 0.5
 """A combination (or parameter) counts as resolved when its posterior sd is at most this share of its
@@ -207,31 +225,47 @@ def mounting_separability(cov_unit: np.ndarray, spec: ModelSpec) -> list:
     return rows
 
 
-def flown_directions(maneuvers) -> set:
-    """``(axis, sign)`` of every rotation the campaign flew."""
-    return {(d.axis, sign) for d in maneuvers for sign in (("+", "-") if d.direction == "both" else (d.direction,))}
+TURNED_MIN_DEG = 10.0
+"""A direction (an axis, one way) the data hold: the body turned about it at least this far, summed
+over the maneuvers (a limit cycle's wander adds up to a degree or so over a campaign)."""
+
+
+def flown_directions(maneuvers, min_deg: float = TURNED_MIN_DEG) -> set:
+    """``(axis, sign)`` the body turned about at least ``min_deg`` over ``maneuvers``: the motion
+    (each maneuver's ``turned()``, `gyrocal.maneuvers.preprocess.ManeuverData.turned`), labelled or
+    free alike; a maneuver known only by its label (no data) counts as turning as labelled."""
+    total = {}
+    for d in maneuvers:
+        if hasattr(d, "turned"):
+            for key, angle in d.turned().items():
+                total[key] = total.get(key, 0.0) + angle
+        elif d.axis is not None:
+            for sign in ("+", "-") if d.direction == "both" else (d.direction,):
+                total[(d.axis, sign)] = np.inf
+    return {key for key, angle in total.items() if np.rad2deg(angle) >= min_deg}
 
 
 def advice(name: str, axis: str, flown: set) -> str:
-    """Which maneuver would resolve a channel's unresolved ``sf_mean``, ``sf_asym`` or misalignment
-    ``mis_<toward>`` (``axis``: the channel's own), from what the campaign flew. Flown both ways,
-    the asymmetry is the hard part: at one rate in both directions, ``sf_pos - sf_neg`` adds the
-    same error rate as a bias does (``sf_pos w`` one way, ``-sf_neg w`` back), so only rest or a
-    change of rate tells them apart."""
+    """The motion that would resolve a channel's unresolved ``sf_mean``, ``sf_asym`` or misalignment
+    ``mis_<toward>`` (``axis``: the channel's own), from what the data turned (`flown_directions`):
+    a turn the data lack by name, one they hold as more of it. Turned both ways, the asymmetry is
+    the hard part: at one rate in both directions, ``sf_pos - sf_neg`` adds the same error rate as
+    a bias does (``sf_pos w`` one way, ``-sf_neg w`` back), so only rest or a change of rate tells
+    them apart."""
     if name.startswith("mis_"):
         toward = name[4:]
         if not any(a == toward for a, _ in flown):
-            return f"fly a rotation about {toward}"
-        return f"fly more or larger rotations about {toward}"
+            return f"turn about {toward}, either way (the data hold no such turn)"
+        return f"turn more, or larger, about {toward}"
     missing = [s for s in "+-" if (axis, s) not in flown]
     if len(missing) == 2:
-        return f"fly a +{axis} and a -{axis} rotation of equal size"
+        return f"turn about +{axis} and -{axis}, as far each way"
     if missing:
-        return f"fly a {missing[0]}{axis} rotation (only {'+-'.replace(missing[0], '')}{axis} was flown)"
+        return f"turn about {missing[0]}{axis} (the data turn only {'+-'.replace(missing[0], '')}{axis})"
     if name == "sf_asym":
-        return (f"fly the +{axis} and -{axis} rotations with holds at rest before, between and after them, or at "
+        return (f"turn about +{axis} and -{axis} with rest before, between and after the turns, or at "
                 f"two rates: at one rate both ways sf_pos - sf_neg reads as a bias")
-    return f"fly more or larger +{axis} and -{axis} rotations of equal size"
+    return f"turn more, or larger, about +{axis} and -{axis}, as far each way"
 
 
 NAMED = {"sf_mean": "sf_mean", "sf_asym": "sf_asym (sf_pos - sf_neg)"}

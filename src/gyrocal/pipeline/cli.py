@@ -19,10 +19,12 @@ def main(argv=None):
     sim.add_argument("scenario")
     sim.add_argument("outdir")
     sim.add_argument("--seed", type=int, default=None, help="default: the scenario's seed")
-    imp = sub.add_parser("import", help="write a campaign directory from tabular telemetry, through a mapping")
-    imp.add_argument("mapping", help="a shipped mapping (repoimu) or a mapping file (.yaml)")
+    imp = sub.add_parser("import", help="write a campaign directory from recordings (CSV, MATLAB .mat, HDF5), "
+                                        "through a mapping")
+    imp.add_argument("mapping", help="a shipped mapping (repoimu, broad) or a mapping file (.yaml)")
     imp.add_argument("outdir")
-    imp.add_argument("files", nargs="+", help="one maneuver per file, named after its stem")
+    imp.add_argument("files", nargs="+", help="one noise group per file, named after its stem, and one "
+                                              "maneuver (or one per stretch between its rests)")
     imp.add_argument("--reference-interval", type=float, default=None, metavar="S",
                      help="keep the reference only every S seconds (0: every row); default: the mapping's "
                           "reference.sample_interval_s")

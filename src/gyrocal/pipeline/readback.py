@@ -6,7 +6,8 @@ from pathlib import Path
 
 from gyrocal.criticism import linearity
 from gyrocal.inference.fit.estimate import PointEstimate
-from gyrocal.pipeline.steps.common import known_effects, load_maneuvers
+from gyrocal.model import effects
+from gyrocal.pipeline.steps.common import load_maneuvers
 
 __all__ = ["linearity_report", "load_model_run"]
 
@@ -20,7 +21,7 @@ def load_model_run(results, model: str, plugin_paths=()) -> tuple:
         raise FileNotFoundError(f"{point}: no point estimate of model {model!r} in {results} (run the pipeline first)")
     ids = json.loads((results / "input.json").read_text())["maneuvers"]
     maneuvers = load_maneuvers([results / "preprocess" / f"{i}.npz" for i in ids])
-    estimate = PointEstimate.load(point, known_effects(list(plugin_paths)))
+    estimate = PointEstimate.load(point, effects.known(list(plugin_paths)))
     if estimate.biases.shape[0] != len(maneuvers):
         raise ValueError(f"{point}: {estimate.biases.shape[0]} maneuvers' biases, but {results}/input.json lists "
                          f"{len(maneuvers)} maneuvers")

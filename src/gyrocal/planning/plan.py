@@ -252,8 +252,8 @@ def plan(scenario: dict, cfg: dict, model: str = "baseline", name: str = "") -> 
     maneuvers = planned_maneuvers(scenario)
     spec = ModelSpec.build(model, effects.resolve(model, cfg["models"][model], plugins), maneuvers[0].channels)
     spec = spec.with_sensor_class((scenario.get("gyro") or {}).get("sensor_class")).with_priors(cfg["priors"])
-    spec = spec.with_prior_only(identification.unflown(maneuvers, spec))
     stated = stated_noise(scenario, cfg["noise"])
+    spec = spec.with_prior_only(identification.unflown(maneuvers, spec, stated))
     candidates, skipped = [], {}
     for effect in known.values():
         if effect.name in spec.effect_names or effect.core:
@@ -303,14 +303,27 @@ def read_config(path) -> dict:
 
 
 def read_scenario(path) -> dict:
-    """A scenario (`simulate.load_scenario`) whose maneuvers a plan can fly: each names an id, an axis
-    and a direction "+" or "-"; a bad entry is named with its file and field."""
+    """A scenario (`simulate.load_scenario`) whose maneuvers a plan can fly: each names an id and an
+    axis with a direction "+" or "-" (a single-axis slew), a unit vector ``axis: [x, y, z]`` (an
+    eigen-axis slew) or a body rate vector ``rate_deg_s: [x, y, z]`` with its ``duration_s`` (a
+    tumble); a bad entry is named with its file and field."""
     scenario = simulate.load_scenario(path)
     for i, m in enumerate(scenario["maneuvers"]):
         where = f"{path}: maneuvers[{i}]"
-        for key in ("id", "axis", "direction"):
-            if key not in m:
-                raise ValueError(f"{where}: missing field '{key}'")
+        if "id" not in m:
+            raise ValueError(f"{where}: missing field 'id'")
+        if isinstance(m.get("rate_deg_s"), list):
+            if "duration_s" not in m:
+                raise ValueError(f"{where}: a tumble (rate_deg_s: [x, y, z]) needs its duration_s")
+            continue
+        if "axis" not in m:
+            raise ValueError(f"{where}: missing field 'axis'")
+        if isinstance(m["axis"], list):
+            if abs(np.linalg.norm(m["axis"]) - 1.0) > 1e-3:
+                raise ValueError(f"{where}.axis: {m['axis']} is not a unit vector in body axes")
+            continue
+        if "direction" not in m:
+            raise ValueError(f"{where}: missing field 'direction'")
         if m["axis"] not in AXES:
             raise ValueError(f"{where}.axis: {m['axis']!r} is not one of {list(AXES)}")
         if m["direction"] not in ("+", "-"):

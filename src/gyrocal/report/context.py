@@ -7,7 +7,7 @@ from pathlib import Path
 import pandas as pd
 from markupsafe import Markup
 
-__all__ = ["CorrectionSet", "ReviewContext", "ReviewInputs"]
+__all__ = ["FLIGHT_WORDS", "LAB_WORDS", "CorrectionSet", "ReviewContext", "ReviewInputs", "campaign_words"]
 
 
 @dataclass(frozen=True)
@@ -61,6 +61,24 @@ class CorrectionSet:
     """``matrix_pos``, ``matrix_neg`` and ``misalignment_correction`` as tables of 9-decimal text."""
     scale_correction_pos: str
     scale_correction_neg: str
+
+
+FLIGHT_WORDS = {"kind": "flight", "review": "pre-uplink review", "axis": "spacecraft axis",
+                "correction": "The correction to uplink", "first_set": "In-loop", "other_set": "Redundant",
+                "first_set_figure": "in-loop set", "reference": "star tracker",
+                "reference_adj": "Star-tracker"}
+"""The report's words for a flight campaign: the paper's spacecraft, its uplink and in-loop channels."""
+LAB_WORDS = {"kind": "lab", "review": "calibration review", "axis": "body axis",
+             "correction": "The correction to apply", "first_set": "First", "other_set": "Other",
+             "first_set_figure": "first channel set", "reference": "reference",
+             "reference_adj": "Reference"}
+"""...and for a lab's (free motion, an imported recording): no spacecraft, no uplink, no onboard loop."""
+
+
+def campaign_words(maneuvers) -> dict:
+    """`LAB_WORDS` for a campaign with any free-motion maneuver (a lab's reference, an importer's
+    recordings), `FLIGHT_WORDS` otherwise."""
+    return LAB_WORDS if any(getattr(m, "axis", "") is None for m in maneuvers) else FLIGHT_WORDS
 
 
 @dataclass(frozen=True)
@@ -123,3 +141,7 @@ class ReviewContext:
     """Why the model-choice rule reviews this variant (`gyrocal.criticism.modelchoice.reviewed_reason`)."""
     refused: pd.DataFrame = field(default_factory=pd.DataFrame)
     """The variants refused or skipped: model, status, step, reason."""
+    words: dict = field(default_factory=lambda: dict(FLIGHT_WORDS))
+    """The words that fit the campaign (`campaign_words`): a flight's (spacecraft axes, the correction to
+    uplink, the in-loop set) or a lab's (body axes, the correction to apply, the first set)."""
+

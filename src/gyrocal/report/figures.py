@@ -17,12 +17,13 @@ __all__ = [
 ]
 
 
-def maneuver_figure(table, title, fit=None):
+def maneuver_figure(table, title, fit=None, flight=True):
     """Rate profile and error per axis (arcsec) of one maneuver. Its margins are fixed rather than
     fitted (tight_layout): fitting them draws the figure twice, a third of its cost.
 
     ``table`` is `preprocess.error_table`; ``fit`` optionally adds, per axis, the
-    model's predicted mean and 95 % band and the residual (columns of the fit table).
+    model's predicted mean and 95 % band and the residual (columns of the fit table). ``flight``
+    false (a lab's campaign): the sets are the first and the others, not in loop and redundant.
     """
     fig, axes = plt.subplots(4, 1, figsize=(8, 9), sharex=True)
     t = table["time"] - table["time"].iloc[0]
@@ -34,7 +35,7 @@ def maneuver_figure(table, title, fit=None):
     for ax, axis in zip(axes[1:], PAPER_AXES):
         for s in sets:
             ax.plot(t, table[f"{s}_error_{axis}_arcsec"], lw=0.6,
-                    label=f"{s} {'(in loop)' if s == 'set0' else '(redundant)'}")
+                    label=f"{s} {('(in loop)' if flight else '(first)') if s == 'set0' else '(redundant)' if flight else ''}")
         if fit is not None:
             tf = fit["time"] - table["time"].iloc[0]
             ax.fill_between(tf, fit[f"lo_{axis}"], fit[f"hi_{axis}"], color="C3", alpha=0.25, lw=0,

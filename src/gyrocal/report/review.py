@@ -27,7 +27,7 @@ from gyrocal.model import combinations
 from gyrocal.model.units import PAPER_AXES, paper_term
 from gyrocal.report import figures as plots
 from gyrocal.report import resolution
-from gyrocal.report.context import CorrectionSet, ReviewContext, ReviewInputs
+from gyrocal.report.context import CorrectionSet, ReviewContext, ReviewInputs, campaign_words
 
 __all__ = [
     "COMBINATION_HEADINGS", "EMBED_PNG", "ReviewContext", "ReviewInputs", "build_context", "channel_kind", "draw_all",
@@ -68,10 +68,11 @@ COMBINATION_HEADINGS = {"sf_mean": "sf_mean = (sf_pos + sf_neg) / 2 (ppm)", "sf_
 """Table 2's columns of each channel's identifiable combinations (`gyrocal.model.combinations`)."""
 
 
-def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> dict:
+def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None, axis_heading: str = "spacecraft axis") -> dict:
     """Tables 1-3 of the paper, each entry point | mean [95 % interval] (truth); table 2 also shows each
     channel's identifiable combinations. A column names each channel's DTG only where the campaign
-    declares DTGs (campaign.yaml's ``dtg:``)."""
+    declares DTGs (campaign.yaml's ``dtg:``). ``axis_heading``: table 1's axis column (a lab's
+    ``body axis``, `campaign_words`)."""
     cal = calibration.set_index(["channel", "parameter"])
     if truth:
         truth = {name: {**values, **combinations.combination_values(values)} for name, values in truth.items()}
@@ -84,7 +85,7 @@ def paper_tables(calibration: pd.DataFrame, channels, in_loop, truth=None) -> di
 
     by_name = {c.name: c for c in channels}
     selected = {by_name[n].axis: by_name[n] for n in in_loop}
-    t1 = [{"spacecraft axis": f"{'Positive' if p == 'sf_pos' else 'Negative'} {a.capitalize()} Axis",
+    t1 = [{axis_heading: f"{'Positive' if p == 'sf_pos' else 'Negative'} {a.capitalize()} Axis",
            "channel": selected[a].name, "residual scale factor (ppm)": cell(selected[a].name, p)}
           for a in PAPER_AXES for p in ("sf_pos", "sf_neg")]
     t1_mis = []
@@ -153,10 +154,12 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
     """Everything the template shows, from what the report step read and the verdict's findings.
     Figures are drawn by ``processes`` processes (`draw_all`)."""
     spec, calibration, maneuvers, info = inputs.spec, inputs.calibration, inputs.maneuvers, inputs.info
+    words = campaign_words(maneuvers)
     jobs = []
     for data, table in zip(maneuvers, inputs.tables):
         own = inputs.fit[(inputs.fit["maneuver"] == data.id) & (inputs.fit["set"] == 0)]
-        jobs += [("maneuver_figure", (table, f"{data.id}: model {inputs.model}, in-loop set", own)),
+        jobs += [("maneuver_figure", (table, f"{data.id}: model {inputs.model}, {words['first_set_figure']}", own,
+                                      words["kind"] == "flight")),
                  ("residual_figure", (inputs.fit[inputs.fit["maneuver"] == data.id], data.id))]
     jobs += [("pair_figure", (inputs.posterior, c.name)) for c in spec.channels]
     jobs += [("trace_figure", (inputs.posterior, calibration)), ("comparison_figure", (inputs.comparison,))]
@@ -176,7 +179,7 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         campaign=info["campaign"], model=inputs.model, effects=list(spec.effect_names), version=__version__,
         verdict=judge.verdict(info["campaign"], inputs.model, inputs.findings)["verdict"],
         findings=list(inputs.findings), simulated=inputs.truth is not None,
-        tables=paper_tables(calibration, spec.channels, maneuvers[0].sets[0], inputs.truth),
+        tables=paper_tables(calibration, spec.channels, maneuvers[0].sets[0], inputs.truth, words["axis"]),
         maneuver_figures={d.id: drawn[2 * m] + drawn[2 * m + 1] for m, d in enumerate(maneuvers)},
         posterior_figures=Markup("").join(drawn[2 * len(maneuvers):-1]),
         convergence=calibration[["channel", "parameter", "unit", "mean", "sd", "r_hat", "ess_bulk"]].round(
@@ -194,7 +197,8 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         comparison=inputs.comparison.round(3), comparison_figure=drawn[-1],
         convention=inputs.correction["convention"], correction_path=str(inputs.correction_path),
         correction_sets=_correction_sets(inputs.correction),
-        effect_table=effect.drop(columns=["before norm", "after norm"]).assign(
+        effect_table=effect.drop(columns=["before norm", "after norm"]).rename(
+            columns={} if words["kind"] == "flight" else {"in loop": "first set"}).assign(
             **{"before norm (arcsec)": effect["before norm"].round(1),
                "after norm (arcsec)": effect["after norm"].round(1)}).round(1),
         mounting=mounting_text(info["mounting"]),
@@ -210,7 +214,7 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         config=yaml.safe_dump(inputs.config, sort_keys=False),
         channel_kind=channel_kind(spec.channels),
         reviewed_why=modelchoice.reviewed_reason(modelchoice.typed(inputs.comparison)),
-        refused=pd.DataFrame(inputs.refused, columns=["model", "status", "step", "reason"]))
+        refused=pd.DataFrame(inputs.refused, columns=["model", "status", "step", "reason"]), words=words)
 
 
 def number(value) -> str:

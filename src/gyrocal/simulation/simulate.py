@@ -1,4 +1,6 @@
-"""A Mars-Orbiter-like spacecraft: three two-axis DTGs, a star tracker, single-axis maneuvers.
+"""A Mars-Orbiter-like spacecraft: three two-axis DTGs, a star tracker, single-axis maneuvers,
+eigen-axis slews (about a unit vector in body axes) and tumbles (a body rate vector, constant or
+slowly varying); the last two are free motion in the campaign it writes (no axis label).
 
 Every setting comes from a scenario YAML (``config/scenarios/*.yaml``). The true body
 rate is piecewise constant on a fine grid, so the true attitude is propagated exactly;
@@ -17,6 +19,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP
+from gyrocal.io.outputs import write_text
 from gyrocal.io.scenario import load_scenario
 from gyrocal.io.telemetry import Campaign, Maneuver, write_campaign
 from gyrocal.model import channels as ch
@@ -33,6 +36,7 @@ from gyrocal.model.units import (
 )
 
 __all__ = [
+    "STATED_ARW_FLOOR_DEG_SQRT_H",
     "ManeuverProfile",
     "build_profiles",
     "gauss_markov",
@@ -49,10 +53,12 @@ __all__ = [
 
 @dataclass
 class ManeuverProfile:
-    """Timing of one single-axis maneuver: hold, ramp up, coast, ramp down, hold."""
+    """Timing of one maneuver: hold, ramp up, coast, ramp down, hold, about ``vector`` (body axes;
+    a single-axis maneuver's is its axis), plus a tumble's slow ``wobble``."""
 
     id: str
-    axis: str
+    axis: str | None
+    """The labelled axis; None for free motion (an eigen-axis slew, a tumble)."""
     sign: float
     t_start: float
     rate_rad_s: float
@@ -61,6 +67,11 @@ class ManeuverProfile:
     coast_s: float
     noise_scale: float = 1.0
     noise_group: str = DEFAULT_NOISE_GROUP
+    vector: tuple = None
+    """Unit vector of the rotation in body axes (None: the labelled axis)."""
+    wobble_rad_s: tuple = (0.0, 0.0, 0.0)
+    """A tumble's slowly varying part: a body rate vector times ``sin(2 pi t / wobble_period_s)``, with the ramps."""
+    wobble_period_s: float = 600.0
 
     @property
     def ramp_s(self):
@@ -78,22 +89,52 @@ class ManeuverProfile:
         down = np.clip((tau - r - c) / r, 0.0, 1.0)
         return self.sign * self.rate_rad_s * (up - down)
 
+    def body_rate(self, t) -> np.ndarray:
+        """(n, 3) commanded body rate at times ``t`` (rad/s)."""
+        vector = np.eye(3)[AXIS_INDEX[self.axis]] if self.vector is None else np.asarray(self.vector, dtype=float)
+        rate = self.rate(t)[:, None] * vector
+        if any(self.wobble_rad_s):
+            tau = np.asarray(t) - self.t_start - self.hold_s
+            envelope = np.abs(self.rate(t)) / self.rate_rad_s
+            rate = rate + (envelope * np.sin(2 * np.pi * tau / self.wobble_period_s))[:, None] * np.asarray(
+                self.wobble_rad_s)
+        return rate
+
 
 def build_profiles(scenario) -> list:
+    """The maneuvers' profiles, one after the other: a single-axis slew (``axis: yaw``, ``direction``),
+    an eigen-axis slew (``axis: [x, y, z]``, a unit vector in body axes, its ``angle_deg`` about it) or
+    a tumble (``rate_deg_s: [x, y, z]``, the body rate for ``duration_s`` between its ramps, with an
+    optional ``wobble_deg_s`` of period ``wobble_period_s``)."""
     d = scenario["maneuver_defaults"]
     t = scenario["t0_s"] + d["gap_s"]
     profiles = []
     for entry in scenario["maneuvers"]:
         m = {**d, **entry}
-        rate = np.deg2rad(m["rate_deg_s"])
         accel = np.deg2rad(m["accel_deg_s2"])
-        angle = np.deg2rad(m["angle_deg"])
-        coast = angle / rate - rate / accel
-        if coast < 0:
-            raise ValueError(f"maneuver {m['id']}: angle too small to reach the rate; lower rate_deg_s")
-        p = ManeuverProfile(m["id"], m["axis"], 1.0 if m["direction"] == "+" else -1.0, t,
-                            rate, accel, m["hold_s"], coast, float(m.get("noise_scale", 1.0)),
-                            m.get("noise_group", DEFAULT_NOISE_GROUP))
+        sign = -1.0 if m.get("direction") == "-" else 1.0
+        wobble = tuple(np.deg2rad(m.get("wobble_deg_s") or [0.0, 0.0, 0.0]))
+        if isinstance(m["rate_deg_s"], list):  # a tumble
+            rate_vector = np.deg2rad(np.asarray(m["rate_deg_s"], dtype=float))
+            rate = float(np.linalg.norm(rate_vector))
+            if rate == 0 or "duration_s" not in m:
+                raise ValueError(f"maneuver {m['id']}: a tumble needs a non-zero rate_deg_s vector and its duration_s")
+            axis, vector, coast = None, tuple(rate_vector / rate), float(m["duration_s"])
+        else:
+            rate = np.deg2rad(m["rate_deg_s"])
+            coast = np.deg2rad(m["angle_deg"]) / rate - rate / accel
+            if coast < 0:
+                raise ValueError(f"maneuver {m['id']}: angle too small to reach the rate; lower rate_deg_s")
+            if isinstance(m["axis"], list):  # an eigen-axis slew
+                v = np.asarray(m["axis"], dtype=float)
+                if abs(np.linalg.norm(v) - 1.0) > 1e-3:
+                    raise ValueError(f"maneuver {m['id']}: axis {m['axis']} is not a unit vector in body axes")
+                axis, vector = None, tuple(v / np.linalg.norm(v))
+            else:
+                axis, vector = m["axis"], None
+        p = ManeuverProfile(m["id"], axis, sign, t, rate, accel, m["hold_s"], coast, float(m.get("noise_scale", 1.0)),
+                            m.get("noise_group", DEFAULT_NOISE_GROUP), vector, wobble,
+                            float(m.get("wobble_period_s", 600.0)))
         profiles.append(p)
         t = p.t_end + m["gap_s"]
     return profiles
@@ -132,6 +173,11 @@ def _temperatures(t_first, t_last, dtgs, swing_K, rng):
                 for name, (period, phase) in waves.items()}
     return temperatures
 
+
+STATED_ARW_FLOOR_DEG_SQRT_H = 1e-6
+"""The ARW ``campaign.yaml`` states for gyros simulated without noise: a stated noise must be positive
+(the fit weighs by it), and this is a hundred times below the best navigation-grade gyros' 1e-4
+deg/sqrt(h); the data themselves are simulated without any walk."""
 
 GYRO_BLOCK = 1 << 15
 """Gyro samples per block of the fine truth grid: each block's arrays are a few MB, so the
@@ -185,7 +231,7 @@ def simulate(scenario: dict, seed=None):
     def true_rate(t):
         rate = uncontrolled(t)
         for p in profiles:
-            rate[:, AXIS_INDEX[p.axis]] += p.rate(t)
+            rate += p.body_rate(t)
         return rate
 
     increments_fine = np.empty((n_gyro * n_sub, 3))
@@ -267,9 +313,9 @@ def simulate(scenario: dict, seed=None):
         name=scenario["name"],
         channels=channels,
         star_tracker=stated_star_tracker(st_cfg),
-        gyro={"arw_deg_sqrt_h": gyro_cfg["arw_deg_sqrt_h"],
+        gyro={"arw_deg_sqrt_h": max(gyro_cfg["arw_deg_sqrt_h"], STATED_ARW_FLOOR_DEG_SQRT_H),
               **({"sensor_class": gyro_cfg["sensor_class"]} if gyro_cfg.get("sensor_class") else {})},
-        maneuvers=tuple(Maneuver(p.id, p.axis, "+" if p.sign > 0 else "-", p.t_start, p.t_end,
+        maneuvers=tuple(Maneuver(p.id, p.axis, None if p.axis is None else "+" if p.sign > 0 else "-", p.t_start, p.t_end,
                                  tuple(scenario["in_loop"]), p.noise_group) for p in profiles),
         st_time=t_st, st_quat=quat, st_valid=valid,
         gyro_time=t_gyro, gyro_columns=gyro_columns,
@@ -365,7 +411,5 @@ def run(scenario_path, outdir, seed=None):
     campaign, truth = simulate(scenario, seed)
     outdir = Path(outdir)
     write_campaign(campaign, outdir / "campaign")
-    tmp = outdir / "truth.json.tmp"
-    tmp.write_text(json.dumps(truth, indent=2, sort_keys=True))
-    tmp.replace(outdir / "truth.json")
+    write_text(json.dumps(truth, indent=2, sort_keys=True), outdir / "truth.json")
     return campaign, truth

@@ -1,5 +1,5 @@
 """The white baseline fitted to a campaign and its diagnostics' ranking of explanations, in one
-process: what the ranking study (`benchmarks/explanation_ranking.py`) and its tests call, as the
+process: what the ranking study (`studies/explanation_ranking.py`) and its tests call, as the
 point-estimate and diagnostics steps compute them, without the workflow."""
 
 from gyrocal.criticism import diagnostics

@@ -20,9 +20,23 @@ from gyrocal.model.spec import ModelSpec
 from gyrocal.model.units import ARCSEC_RAD, AXES, AXIS_INDEX, DEG_SQRT_H_RAD_SQRT_S
 
 __all__ = [
-    "BIAS_CHOICES", "MIN_BIAS_HOLD_SAMPLES", "MIN_HOLD_SAMPLES", "PIPELINE_ITERATIONS", "TABLE_COLUMNS", "bias_source", "classic",
-    "classic_sd", "classic_start", "classic_table", "classic_vector", "hold_bias", "hold_slope_weights",
-    "hold_windows", "missing_holds", "star_tracker_cov"
+    "BIAS_CHOICES",
+    "MIN_BIAS_HOLD_SAMPLES",
+    "MIN_HOLD_SAMPLES",
+    "PIPELINE_ITERATIONS",
+    "TABLE_COLUMNS",
+    "bias_source",
+    "classic",
+    "classic_sd",
+    "classic_start",
+    "classic_table",
+    "classic_vector",
+    "free_note",
+    "hold_bias",
+    "hold_slope_weights",
+    "hold_windows",
+    "missing_holds",
+    "star_tracker_cov"
 ]
 
 BIAS_CHOICES = ("auto", "holds", "trusted")
@@ -147,7 +161,7 @@ def classic(data: ManeuverData, bias: str = "trusted", stated: dict | None = Non
     divide by the kinematic matrix of the actual trajectory, which is the angle for
     the scale factor and reduces to it for small rotations. The hold averages are
     differenced in the inertial frame, where the initial attitude offset stays put.
-    A maneuver without both holds, or one that turns both ways, gets no row: the method does
+    A maneuver without both holds, one that turns both ways, or free motion gets no row: the method does
     not apply to it. The paper trusts the bias known before the maneuver (zero residual bias);
     from the holds (``bias``, `bias_source`), each channel set's residual bias is first
     estimated from them (`hold_bias`), so that it is not read as a scale factor. With the
@@ -156,7 +170,7 @@ def classic(data: ManeuverData, bias: str = "trusted", stated: dict | None = Non
     ``iterations`` > 1 it is repeated about its own estimate (Gauss-Newton), which removes its
     second-order error at large parameters (5000 ppm and 1000 arcsec: -35 ppm of bias, twice its sd).
     """
-    if data.direction == "both" or missing_holds(data):
+    if data.free or data.direction == "both" or missing_holds(data):
         return pd.DataFrame(columns=_ROW_COLUMNS)
     before, after = hold_windows(data)
     source, note = bias_source(before, after, bias)
@@ -197,10 +211,14 @@ def classic_table(maneuvers, spec: ModelSpec, bias: str = "trusted", stated: dic
     ``sf`` is averaged over both directions. Columns
     `TABLE_COLUMNS`: ``bias_source`` is ``holds``, ``trusted`` or ``mixed`` over its maneuvers,
     ``maneuvers`` lists each with its source (``yaw_pos:holds``), ``note`` why a bias was trusted.
-    ``iterations``: as in `classic` (the pipeline's `PIPELINE_ITERATIONS`)."""
+    ``iterations``: as in `classic` (the pipeline's `PIPELINE_ITERATIONS`). Free-motion maneuvers
+    give no number (the method needs a rotation about one labelled axis between inertial holds):
+    the note says so on every row, and a channel parameter no labelled maneuver gives has a row of
+    its own with no value (``n`` 0)."""
+    free = [d.id for d in maneuvers if d.free]
     parts = [part for part in (classic(d, bias, stated, iterations) for d in maneuvers) if len(part)]
     if not parts:
-        return pd.DataFrame(columns=TABLE_COLUMNS)
+        return _free_rows(pd.DataFrame(columns=TABLE_COLUMNS), free, spec)
     rows = pd.concat(parts, ignore_index=True)
     symmetric = np.array([f"{c}.sf" in spec.labels for c in rows["channel"]], dtype=bool)
     rows.loc[symmetric & rows["parameter"].str.startswith("sf_").to_numpy(), "parameter"] = "sf"
@@ -217,7 +235,29 @@ def classic_table(maneuvers, spec: ModelSpec, bias: str = "trusted", stated: dic
     per_unit = 1.0 / spec.si_per_unit[columns]
     table["value"] = table["value"].to_numpy() * per_unit
     table["sd"] = np.sqrt(table.pop("var").to_numpy()) / table["n"].to_numpy() * per_unit
-    return table[TABLE_COLUMNS]
+    return _free_rows(table[TABLE_COLUMNS], free, spec)
+
+
+def free_note(free_ids) -> str:
+    """What ``classic.csv`` says of free-motion maneuvers: why the paper's method gives them no number."""
+    return (f"free-motion maneuver(s) {', '.join(free_ids)}: no number from the paper's method, which needs a "
+            "rotation about one labelled axis between inertial holds (the full-trajectory fit uses them)")
+
+
+def _free_rows(table: pd.DataFrame, free_ids, spec: ModelSpec) -> pd.DataFrame:
+    """``table`` with the free maneuvers' note on every row, and a row without a value for each
+    channel parameter of the paper's (scale factors, misalignments) no labelled maneuver gave."""
+    if not free_ids:
+        return table
+    note = free_note(free_ids)
+    table = table.assign(note=[f"{n}; {note}" if n else note for n in table["note"]])
+    have = set(zip(table["channel"], table["parameter"]))
+    rows = [{"channel": spec.channels[p.channel].name, "parameter": p.name, "unit": spec.units[i],
+             "value": np.nan, "sd": np.nan, "n": 0, "bias_source": "", "maneuvers": "", "note": note}
+            for i, p in enumerate(spec.parameters) if p.core and p.channel is not None
+            and (p.name.startswith("sf") or p.name.startswith("mis_"))
+            and (spec.channels[p.channel].name, p.name) not in have]
+    return pd.concat([table, pd.DataFrame(rows, columns=TABLE_COLUMNS)], ignore_index=True) if rows else table
 
 
 def classic_start(maneuvers, spec: ModelSpec) -> np.ndarray:
@@ -231,6 +271,8 @@ def classic_vector(table: pd.DataFrame, spec: ModelSpec) -> np.ndarray:
     """A `classic_table` as the spec's SI vector; parameters it lacks are zero."""
     theta = np.zeros(len(spec))
     for row in table.itertuples():
+        if not row.n:
+            continue  # no number (free motion only)
         i = spec.index(f"{row.channel}.{row.parameter}")
         theta[i] = row.value * spec.si_per_unit[i]
     return theta

@@ -277,7 +277,7 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     star-tracker noise estimates its Gauss-Markov part there too (always: its sd and correlation
     time are what the model is for), from the residuals' correlation time as a start.
     """
-    spec = spec.with_prior_only(identification.unflown(maneuvers, spec))
+    spec = spec.with_prior_only(identification.unflown(maneuvers, spec, stated_noise))
     log_sigma = covariance.log_sigma_of(stated_noise)
     n_man, n_ch = len(maneuvers), len(spec.channels)
 

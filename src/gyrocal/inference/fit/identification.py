@@ -1,7 +1,8 @@
 """Which parameters the maneuvers can inform at all; the others are prior-only.
 
-A scale factor of a direction never flown, or a misalignment toward an axis never rotated
-about, has no column in the data that is not noise: fitted anyway, it takes up noise and
+A scale factor of a direction the body never turned, or a misalignment toward an axis it never
+turned about, has no column in the data that is not noise (the motion decides, not the
+maneuvers' labels: `unflown`): fitted anyway, it takes up noise and
 drags the parameters the data do inform. So is a parameter whose column, once the
 nuisance (initial attitude, biases) is integrated out, carries almost no information: a
 regressor that is constant, or a copy of the bias. Both are marked prior-only and kept
@@ -12,11 +13,26 @@ prior, and the verdict names them.
 import numpy as np
 
 from gyrocal.inference.fit.likelihood import Stats
+from gyrocal.maneuvers.preprocess import body_increments
+from gyrocal.model import channels as ch
+from gyrocal.model.combinations import flown_directions
 from gyrocal.model.spec import ModelSpec
+from gyrocal.model.units import AXIS_INDEX, arcsec_to_rad
 
 __all__ = [
-    "CONDITION_MAX", "CORRELATION_MAX", "DETECTION_SD", "INFORMATION_RATIO_MIN", "confounded_pairs", "joint_information",
-    "maneuver_to_fly", "prior_held_directions", "unflown", "uninformed"
+    "CONDITION_MAX",
+    "CORRELATION_MAX",
+    "DETECTION_SD",
+    "INFORMATION_RATIO_MIN",
+    "MOTION_RATIO_MIN",
+    "MOTION_SIGMA_ARCSEC",
+    "confounded_pairs",
+    "joint_information",
+    "maneuver_to_fly",
+    "motion_information",
+    "prior_held_directions",
+    "unflown",
+    "uninformed"
 ]
 
 DETECTION_SD = 5.0
@@ -32,23 +48,75 @@ INFORMATION_RATIO_MIN = 0.01
 would narrow its interval by less than half a percent."""
 
 
-def unflown(maneuvers, spec: ModelSpec) -> dict:
-    """Channel-model terms no maneuver informs, with the reason: a scale-factor branch needs a
-    maneuver about its channel's axis in its direction (a symmetric one, in either); a misalignment toward axis b needs a
-    maneuver about b (either direction)."""
-    flown = {(d.axis, sign) for d in maneuvers for sign in (("+", "-") if d.direction == "both" else (d.direction,))}
-    rotated = {d.axis for d in maneuvers}
+MOTION_RATIO_MIN = 1.0
+"""Below this ratio of the motion's information to the prior's, a term is prior-only before any fit
+(`unflown`): its posterior sd would stay above 0.7 of its prior's, and fitted it takes up noise. A
+limit cycle's wander gives a term a few hundredths; a single 90 deg turn at MOM's noise, ten thousand."""
+
+MOTION_SIGMA_ARCSEC = 10.0
+"""The reference's noise per sample that `unflown` weighs the motion with where none is stated."""
+
+
+def motion_information(maneuvers, spec: ModelSpec, sigma_rad: float, arw_rad_sqrt_s: float = 0.0) -> dict:
+    """Per channel, the information its scale factors and misalignments draw from the motion alone:
+    each term's column is the rotation it multiplies (eq. 3: the channel's own axis, by sign for
+    ``sf_pos``/``sf_neg``; the other axis for ``mis_<b>``), accumulated into the error angle at
+    the reference's samples, each maneuver's start attitude and bias (a line in time) projected
+    out, over the error's noise: the reference's ``sigma_rad`` and the gyro's walk over the window
+    (``arw^2 T / 6``, a walk's mean square over T less its line), so that a column made of the gyros'
+    own noise (a body at rest about that axis, a precise reference) does not count as motion.
+    ``{channel index: (parameter indices, A)}``."""
+    out = {}
+    columns = {}
+    for data in maneuvers:
+        inc = body_increments(data, data.sets[0], ch.ChannelParams.zeros(data.channels))
+        k, _ = data.st_interval()
+        t = data.st_time - data.st_time[0]
+        line = np.linalg.qr(np.column_stack([np.ones_like(t), t]))[0]
+        weight = 1.0 / np.sqrt(sigma_rad**2 + arw_rad_sqrt_s**2 * (t[-1] if t.size else 0.0) / 6.0)
+        for i, p in enumerate(spec.parameters):
+            if not p.core or p.channel is None or not _motion_term(p.name):
+                continue
+            own = inc[:, AXIS_INDEX[spec.channels[p.channel].axis]]
+            x = {"sf_pos": own.clip(min=0), "sf_neg": own.clip(max=0), "sf": own}.get(p.name)
+            x = inc[:, AXIS_INDEX[p.name[4:]]] if x is None else x
+            at_st = np.cumsum(x)[k]
+            columns.setdefault(i, []).append(weight * (at_st - line @ (line.T @ at_st)))
+    for i, parts in columns.items():
+        out.setdefault(spec.parameters[i].channel, []).append((i, np.concatenate(parts)))
+    return {c: ([i for i, _ in items], np.array([[a @ b for _, b in items] for _, a in items]))
+            for c, items in out.items()}
+
+
+def _motion_term(name: str) -> bool:
+    return name in ("sf_pos", "sf_neg", "sf") or name.startswith("mis_")
+
+
+def unflown(maneuvers, spec: ModelSpec, stated: dict | None = None) -> dict:
+    """Channel-model terms the motion does not inform, with the reason: whatever the maneuvers'
+    labels, a scale factor or misalignment whose information in the motion (`motion_information`,
+    the others of its channel estimated with it: `joint_information`) is below `MOTION_RATIO_MIN`
+    of its prior's (`uninformed` then judges the rest from the data's information at
+    `INFORMATION_RATIO_MIN`). ``stated``: the noise knowledge (its star tracker's
+    sds, absent `MOTION_SIGMA_ARCSEC`, and its ARW weigh the motion)."""
+    stated = stated or {}
+    sigma = arcsec_to_rad(np.sqrt((2 * stated.get("sigma_cross_arcsec", MOTION_SIGMA_ARCSEC) ** 2
+                                   + stated.get("sigma_about_arcsec", MOTION_SIGMA_ARCSEC) ** 2) / 3))
+    held = flown_directions(maneuvers)
     reasons = {}
-    for p in spec.parameters[spec.core]:
-        axis = spec.channels[p.channel].axis
-        if p.name in ("sf_pos", "sf_neg"):
-            sign = "+" if p.name == "sf_pos" else "-"
-            if (axis, sign) not in flown:
-                reasons[p.label] = f"no {sign}{axis} maneuver"
-        elif p.name == "sf" and axis not in rotated:
-            reasons[p.label] = f"no {axis} maneuver"
-        elif p.name.startswith("mis_") and p.name[4:] not in rotated:
-            reasons[p.label] = f"no {p.name[4:]} maneuver"
+    arw = np.deg2rad(stated.get("arw_deg_sqrt_h", 0.0)) / 60.0
+    for index, A in motion_information(maneuvers, spec, sigma, arw).values():
+        joint = joint_information(A, spec.prior_sd_si[index])
+        for i, ratio in zip(index, joint):
+            if ratio < MOTION_RATIO_MIN:
+                missing = [w for w in wanted_turns(spec, i) if (w[1:], w[0]) not in held]
+                if len(missing) == 2:
+                    reasons[spec.labels[i]] = f"no {missing[0][1:]} turn in the data: turn about {missing[0][1:]}, either way"
+                elif missing:
+                    reasons[spec.labels[i]] = f"no {missing[0]} turn in the data: turn about {missing[0]}"
+                else:
+                    reasons[spec.labels[i]] = (f"the motion carries {ratio:.2g} of its prior's information: "
+                                               f"{maneuver_to_fly(spec, i, held)}")
     return reasons
 
 
@@ -105,18 +173,37 @@ def prior_held_directions(A: np.ndarray, prior_sd: np.ndarray, labels, top: int 
     return out
 
 
-def maneuver_to_fly(spec: ModelSpec, i: int) -> str:
-    """What to fly to inform parameter ``i``: a scale-factor branch needs turns about its channel's axis
-    in its direction, a misalignment toward b turns about b (larger, faster or longer ones)."""
+def wanted_turns(spec: ModelSpec, i: int) -> list:
+    """The turns (``+pitch``, ``-yaw``) that inform parameter ``i`` (eq. 3): a scale-factor branch its
+    channel's axis in its direction (a symmetric one either way), a misalignment toward b about b,
+    either way; none for other parameters."""
     p = spec.parameters[i]
     if p.channel is None:
-        return "fly maneuvers that excite it"
+        return []
     axis = spec.channels[p.channel].axis
-    if p.name in ("sf_pos", "sf_neg"):
-        return f"fly larger or faster {'+' if p.name == 'sf_pos' else '-'}{axis} maneuvers"
+    if p.name in ("sf_pos", "sf_neg", "sf"):
+        return [f"{s}{axis}" for s in ({"sf_pos": "+", "sf_neg": "-"}.get(p.name) or "+-")]
     if p.name.startswith("mis_"):
-        return f"fly larger or faster maneuvers about {p.name[4:]} (both directions)"
-    return f"fly maneuvers about {axis} that excite it"
+        return [f"+{p.name[4:]}", f"-{p.name[4:]}"]
+    return []
+
+
+def maneuver_to_fly(spec: ModelSpec, i: int, held: set | None = None) -> str:
+    """The motion that would inform parameter ``i``: a scale-factor branch needs turns about its
+    channel's axis in its direction, a misalignment toward b turns about b. With ``held`` (the
+    ``(axis, sign)`` the data already turn, `combinations.flown_directions`), a direction the data hold is asked
+    for as more of it, one they lack by name."""
+    wanted = wanted_turns(spec, i)
+    if not wanted:
+        p = spec.parameters[i]
+        return "turn in ways that excite it" if p.channel is None else \
+            f"turn about {spec.channels[p.channel].axis} in ways that excite it"
+    if held is None:
+        return f"turn more, or faster, about {' and '.join(wanted)}"
+    missing = [w for w in wanted if (w[1:], w[0]) not in held]
+    if missing:
+        return f"turn about {' and '.join(missing)} (the data hold no such turn)"
+    return f"turn more, or faster, about {' and '.join(wanted)} (the data's turns there are too small or too slow)"
 
 
 def confounded_pairs(cov: np.ndarray, free: np.ndarray, labels, threshold: float = CORRELATION_MAX) -> list:

@@ -1,34 +1,21 @@
 """scipy's trust-region least squares, step for step, holding one Jacobian.
 
 `trust_region` is `scipy.optimize.least_squares`'s ``trf`` without bounds (its ``trf_no_bounds``),
-written out with scipy's own helpers from the private module ``scipy.optimize._lsq.common`` so that
-it takes the same steps to the bit while keeping a single Jacobian alive (least_squares held up to
-six: 1.2 GB at 10x the default campaign). A private module may move between scipy releases: where
-the helpers are missing, `trust_region` calls `scipy.optimize.least_squares` itself with the same
-options (the same steps, its memory) and says so once. ``tests/test_numerics.py`` checks both
-against ``least_squares`` and dense references.
+written out so that it takes the same steps to the bit while keeping a single Jacobian alive
+(least_squares held up to six: 1.2 GB at 10x the default campaign). The five helpers it takes its
+steps with are scipy's own (``scipy.optimize._lsq.common``, BSD-3-Clause, Copyright (c) 2001-2002
+Enthought, Inc. and 2003- SciPy Developers), copied here as far as `trust_region` uses them, because
+that module is private. ``tests/test_numerics.py`` checks the steps against ``least_squares`` and
+dense references.
 """
 
-import warnings
-
 import numpy as np
-from numpy.linalg import norm
-from scipy.linalg import qr
-from scipy.optimize import least_squares
+from numpy.linalg import LinAlgError, norm
+from scipy.linalg import cho_factor, cho_solve, qr
+from scipy.sparse import issparse
 from scipy.sparse.linalg import LinearOperator, lsmr
 
-__all__ = ["HELPERS", "TERMINATION_MESSAGES", "trust_region"]
-
-HELPERS = ("compute_jac_scale", "solve_trust_region_2d", "evaluate_quadratic", "update_tr_radius",
-           "check_termination")
-"""The functions of ``scipy.optimize._lsq.common`` that `trust_region` takes its steps with."""
-
-try:
-    from scipy.optimize._lsq import common as lsq
-except ImportError:  # pragma: no cover - depends on the installed scipy
-    lsq = None
-if lsq is not None and not all(hasattr(lsq, name) for name in HELPERS):  # pragma: no cover
-    lsq = None
+__all__ = ["TERMINATION_MESSAGES", "trust_region"]
 
 TERMINATION_MESSAGES = {
     0: "The maximum number of function evaluations is exceeded.",
@@ -38,6 +25,69 @@ TERMINATION_MESSAGES = {
     4: "Both `ftol` and `xtol` termination conditions are satisfied.",
 }
 """``least_squares``'s message for each ``status`` that `trust_region` returns (its own words)."""
+
+
+def _jac_scale(J, scale_inv_old=None):
+    """The variables' scale from the Jacobian's column norms, never below the last (scipy's ``compute_jac_scale``)."""
+    scale_inv = np.asarray(J.power(2).sum(axis=0)).ravel() ** 0.5 if issparse(J) else np.sum(J**2, axis=0) ** 0.5
+    if scale_inv_old is None:
+        scale_inv[scale_inv == 0] = 1
+    else:
+        scale_inv = np.maximum(scale_inv, scale_inv_old)
+    return 1 / scale_inv, scale_inv
+
+
+def _trust_region_2d(B, g, Delta):
+    """The step minimising ``p B p / 2 + g p`` within ``|p| <= Delta`` in two dimensions: the Newton step
+    where it is inside, else the best root of a quartic on the boundary (scipy's ``solve_trust_region_2d``)."""
+    try:
+        R, lower = cho_factor(B)
+        p = -cho_solve((R, lower), g)
+        if np.dot(p, p) <= Delta**2:
+            return p
+    except LinAlgError:
+        pass
+    a, b, c = B[0, 0] * Delta**2, B[0, 1] * Delta**2, B[1, 1] * Delta**2
+    d, f = g[0] * Delta, g[1] * Delta
+    t = np.roots(np.array([-b + d, 2 * (a - c + f), 6 * b, 2 * (-a + c + f), -b - d]))
+    t = np.real(t[np.isreal(t)])
+    p = Delta * np.vstack((2 * t / (1 + t**2), (1 - t**2) / (1 + t**2)))
+    value = 0.5 * np.sum(p * B.dot(p), axis=0) + np.dot(g, p)
+    return p[:, np.argmin(value)]
+
+
+def _quadratic(J, g, s):
+    """``s J^T J s / 2 + g s`` for one step ``s`` (scipy's ``evaluate_quadratic``)."""
+    Js = J.dot(s)
+    return 0.5 * np.dot(Js, Js) + np.dot(s, g)
+
+
+def _update_radius(Delta, actual_reduction, predicted_reduction, step_norm, bound_hit):
+    """The next radius and the ratio of the actual to the predicted reduction (scipy's ``update_tr_radius``)."""
+    if predicted_reduction > 0:
+        ratio = actual_reduction / predicted_reduction
+    elif predicted_reduction == actual_reduction == 0:
+        ratio = 1
+    else:
+        ratio = 0
+    if ratio < 0.25:
+        Delta = 0.25 * step_norm
+    elif ratio > 0.75 and bound_hit:
+        Delta *= 2.0
+    return Delta, ratio
+
+
+def _termination(dF, F, dx_norm, x_norm, ratio, ftol, xtol):
+    """``least_squares``'s status where ``ftol`` or ``xtol`` is met, else None (scipy's ``check_termination``)."""
+    ftol_satisfied = dF < ftol * F and ratio > 0.25
+    xtol_satisfied = dx_norm < xtol * (xtol + x_norm)
+    if ftol_satisfied and xtol_satisfied:
+        return 4
+    if ftol_satisfied:
+        return 2
+    if xtol_satisfied:
+        return 3
+    return None
 
 
 def _scaled(J, d) -> LinearOperator:
@@ -58,15 +108,13 @@ def trust_region(fun, jac, x0, ftol: float, xtol: float, gtol: float, max_nfev: 
 
     Returns ``(x, cost, nfev, status, J)``: ``status`` as ``least_squares``'s, ``J`` at ``x``.
     """
-    if lsq is None:
-        return _least_squares(fun, jac, x0, ftol, xtol, gtol, max_nfev, lsmr_tol)
     x = np.atleast_1d(x0).astype(float)
     f = fun(x)
     if not np.all(np.isfinite(f)):
         raise ValueError("Residuals are not finite in the initial point.")
     J, nfev, cost = jac(x), 1, 0.5 * np.dot(f, f)
     g = J.T.dot(f)
-    scale, scale_inv = lsq.compute_jac_scale(J)
+    scale, scale_inv = _jac_scale(J)
     Delta, status = norm(x * scale_inv) or 1.0, None
     while True:
         if norm(g, ord=np.inf) < gtol:
@@ -82,9 +130,9 @@ def trust_region(fun, jac, x0, ftol: float, xtol: float, gtol: float, max_nfev: 
         g_S = S.T.dot(g_h)
         actual_reduction = -1
         while actual_reduction <= 0 and nfev < max_nfev:
-            p_S, _ = lsq.solve_trust_region_2d(B_S, g_S, Delta)
+            p_S = _trust_region_2d(B_S, g_S, Delta)
             step_h = S.dot(p_S)
-            predicted_reduction = -lsq.evaluate_quadratic(J_h, g_h, step_h)
+            predicted_reduction = -_quadratic(J_h, g_h, step_h)
             step = d * step_h
             x_new = x + step
             f_new = fun(x_new)
@@ -95,9 +143,9 @@ def trust_region(fun, jac, x0, ftol: float, xtol: float, gtol: float, max_nfev: 
                 continue
             cost_new = 0.5 * np.dot(f_new, f_new)
             actual_reduction = cost - cost_new
-            Delta_new, ratio = lsq.update_tr_radius(Delta, actual_reduction, predicted_reduction, step_h_norm,
-                                                    step_h_norm > 0.95 * Delta)
-            status = lsq.check_termination(actual_reduction, cost, norm(step), norm(x), ratio, ftol, xtol)
+            Delta_new, ratio = _update_radius(Delta, actual_reduction, predicted_reduction, step_h_norm,
+                                              step_h_norm > 0.95 * Delta)
+            status = _termination(actual_reduction, cost, norm(step), norm(x), ratio, ftol, xtol)
             if status is not None:
                 break
             Delta = Delta_new
@@ -106,16 +154,6 @@ def trust_region(fun, jac, x0, ftol: float, xtol: float, gtol: float, max_nfev: 
             J = J_h = None  # the last point's Jacobian goes before this one's is made
             J = jac(x)
             g = J.T.dot(f)
-            scale, scale_inv = lsq.compute_jac_scale(J, scale_inv)
+            scale, scale_inv = _jac_scale(J, scale_inv)
     return x, cost, nfev, 0 if status is None else status, J
 
-
-def _least_squares(fun, jac, x0, ftol, xtol, gtol, max_nfev, lsmr_tol):
-    """`trust_region` through `scipy.optimize.least_squares` itself: the same options, its memory."""
-    warnings.warn("scipy.optimize._lsq.common lacks the helpers gyrocal's trust_region takes its steps with "
-                  f"({', '.join(HELPERS)}); using scipy.optimize.least_squares instead: the same steps, but it "
-                  "holds several Jacobians (more memory on long campaigns)", RuntimeWarning, stacklevel=3)
-    result = least_squares(fun, np.atleast_1d(x0).astype(float), jac=jac, method="trf", x_scale="jac",
-                           tr_solver="lsmr", tr_options={"regularize": False, "atol": lsmr_tol, "btol": lsmr_tol},
-                           ftol=ftol, xtol=xtol, gtol=gtol, max_nfev=max_nfev)
-    return result.x, float(result.cost), int(result.nfev), int(result.status), result.jac

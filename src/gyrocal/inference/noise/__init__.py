@@ -2,4 +2,8 @@
 angle random walk as a banded covariance per maneuver, maneuvers chained where the reference's slow
 error runs on, the smoothness a noise model can have, and the banded inverse's diagonal blocks."""
 
-__all__ = ["covariance", "markov", "segments", "selectedinverse", "smoothness"]
+from gyrocal.inference.noise.covariance import ManeuverNoise, build, noise_knowledge, stated_scales, variances
+from gyrocal.inference.noise.segments import chains
+from gyrocal.inference.noise.smoothness import Smoothness
+
+__all__ = ["ManeuverNoise", "Smoothness", "build", "chains", "noise_knowledge", "stated_scales", "variances"]

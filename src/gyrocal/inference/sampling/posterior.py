@@ -9,6 +9,9 @@ and the likelihood's sufficient statistics are tabulated on a grid over the rati
 spanning many posterior standard deviations, and interpolated (cubic Lagrange). Given the
 noise the posterior is Gaussian in ``dtheta``, so each move draws the noise and then
 ``dtheta`` from that conditional exactly (`CollapsedProposal`): only the noise is explored.
+
+The priors are built here (`model_priors`), and sampling comes in two calls: `prepare` (the
+linearisation, the grid and the data's information, which a check can read) and `run`.
 """
 
 from dataclasses import dataclass
@@ -16,6 +19,7 @@ from dataclasses import dataclass
 import arviz as az
 import emcee
 import numpy as np
+import pandas as pd
 
 from gyrocal.inference.fit.estimate import linearize_all
 from gyrocal.inference.fit.likelihood import (
@@ -26,7 +30,7 @@ from gyrocal.inference.fit.likelihood import (
     total,
 )
 from gyrocal.inference.noise import segments
-from gyrocal.inference.noise.covariance import log_sigma_of, ratios_of, variances
+from gyrocal.inference.noise.covariance import log_sigma_of, noise_labels, ratios_of, variances
 from gyrocal.inference.sampling.budget import SamplingBudget
 from gyrocal.inference.sampling.noisegrid import NoiseShapes, RatioGrid, ratio_curvature
 from gyrocal.inference.sampling.proposal import (
@@ -36,14 +40,16 @@ from gyrocal.inference.sampling.proposal import (
     StudentProposal,
     fitted_noise_proposal,
 )
+from gyrocal.io.calibration import parameter_rows
 from gyrocal.maneuvers.preprocess import noise_groups
 from gyrocal.model import priorfamily
 
 __all__ = [
     "AUTOCORR_WINDOW_C", "DE_SHARE", "GM_FRACTION_LOGIT_SD", "GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDIAN",
     "GROUP_SD_START_VARIANCE", "LOCAL_SCALE", "LOCAL_SHARE", "START_REDRAWS", "TAU_PRIOR_CENTER_S",
-    "TAU_PRIOR_LOG_SD", "LogPosterior", "Posterior", "Priors", "SamplerResult", "SamplingError", "StudentProposal",
-    "absolute", "leave_one_maneuver_out", "run_ensembles", "sample", "start_covariance"
+    "TAU_PRIOR_LOG_SD", "LogPosterior", "Posterior", "Prepared", "Priors", "SamplerResult", "SamplingError",
+    "StudentProposal", "absolute", "leave_one_maneuver_out", "model_priors", "posterior_spec", "prepare", "run",
+    "run_ensembles", "start_covariance"
 ]
 
 
@@ -99,6 +105,28 @@ class Priors:
             center = np.concatenate([center, [0.0, np.log(TAU_PRIOR_CENTER_S)]])
             sd = np.concatenate([sd, [GM_FRACTION_LOGIT_SD, TAU_PRIOR_LOG_SD]])
         return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, center, sd, spec.prior_dof)
+
+    @property
+    def log_ratio_sd(self) -> float:
+        """The prior sd of a white noise scale's log ratio to ``sigma_cross`` (two log scales'
+        difference): where the data do not tell a ratio, its spread is this."""
+        return np.sqrt(2.0) * self.log_sigma_sd[0]
+
+
+def posterior_spec(spec, priors_cfg: dict, prior_from=None):
+    """A point estimate's specification with the priors its posterior samples under: the declared
+    ones, overridden by the config and by an earlier campaign's ``calibration.csv``
+    (``prior_from``): its parameters' rows, never its derived combinations (a combination is no
+    parameter's prior: ``sf_mean`` is correlated with both scale factors)."""
+    earlier = parameter_rows(pd.read_csv(prior_from)) if prior_from else None
+    return spec.with_priors(priors_cfg, earlier, str(prior_from))
+
+
+def model_priors(estimate, priors_cfg: dict, prior_from=None) -> Priors:
+    """The priors of a point estimate's posterior (`posterior_spec`), its noise scales' centred on
+    its stated noise with the config's ``noise_log_sd``."""
+    spec = posterior_spec(estimate.spec, priors_cfg, prior_from)
+    return Priors.from_spec(spec, estimate.stated_noise, priors_cfg["noise_log_sd"])
 
 
 GROUP_SD_PRIOR_MEDIAN = 0.5
@@ -220,17 +248,25 @@ AUTOCORR_WINDOW_C = 5.0
 
 
 def _autocorr_times(chain) -> np.ndarray:
-    """emcee's integrated autocorrelation time per parameter of a (steps, walkers, dim) chain:
-    the walkers' mean autocorrelation and Sokal's window (`emcee.autocorr.auto_window`), with
+    """emcee's integrated autocorrelation time per parameter of a (steps, walkers, dim) chain
+    (`emcee.autocorr.integrated_time`): the walkers' mean autocorrelation and Sokal's window, with
     every walker and parameter in one FFT (`arviz.autocorr`) where emcee takes one at a time
     (eight times as fast, the same times to 1e-15). A walker that never moves leaves its
     parameter's time undefined (NaN), as in emcee. The caller compares the length with them."""
     rho = az.autocorr(np.moveaxis(chain, 0, -1), axis=-1).mean(axis=0)
     taus = 2.0 * np.cumsum(rho, axis=-1) - 1.0
-    window = [emcee.autocorr.auto_window(t, AUTOCORR_WINDOW_C) for t in taus]
-    tau = taus[np.arange(len(taus)), window]
+    tau = taus[np.arange(len(taus)), _sokal_window(taus, AUTOCORR_WINDOW_C)]
     tau[np.any(np.ptp(chain, axis=0) == 0, axis=0)] = np.nan
     return tau
+
+
+def _sokal_window(taus, c: float) -> np.ndarray:
+    """Each row's window: the first lag M with ``M >= c * tau(M)`` (lag 0 where no lag reaches it, as emcee's
+    argmin gives). emcee's ``auto_window`` (emcee 3.1, MIT licence, D. Foreman-Mackey and contributors)
+    over every row at once: it is not in ``emcee.autocorr.__all__``; tests/test_numerics.py pins the
+    times against `emcee.autocorr.integrated_time`."""
+    below = np.arange(taus.shape[-1]) < c * taus
+    return np.where(below.any(axis=-1), np.argmin(below, axis=-1), taus.shape[-1] - 1)
 
 
 DE_SHARE = 0.1
@@ -384,12 +420,43 @@ def leave_one_maneuver_out(post: Posterior, priors: Priors) -> np.ndarray:
                                       priors.gaussian_sd(post.estimate.theta))
 
 
-def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dict, seed: int, before=None) -> Posterior:
-    """Linearise about the point estimate, tabulate the noise ratios and run the ensembles (``before``: a
-    check called first with the data's statistics at the estimate and the ratios' sds)."""
+@dataclass
+class Prepared:
+    """What `prepare` computes at the point estimate before a step is taken, and `run` samples from.
+    ``stats`` and ``ratio_sd`` (the data's information, the nuisance integrated out, and the noise
+    ratios' spread) are what a check of identification reads before the sampler runs."""
+
+    estimate: object
+    priors: Priors
+    lins: list
+    noises: list
+    grid: RatioGrid
+    logpost: LogPosterior
+    parts: list
+    """Each maneuver's `likelihood.Stats` at the point estimate's noise scales."""
+    stats: object
+    """The campaign's `likelihood.Stats` at the fitted noise (with correlated noise, the maneuvers chained)."""
+    ratio_sd: np.ndarray
+    """The noise ratios' sds from the REML profile's Hessian (their prior's where it is flat: `ratio_curvature`)."""
+    group_index: np.ndarray | None = None
+    """Each maneuver's noise group, where the campaign has more than one (`preprocess.noise_groups`)."""
+
+    @property
+    def labels(self) -> list:
+        """The sampled dimensions' names, in the order of the log posterior's ``x`` (`LogPosterior`)."""
+        est = self.estimate
+        labels = list(est.spec.labels) + noise_labels(est.spec.correlated_noise)
+        if self.group_index is not None:
+            labels += [f"noise.level.{g}" for g in est.noise_groups] + ["noise.group_sd"]
+        return labels
+
+
+def prepare(maneuvers, estimate, priors: Priors, grid_cfg: dict) -> Prepared:
+    """Linearise about the point estimate, tabulate the noise ratios on their grid and gather the data's
+    information at the fitted noise: everything the sampler needs, and what is checked before it runs."""
     lins, noises = linearize_all(maneuvers, estimate)
     ratios = ratios_of(estimate.log_sigma)
-    fallback = np.sqrt(2.0) * priors.log_sigma_sd[0]
+    fallback = priors.log_ratio_sd
     index = noise_groups(maneuvers)[1] if estimate.group_offsets is not None else None
     shapes = NoiseShapes(noises, groups=index)
     if estimate.spec.correlated_noise:
@@ -407,8 +474,13 @@ def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dic
         stats = total([maneuver_stats(nz, estimate.maneuver_variances(0, g)) for nz, g in zip(shapes.at(ratios), levels)])
     else:
         stats = total(parts)
-    if before is not None:
-        before(stats, ratio_sd)
+    return Prepared(estimate, priors, lins, noises, grid, logpost, parts, stats, ratio_sd, index)
+
+
+def run(ready: Prepared, sampler_cfg: dict, seed: int) -> Posterior:
+    """Start at the Laplace approximation about the conditional posterior and run the ensembles
+    (`run_ensembles`; `budget.SamplingStopped` where the budget cannot converge)."""
+    estimate, priors, grid, stats, index = ready.estimate, ready.priors, ready.grid, ready.stats, ready.group_index
     mean, cov = conditional_posterior(stats, priors.mean - estimate.theta, priors.gaussian_sd(estimate.theta))
     start_mean = np.concatenate([mean, estimate.log_sigma])
     start_cov = start_covariance(cov, stats.n, grid.sd)
@@ -420,7 +492,7 @@ def sample(maneuvers, estimate, priors: Priors, sampler_cfg: dict, grid_cfg: dic
         spread = np.concatenate([0.5 / np.asarray(grid.n, dtype=float), [GROUP_SD_START_VARIANCE]])
         start_cov = np.block([[start_cov, np.zeros((len(start_cov), len(spread)))],
                               [np.zeros((len(spread), len(start_cov))), np.diag(spread)]])
-    result = run_ensembles(logpost, start_mean, start_cov, sampler_cfg, seed)
+    result = run_ensembles(ready.logpost, start_mean, start_cov, sampler_cfg, seed)
     if index is not None:  # every later step reads log scales
         result.chains[..., p:p + k] = absolute(result.chains[..., p:p + k])
-    return Posterior(estimate, lins, noises, grid, result, list(estimate.spec.labels), parts, index)
+    return Posterior(estimate, ready.lins, ready.noises, grid, result, list(estimate.spec.labels), ready.parts, index)

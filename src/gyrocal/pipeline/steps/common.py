@@ -9,14 +9,13 @@ import warnings
 from contextlib import contextmanager
 from pathlib import Path
 
-from gyrocal.errors import InputError
+from gyrocal.errors import InputError, OutputError
 from gyrocal.io.outputs import write_json, write_text
 from gyrocal.maneuvers import preprocess
-from gyrocal.model import effects
 from gyrocal.pipeline.steps import REFUSED
 
-__all__ = ["VARIANT_STEPS", "compared", "finish", "known_effects", "load_maneuvers", "peak_rss", "posterior_spec",
-           "read_json", "read_refusal", "refusal", "refusals", "start", "variant_step"]
+__all__ = ["VARIANT_STEPS", "compared", "finish", "load_maneuvers", "peak_rss", "read_json", "read_refusal", "refusal",
+           "refusals", "start", "variant_step"]
 
 log = logging.getLogger("gyrocal")
 
@@ -84,6 +83,9 @@ def refusal():
     except InputError as exc:
         log.error("%s\n%s", REFUSED, exc)
         sys.exit(f"{REFUSED}\n{exc}")
+    except OutputError as exc:  # a full disk: not the input's fault, but a message, not a traceback
+        log.error("%s", exc)
+        sys.exit(f"gyrocal: {exc}")
 
 
 VARIANT_STEPS = ("point_estimate", "posterior", "diagnostics")
@@ -140,9 +142,6 @@ def variant_step(paths, model: str, step: str, run, outputs=()) -> dict | None:
     return record
 
 
-known_effects = effects.known
-
-
 def load_maneuvers(npz_paths) -> list:
     return [preprocess.ManeuverData.load(p) for p in npz_paths]
 
@@ -151,14 +150,3 @@ def read_json(path):
     with open(path) as handle:
         return json.load(handle)
 
-
-def posterior_spec(spec, priors_cfg: dict, prior_from=None):
-    """A point estimate's specification with the priors its posterior samples under: the declared
-    ones, overridden by the config and by an earlier campaign's ``calibration.csv``
-    (``prior_from``): its parameters' rows, never its derived combinations (a combination is no
-    parameter's prior: ``sf_mean`` is correlated with both scale factors)."""
-    import pandas as pd
-
-    from gyrocal.io.calibration import parameter_rows
-    earlier = parameter_rows(pd.read_csv(prior_from)) if prior_from else None
-    return spec.with_priors(priors_cfg, earlier, str(prior_from))

@@ -8,7 +8,7 @@ from gyrocal.io.outputs import write_json
 from gyrocal.model import effects
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import DiagnosticsSettings
-from gyrocal.pipeline.steps.common import known_effects, load_maneuvers
+from gyrocal.pipeline.steps.common import load_maneuvers
 
 __all__ = ["run"]
 
@@ -17,7 +17,7 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: DiagnosticsSet
     """``diagnostics.json`` per docs/interface.md section 5: misfit verdict and ranking."""
     out = paths.model(model)
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
-    known = known_effects(settings.plugins)
+    known = effects.known(settings.plugins)
     est = PointEstimate.load(out.point_estimate, known)
     plugins = [e for name, e in known.items() if name not in effects.LIBRARY]
     doc = diagnostics.diagnose(maneuvers, est, pd.read_csv(out.fit), pd.read_csv(out.summary).set_index("label"),

@@ -1,26 +1,18 @@
 """Rule ``posterior``: emcee over one model's parameters and noise scales."""
 
-import numpy as np
 import pandas as pd
 
 from gyrocal.checks import fit as checks
 from gyrocal.inference.fit.estimate import PointEstimate
-from gyrocal.inference.noise import covariance
 from gyrocal.inference.sampling import inferencedata, posterior
 from gyrocal.inference.sampling.budget import SamplingStopped
 from gyrocal.io.outputs import atomic, write_csv, write_json
+from gyrocal.model import effects
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import PosteriorSettings
-from gyrocal.pipeline.steps.common import known_effects, load_maneuvers, posterior_spec
+from gyrocal.pipeline.steps.common import load_maneuvers
 
-__all__ = ["model_priors", "run"]
-
-
-def model_priors(est: PointEstimate, priors_cfg: dict, prior_from=None) -> posterior.Priors:
-    """The spec's declared priors, overridden by the config and by an earlier campaign's
-    ``calibration.csv`` (``prior_from``; `common.posterior_spec`)."""
-    spec = posterior_spec(est.spec, priors_cfg, prior_from)
-    return posterior.Priors.from_spec(spec, est.stated_noise, priors_cfg["noise_log_sd"])
+__all__ = ["run"]
 
 
 def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSettings):
@@ -31,28 +23,25 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSetti
     comparison of the models needs neither)."""
     out, s = paths.model(model), settings
     maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
-    est = PointEstimate.load(out.point_estimate, known_effects(s.plugins))
-    priors = model_priors(est, s.priors, s.prior_from)
+    est = PointEstimate.load(out.point_estimate, effects.known(s.plugins))
+    priors = posterior.model_priors(est, s.priors, s.prior_from)
     checks.check_blocks(maneuvers, s.sampler["block_s"])
     checks.check_noise(maneuvers, est)
     checks.check_physical(maneuvers, est, priors.bound)
     checks.check_representable(maneuvers, est)
-    notes = []
-    identified = lambda stats, ratio_sd: notes.append(
-        checks.check_identified(est, priors.sd, stats, ratio_sd, np.sqrt(2.0) * priors.log_sigma_sd[0]))
+    ready = posterior.prepare(maneuvers, est, priors, s.grid)
+    weakest = checks.check_identified(est, priors.sd, ready.stats, ready.ratio_sd, priors.log_ratio_sd)
     try:
-        post = posterior.sample(maneuvers, est, priors, s.sampler, s.grid, s.seed, before=identified)
+        post = posterior.run(ready, s.sampler, s.seed)
     except SamplingStopped as stopped:
-        labels = list(est.spec.labels) + covariance.noise_labels(est.spec.correlated_noise)
-        if est.group_offsets is not None:
-            labels += [f"noise.level.{g}" for g in est.noise_groups] + ["noise.group_sd"]
-        raise checks.sampling_stopped(stopped, est, notes[0] if notes else "", labels) from None
+        raise checks.sampling_stopped(stopped, est, weakest, ready.labels) from None
     idata, summary, fit, record = inferencedata.assemble(post, maneuvers, s.sampler, s.convergence, s.seed)
+    blocks = inferencedata.loo_blocks(idata, est.spec.model)
+    elpd = posterior.leave_one_maneuver_out(post, priors)
     with atomic(out.posterior) as tmp:
         idata.to_netcdf(str(tmp))
     write_csv(summary, out.summary)
     write_csv(fit, out.fit)
     write_json(record, out.sampler)
-    write_csv(inferencedata.loo_blocks(idata, est.spec.model), out.elpd_blocks)
-    elpd = posterior.leave_one_maneuver_out(post, priors)
+    write_csv(blocks, out.elpd_blocks)
     write_csv(pd.DataFrame({"maneuver": [d.id for d in maneuvers], "elpd": elpd}), out.elpd_maneuvers)

@@ -8,10 +8,11 @@ import xarray as xr
 
 from gyrocal.criticism import priorconflict, verdict
 from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.inference.sampling.posterior import posterior_spec
 from gyrocal.io.outputs import write_json, write_text
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import ReportSettings
-from gyrocal.pipeline.steps.common import compared, load_maneuvers, posterior_spec, read_json, refusals
+from gyrocal.pipeline.steps.common import compared, load_maneuvers, read_json, refusals
 from gyrocal.report import review
 
 __all__ = ["run"]
@@ -37,15 +38,14 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
     est = PointEstimate.load(files.point_estimate, linearizations=False)
     info, diagnostics, sampler = read_json(paths.input_json), read_json(files.diagnostics), read_json(files.sampler)
     effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases)
-    earlier = pd.read_csv(cfg["prior_from"]) if cfg.get("prior_from") else None
-    used = est.spec.with_priors(cfg["priors"], earlier, str(cfg.get("prior_from")))
+    used = posterior_spec(est.spec, cfg["priors"], cfg.get("prior_from"))
     conflict = priorconflict.conflict_check(priorconflict.conflict_table(used, est.theta, est.cov, calibrations[model]))
     findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg, conflict)
     # its posterior group alone (the predictive draws are 100 MB at 10x), in memory: forked processes draw
     with xr.open_dataset(files.posterior, group="posterior", engine="h5netcdf") as group:
         posterior = az.InferenceData(posterior=group.load())
     inputs = review.ReviewInputs(
-        model=model, spec=posterior_spec(est.spec, cfg["priors"], cfg.get("prior_from")), maneuvers=maneuvers,
+        model=model, spec=used, maneuvers=maneuvers,
         tables=[pd.read_csv(p) for p in paths.maneuvers(maneuver_ids, "csv")],
         calibration=calibrations[model], fit=pd.read_csv(files.fit), posterior=posterior, diagnostics=diagnostics,
         sampler=sampler, correction=read_json(files.correction), correction_path=files.correction,

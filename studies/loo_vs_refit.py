@@ -1,6 +1,6 @@
 """PSIS-LOO against exact refits on the default campaign, and what p_loo counts (issue 12).
 
-    python benchmarks/loo_vs_refit.py [OUT.csv] [--blocks yaw_pos:5,roll_neg:12,...]
+    python studies/loo_vs_refit.py [OUT.csv] [--blocks yaw_pos:5,roll_neg:12,...]
     (default OUT: results/study/loo_vs_refit.csv)
 
 Prints figures, asserts nothing. On the default MOM-like campaign (simulated, then gyrocal's

@@ -3,7 +3,7 @@ one solve) and ``classic.csv``'s (bias from the holds, solved again about its es
 its delta-method sd, at the default scenario's truth and residual bias, at a bias 30 times
 larger, at truths drawn as the validation study draws them, and under a bias drift (the limit).
 
-    python benchmarks/classic_accuracy.py [--campaigns 20] [--out benchmarks/data/classic_accuracy.csv]
+    python studies/classic_accuracy.py [--campaigns 20] [--out studies/data/classic_accuracy.csv]
 
 Prints one row per condition, estimator and parameter kind: RMSE and largest error against the
 truth, the mean sd, the z-scores' sd and the share within 2 sd (ppm for scale factors, arcsec for

@@ -1,8 +1,8 @@
 """Why the structure test and PSIS-LOO can disagree: prints figures, asserts nothing.
 
-    python benchmarks/loo_vs_structure.py [SCENARIO.yaml EFFECT]
+    python studies/loo_vs_structure.py [SCENARIO.yaml EFFECT]
     (default: tests/data/hidden_bias_drift.yaml bias_drift; the long-maneuver case is
-    benchmarks/data/mom_bias_drift.yaml bias_drift)
+    studies/data/mom_bias_drift.yaml bias_drift)
 
 On a small campaign with a hidden effect, run with the baseline and with the variant
 that adds the effect, it prints for the same added effect:
@@ -29,19 +29,17 @@ import numpy as np
 import pandas as pd
 import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
 from gyrocal.inference.fit.estimate import PointEstimate, linearize_all
 from gyrocal.inference.fit.likelihood import Stats, leave_one_out_log_evidence, log_evidence, maneuver_stats, total
 from gyrocal.inference.noise import covariance
 from gyrocal.inference.sampling import inferencedata, predictive
+from gyrocal.inference.sampling.posterior import model_priors
+from gyrocal.model import effects
 from gyrocal.pipeline.steps import common
-from gyrocal.pipeline.steps import posterior as posterior_step
 from gyrocal.simulation import simulate
+from gyrocal.study.hidden import calibrate, with_variant
 
-from conftest import DATA, config_with, run_campaign
-from test_criticism import BASE
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def dense_parts(lin, nz, var):
@@ -89,8 +87,8 @@ def study(scenario: Path, effect: str, tmp: Path):
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     from snakemake.utils import validate
     validate(cfg, str(ROOT / "workflow/schemas/config.schema.yaml"))
-    cfg = config_with(cfg, {"baseline": BASE, "extended": BASE + [effect]})
-    npz = run_campaign(tmp / "sim" / "campaign", tmp / "out", cfg, ("baseline", "extended"))
+    cfg = with_variant(cfg, effect)
+    npz = calibrate(tmp / "sim" / "campaign", tmp / "out", cfg)
     maneuvers = common.load_maneuvers(npz)
     table = pd.read_csv(tmp / "out" / "model_comparison.csv").set_index("model")
     base_diag = common.read_json(tmp / "out" / "baseline" / "diagnostics.json")
@@ -102,11 +100,11 @@ def study(scenario: Path, effect: str, tmp: Path):
     print(f"2. PSIS-LOO, 60-s blocks: elpd diff {table.loc['extended', 'elpd_diff_vs_first']:.1f} "
           f"+- {table.loc['extended', 'elpd_diff_se']:.1f}; p_loo baseline {table.loc['baseline', 'p_loo']:.1f}, "
           f"extended {table.loc['extended', 'p_loo']:.1f}")
-    known = common.known_effects(cfg["plugins"])
+    known = effects.known(cfg["plugins"])
     lomo = {}
     for model in ("baseline", "extended"):
         est = PointEstimate.load(tmp / "out" / model / "point_estimate.npz", known)
-        priors = posterior_step.model_priors(est, cfg["priors"])
+        priors = model_priors(est, cfg["priors"])
         prior_mean, prior_sd = priors.mean - est.theta, priors.sd
         var = covariance.variances(est.log_sigma)
         lins, noises = linearize_all(maneuvers, est)
@@ -141,7 +139,7 @@ def study(scenario: Path, effect: str, tmp: Path):
 
 
 def main():
-    scenario, effect = (Path(sys.argv[1]), sys.argv[2]) if len(sys.argv) > 2 else (DATA / "hidden_bias_drift.yaml",
+    scenario, effect = (Path(sys.argv[1]), sys.argv[2]) if len(sys.argv) > 2 else (ROOT / "tests/data/hidden_bias_drift.yaml",
                                                                                    "bias_drift")
     with tempfile.TemporaryDirectory() as tmp:
         study(scenario, effect, Path(tmp))

@@ -1,7 +1,7 @@
 """How often each candidate of the diagnostics' ranking rejects on clean campaigns, against its
 nominal rate: the structure test's p-values should be uniform when nothing is missing.
 
-    python benchmarks/signature_calibration.py [--campaigns 24] [--scenario config/scenarios/mom.yaml]
+    python studies/signature_calibration.py [--campaigns 24] [--scenario config/scenarios/mom.yaml]
 
 Each campaign draws its truth from the configured prior (as the validation study does), is fitted
 with the baseline (classic start, REML noise, WLS) and ranked; no posterior is sampled, so this

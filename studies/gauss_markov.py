@@ -1,10 +1,10 @@
 """The Gauss-Markov validation (issue 30): star-tracker noise white plus first-order Gauss-Markov.
 
-    python benchmarks/gauss_markov.py run --tau 3 --n 200 --out /tmp/gm       # one record per campaign
-    python benchmarks/gauss_markov.py run --tau 30 --n 200 --out /tmp/gm
-    python benchmarks/gauss_markov.py run --tau 0 --n 100 --out /tmp/gm                  # the white control
-    python benchmarks/gauss_markov.py run --tau 3 --n 20 --sampled --out /tmp/gm_full   # + the full sampler
-    python benchmarks/gauss_markov.py summary /tmp/gm /tmp/gm_full                       # prints the tables
+    python studies/gauss_markov.py run --tau 3 --n 200 --out /tmp/gm       # one record per campaign
+    python studies/gauss_markov.py run --tau 30 --n 200 --out /tmp/gm
+    python studies/gauss_markov.py run --tau 0 --n 100 --out /tmp/gm                  # the white control
+    python studies/gauss_markov.py run --tau 3 --n 20 --sampled --out /tmp/gm_full   # + the full sampler
+    python studies/gauss_markov.py summary /tmp/gm /tmp/gm_full                       # prints the tables
 
 Each campaign is the tiny hidden-effect campaign (tests/data/hidden_st_correlated_noise.yaml:
 six single-axis maneuvers, 1 Hz star tracker, 60 s holds) with its channel parameters drawn from
@@ -34,19 +34,18 @@ Records are written one JSON file per campaign, so a run can be stopped and resu
 
 import argparse
 import json
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 import yaml
+from gauss_markov_tables import summary
 
 ROOT = Path(__file__).resolve().parents[1]
 BASE = ROOT / "tests/data/hidden_st_correlated_noise.yaml"
 WHITE_ARCSEC = (5.0, 20.0)
 GM_SHARE = 0.5
-LEVELS = {50: 0.674489750196, 90: 1.644853626951, 95: 1.959963984540}
 
 
 def scenario_for(tau_s: float, index: int, truth: dict, gap_s=None) -> dict:
@@ -215,9 +214,6 @@ def main():
     if args.command == "run":
         run(args)
     else:
-        sys.path.insert(0, str(Path(__file__).parent))
-        from gauss_markov_tables import summary
-
         summary([Path(f) for f in args.folders])
 
 

@@ -7,7 +7,7 @@ fit reads both point estimates. Printed: for the first pair, each parameter's me
 ways and their differences in the joint sd; over all pairs, the spread of those differences and
 each method's error against the truth in its own sd.
 
-    PYTHONPATH=src python benchmarks/sequential_vs_joint.py --pairs 3 --out /tmp/sequential
+    PYTHONPATH=src python studies/sequential_vs_joint.py --pairs 3 --out /tmp/sequential
 """
 
 import argparse

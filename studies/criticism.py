@@ -1,28 +1,25 @@
 """The model-criticism loop on every hidden-effect scenario: prints a table, asserts nothing.
 
-    python benchmarks/criticism.py
+    python studies/criticism.py
 
 Each scenario in tests/data/hidden_*.yaml is simulated (its own seed) and run with the
 baseline and with the variant that adds the hidden effect, as the tests do.
 """
 
 import json
-import sys
 import tempfile
 from pathlib import Path
 
 import pandas as pd
 import yaml
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.io.calibration import core_rows
 from gyrocal.simulation import simulate
+from gyrocal.study.hidden import CASES, calibrate, with_variant
 
-from conftest import DATA, config_with, run_campaign
-from test_criticism import BASE, CASES
+ROOT = Path(__file__).resolve().parents[1]
+DATA = ROOT / "tests/data"
 
 
 def coverage(out, model, campaign, truth):
@@ -43,9 +40,8 @@ def main():
             root = Path(tmp) / case
             simulate.run(DATA / f"hidden_{case}.yaml", root / "sim")
             campaign, truth = root / "sim/campaign", json.loads((root / "sim/truth.json").read_text())
-            run_campaign(campaign, root / "out", config_with(cfg, {"baseline": BASE, "extended": BASE + [effect]},
-                                                             [str(plugin)] if plugin else []),
-                         ("baseline", "extended"), root / "sim/truth.json")
+            calibrate(campaign, root / "out", with_variant(cfg, effect, DATA / plugin if plugin else None),
+                      truth_path=root / "sim/truth.json")
             comp = pd.read_csv(root / "out/model_comparison.csv").set_index("model")
             base = json.loads((root / "out/baseline/diagnostics.json").read_text())
             ext = json.loads((root / "out/extended/diagnostics.json").read_text())

@@ -1,7 +1,7 @@
 """What ``reference_interval_s: auto`` chooses on the validation study's kinds of campaign.
 
-    python benchmarks/auto_interval.py                 # 20 campaigns per kind, a few minutes
-    python benchmarks/auto_interval.py --n 50
+    python studies/auto_interval.py                 # 20 campaigns per kind, a few minutes
+    python studies/auto_interval.py --n 50
 
 Every kind of campaign the validation study and the Gauss-Markov validation fly, with truths drawn
 from the configured prior as they are: clean; each hidden effect of ``config/study.yaml`` at its
@@ -14,7 +14,6 @@ the numbers it got before ``auto`` existed.
 """
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
@@ -22,7 +21,6 @@ import numpy as np
 import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
 
 
 def kinds(study: dict) -> list:

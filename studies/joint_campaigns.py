@@ -9,7 +9,7 @@ comparison it also counts how often `gyrocal compare-campaigns`'s parameter-by-p
 |z| >= 3) fires, how often the moved parameter leads the largest direction, and the ratio of the
 joint fit's sds to one campaign's.
 
-    PYTHONPATH=src python benchmarks/joint_campaigns.py --pairs 50 --processes 2 --out /tmp/joint_study
+    PYTHONPATH=src python studies/joint_campaigns.py --pairs 50 --processes 2 --out /tmp/joint_study
 
 prints the table and writes ``pairs.csv`` there.
 """

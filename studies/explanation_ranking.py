@@ -1,8 +1,8 @@
 """What the white baseline names first, on the validation's kinds of campaign (issue 30).
 
-    OPENBLAS_NUM_THREADS=1 python benchmarks/explanation_ranking.py --n 16            # every kind, ~15 min
-    OPENBLAS_NUM_THREADS=1 python benchmarks/explanation_ranking.py --n 50 --kinds gm30,gm3,gm0
-    OPENBLAS_NUM_THREADS=1 python benchmarks/explanation_ranking.py --n 8 --factor 3     # effects 3x larger
+    OPENBLAS_NUM_THREADS=1 python studies/explanation_ranking.py --n 16            # every kind, ~15 min
+    OPENBLAS_NUM_THREADS=1 python studies/explanation_ranking.py --n 50 --kinds gm30,gm3,gm0
+    OPENBLAS_NUM_THREADS=1 python studies/explanation_ranking.py --n 8 --factor 3     # effects 3x larger
 
 Per campaign: the baseline model's point estimate, the whiteness statistics and the ranking of
 explanations of `gyrocal.criticism.diagnostics`, as the diagnostics step computes them. The kinds:
@@ -16,7 +16,6 @@ often ``st_correlated_noise`` is first, and how often the structure test is fail
 """
 
 import argparse
-import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
@@ -24,7 +23,6 @@ import numpy as np
 import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
 
 
 def kinds(study: dict, factor: float = 1.0) -> dict:

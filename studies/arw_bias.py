@@ -14,7 +14,7 @@ thing changed at a time, to find where a bias comes from:
 set, as a triad of single-axis gyros, where no second set's difference measures the walk.
 ``--gyro-hz 2.5`` samples the gyros so that every other 1-Hz star-tracker sample falls mid-interval.
 
-    python benchmarks/arw_bias.py [--scenario tests/data/tiny.yaml] [--seeds 20] [--posterior] [--out OUT.csv]
+    python studies/arw_bias.py [--scenario tests/data/tiny.yaml] [--seeds 20] [--posterior] [--out OUT.csv]
 
 Prints each column's ratio to the stated ARW (mean, its standard error, median, how many below 1)
 and writes one row per seed. docs/validation.md ("The fitted ARW") has the figures.
@@ -79,10 +79,10 @@ def fit(scenario, seed, cfg, posterior_draws: bool) -> dict:
     from gyrocal.inference.fit import classic, estimate
     from gyrocal.inference.noise import covariance
     from gyrocal.inference.sampling import posterior
+    from gyrocal.inference.sampling.posterior import model_priors
     from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline
     from gyrocal.model.units import deg_h_to_rad_s
-    from gyrocal.pipeline.steps.posterior import model_priors
     from gyrocal.simulation import simulate
 
     campaign, truth = simulate.simulate(scenario, seed)
@@ -113,7 +113,7 @@ def fit(scenario, seed, cfg, posterior_draws: bool) -> dict:
                                                    classic.classic_start(maneuvers0, spec)).log_sigma[2]
     if posterior_draws:
         priors = model_priors(est, cfg["priors"])
-        post = posterior.sample(maneuvers, est, priors, cfg["sampler"], cfg["grid"], seed)
+        post = posterior.run(posterior.prepare(maneuvers, est, priors, cfg["grid"]), cfg["sampler"], seed)
         arw = np.exp(post.result.chains[..., -1])
         row["posterior_mean"] = np.log(arw.mean())
     stated_arw = covariance.stated_si(stated)[2]

@@ -5,10 +5,11 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from gauss_markov import LEVELS
 
 from gyrocal.study.tables import binomial_interval, clustered_interval, efficiency_confidence
 
+LEVELS = {50: 0.674489750196, 90: 1.644853626951, 95: 1.959963984540}
+"""Each central interval's level (%) and its normal quantile."""
 CORRELATED = "st_correlated_noise"
 
 

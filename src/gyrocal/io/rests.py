@@ -1,0 +1,126 @@
+"""Where a recording rests, read off its gyro, and the maneuvers it splits into there.
+
+A lab recording often rests between its motions (BROAD: 30 s, two minutes of motion, 30 s). The
+gyro tells the rests without any label: at rest it reads its bias and its noise, in motion far
+more. The noise at rest is measured in the recording itself: its samples are cut into blocks of
+`REST_BLOCK_S`, and the quietest `QUIETEST_SHARE` of the blocks (the smallest spread over the
+three channels) give each channel's sd (their median block sd) and bias (their median mean).
+A sample is at rest where the rate less that bias, averaged over `SMOOTH_S` (which shrinks the
+noise by the square root of the samples averaged), has a norm below `REST_SIGMAS` times what
+the noise leaves in that average; a rest is a run of such samples at least ``min_rest_s`` long
+(`MIN_REST_S` unless the mapping says otherwise).
+
+A file is cut in the middle of each rest that neither opens nor closes it, so that every
+maneuver keeps half a rest on either side (its bias is seen still); a file with no such rest is
+one maneuver."""
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "ARW_AVERAGE_S", "MIN_REST_S", "QUIETEST_SHARE", "REST_BLOCK_S", "REST_SIGMAS", "SMOOTH_S",
+    "Rests", "arw_at_rest", "find_rests", "pieces",
+]
+
+REST_BLOCK_S = 0.5
+"""The blocks the noise at rest is measured over."""
+QUIETEST_SHARE = 0.1
+"""The share of the blocks, the quietest, that measure the noise at rest: a file at rest for at
+least half of that (5 % of its length) measures it from rest alone (the median of their spreads)."""
+SMOOTH_S = 0.1
+"""The rate is averaged over this long before it is compared with the threshold."""
+REST_SIGMAS = 5.0
+"""The threshold, in sds of the averaged rate's norm at rest: a sample at rest exceeds it with
+probability about 1e-5 (three channels of white noise); the slowest motion taken for rest
+is a few times the noise's own sd, a tenth or two of a deg/s for a MEMS gyro."""
+MIN_REST_S = 2.0
+"""The shortest rest a file is cut at (a pause in a hand-held motion is shorter)."""
+
+
+@dataclass
+class Rests:
+    """What `find_rests` found in one file (rows counted from 0, ends exclusive)."""
+
+    runs: list
+    """[(first row, row after the last)] of each rest."""
+    sigma: np.ndarray
+    """(n_channels,) each channel's noise sd at rest, in the rate's unit (rad/s)."""
+    bias: np.ndarray
+    """(n_channels,) each channel's rate at rest."""
+    threshold: float
+    """The averaged rate's norm below which a sample is at rest."""
+    smooth: int
+    """The samples averaged."""
+    arw_rad_sqrt_s: float | None = None
+    """The angle random walk the rests show (`arw_at_rest`), where the importer measured it."""
+
+
+def find_rests(rate: np.ndarray, step_s: float, min_rest_s: float = MIN_REST_S) -> Rests:
+    """The rests of one recording from its gyro rates ``rate`` (N, n_channels; rad/s) sampled every
+    ``step_s`` seconds."""
+    rate = np.asarray(rate, dtype=float)
+    n = len(rate)
+    block = max(2, round(REST_BLOCK_S / step_s))
+    count = max(1, n // block)
+    blocks = rate[:count * block].reshape(count, min(block, n), rate.shape[1])
+    spread = blocks.std(axis=1, ddof=1)
+    quiet = np.argsort(np.linalg.norm(spread, axis=1))[:max(1, int(np.ceil(QUIETEST_SHARE * count)))]
+    sigma = np.median(spread[quiet], axis=0)
+    bias = np.median(blocks[quiet].mean(axis=1), axis=0)
+    smooth = max(1, round(SMOOTH_S / step_s))
+    threshold = float(REST_SIGMAS * np.linalg.norm(sigma) / np.sqrt(smooth))
+    averaged = _moving_mean(rate - bias, smooth)
+    still = np.linalg.norm(averaged, axis=1) < threshold
+    shortest = max(1, round(min_rest_s / step_s))
+    runs = [(a, b) for a, b in _runs(still) if b - a >= shortest]
+    return Rests(runs, sigma, bias, threshold, smooth)
+
+
+def pieces(n: int, runs) -> list:
+    """The maneuvers ``[(first row, row after the last)]`` of a file of ``n`` rows with rests
+    ``runs``: cut in the middle of every rest that neither opens nor closes the file."""
+    cuts = [(a + b) // 2 for a, b in runs if a > 0 and b < n]
+    edges = [0, *cuts, n]
+    return [(a, b) for a, b in itertools.pairwise(edges) if b > a]
+
+
+def _moving_mean(x: np.ndarray, k: int) -> np.ndarray:
+    """The mean of each row's ``k`` neighbours centred on it (fewer at the ends)."""
+    if k <= 1:
+        return x
+    total = np.vstack([np.zeros((1, x.shape[1])), np.cumsum(x, axis=0)])
+    rows = np.arange(len(x))
+    lo = np.clip(rows - k // 2, 0, len(x))
+    hi = np.clip(rows - k // 2 + k, 0, len(x))
+    return (total[hi] - total[lo]) / (hi - lo)[:, None]
+
+
+def _runs(mask: np.ndarray) -> list:
+    """``[(start, end)]`` of each run of True in ``mask`` (end exclusive)."""
+    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist()))
+
+
+ARW_AVERAGE_S = 1.0
+"""The averaging time of the ARW measured at rest (`arw_at_rest`): at 1 s the Allan deviation of white
+rate noise equals the ARW coefficient, before bias instability shows (tens of seconds for MEMS)."""
+
+
+def arw_at_rest(rate: np.ndarray, step_s: float, found: Rests) -> float | None:
+    """The angle random walk (rad/sqrt(s)) the rests show, the largest channel's: the sd of the rate's
+    `ARW_AVERAGE_S` means within the rests, times the square root of that time (the Allan deviation at
+    1 s, non-overlapping); None where the rests hold fewer than ten such means. A band-limited MEMS output
+    has correlated samples, so its per-sample sd times sqrt(dt) would understate the walk."""
+    k = max(1, round(ARW_AVERAGE_S / step_s))
+    steps = []
+    for a, b in found.runs:
+        n = (b - a) // k
+        if n > 1:
+            means = rate[a:a + n * k].reshape(n, k, -1).mean(axis=1)
+            steps.append(np.diff(means, axis=0))
+    if sum(len(d) for d in steps) < 10:
+        return None
+    allan = np.sqrt(0.5 * np.mean(np.concatenate(steps) ** 2, axis=0))
+    return float(np.max(allan) * np.sqrt(k * step_s))
