@@ -40,7 +40,8 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
     effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases)
     used = posterior_spec(est.spec, cfg["priors"], cfg.get("prior_from"))
     conflict = priorconflict.conflict_check(priorconflict.conflict_table(used, est.theta, est.cov, calibrations[model]))
-    findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg, conflict)
+    findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg, conflict,
+                              info["gyro"].get("sensor_class"))
     # its posterior group alone (the predictive draws are 100 MB at 10x), in memory: forked processes draw
     with xr.open_dataset(files.posterior, group="posterior", engine="h5netcdf") as group:
         posterior = az.InferenceData(posterior=group.load())
