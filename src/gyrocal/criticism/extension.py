@@ -11,9 +11,11 @@ effect the model has already) stops the loop with its reason.
 
 from dataclasses import asdict, dataclass
 
+import pandas as pd
+
 from gyrocal.model.effects import LIBRARY
 
-__all__ = ["EXTENDED", "Extension", "extension_names", "next_effect"]
+__all__ = ["EXTENDED", "Extension", "before_after", "extension_names", "next_effect", "outside_share"]
 
 EXTENDED = "extended"
 """The first extended variant's name; the k-th step's is ``extended_<k>`` (`extension_names`)."""
@@ -68,3 +70,29 @@ def next_effect(base: str, base_effects, diagnostics: dict, log10_p_min: float) 
     return Extension(base, best["name"], effects + [best["name"]],
                      f"model {base} misfits and its best explanation is effect {best['name']} "
                      f"(log10 p = {best['log10_p']:.1f}, significant below {log10_p_min:g})")
+
+
+def outside_share(fit) -> float:
+    """The share of a model's fitted points (``fit.csv``: every sample, set and axis) outside their 95 % bands."""
+    outside = fit[[c for c in fit.columns if c.startswith("outside_")]].to_numpy(dtype=float)
+    return float(outside.mean())
+
+
+def before_after(steps: list, diagnostics: dict, fits: dict, comparison):
+    """The loop's error before and after, a row per model of each fitted step (``steps``: (name,
+    `Extension.as_dict`) pairs, the model each extends first, then the extended one): residual RMS against
+    what the noise model predicts, the innovations' whiteness, the share outside the 95 % bands and
+    both leave-out elpd (``model_comparison.csv``'s); ``diagnostics`` and ``fits`` by model."""
+    elpd = comparison.set_index("model")
+    rows = []
+    for name, step in steps:
+        for model, role in ((step["base"], "before"), (name, f"after: + {step['effect']}")):
+            d = diagnostics[model]
+            rows.append({"step": name, "model": model, "": role, "misfit": bool(d["misfit"]),
+                         "residual RMS (arcsec)": round(d["residual_rms_arcsec"], 2),
+                         "noise model predicts (arcsec)": round(d["noise_rms_arcsec"], 2),
+                         "whiteness z": round(d["whiteness"]["z"], 1),
+                         "outside 95 % bands": round(outside_share(fits[model]), 4),
+                         "elpd_loo": round(float(elpd.loc[model, "elpd_loo"]), 1),
+                         "elpd_lomo": round(float(elpd.loc[model, "elpd_lomo"]), 1)})
+    return pd.DataFrame(rows)

@@ -7,8 +7,8 @@ from typing import ClassVar
 
 from gyrocal.errors import InputError
 
-__all__ = ["SECTIONS", "DiagnosticsSettings", "ExtendSettings", "ModelChoiceSettings", "PointEstimateSettings", "PosteriorSettings",
-           "ReportSettings", "canonical", "models_to_run", "section"]
+__all__ = ["SECTIONS", "DiagnosticsSettings", "ExtendSettings", "ModelChoiceSettings", "PointEstimateSettings",
+           "PosteriorSettings", "ReportSettings", "canonical", "models_to_run", "section"]
 
 SECTIONS = {
     "point_estimate": ("noise", "plugins"),

@@ -7,7 +7,6 @@ from gyrocal.io.outputs import write_csv, write_with
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import ModelChoiceSettings
 from gyrocal.pipeline.steps.common import compared, read_json
-from gyrocal.report import figures as plots
 
 __all__ = ["run", "table"]
 
@@ -28,6 +27,8 @@ def run(paths: CampaignPaths, models, settings: ModelChoiceSettings):
     """``model_comparison.csv``: residual RMS, PSIS-LOO (each model's ``elpd_blocks.csv``) and exact
     leave-one-maneuver-out per variant, what moved, which variants are plausible and which one is
     reviewed (`table`); and its figure."""
+    from gyrocal.report import figures as plots  # matplotlib: not for the loop's step, which reads `table` alone
+
     table_ = table(paths, models, settings.reject_se)
     write_csv(table_, paths.comparison)
     fig = plots.comparison_figure(table_)

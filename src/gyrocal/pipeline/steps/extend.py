@@ -3,12 +3,11 @@ variant fitted in the same run where the reviewed model misfits and a library ef
 
 import logging
 
-from gyrocal.checks.fit import VariantSkipped
 from gyrocal.criticism.extension import Extension, extension_names, next_effect
 from gyrocal.io.outputs import write_json
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import DiagnosticsSettings, ExtendSettings, PointEstimateSettings, PosteriorSettings
-from gyrocal.pipeline.steps import calibrate, common, compare_models, diagnostics, point_estimate, posterior
+from gyrocal.pipeline.steps import common
 
 __all__ = ["decide", "run"]
 
@@ -21,6 +20,8 @@ def decide(paths: CampaignPaths, models, name: str, settings: ExtendSettings) ->
     names = extension_names(settings.loop["depth"])
     k = names.index(name)
     if k == 0:
+        from gyrocal.pipeline.steps import compare_models
+
         table = compare_models.table(paths, models, settings.model_choice["reject_se"])
         base = str(table.loc[table["reviewed"], "model"].iloc[0])
     else:
@@ -43,18 +44,18 @@ def run(paths: CampaignPaths, maneuver_ids, models, name: str, settings: ExtendS
     step = decide(paths, models, name, settings)
     write_json(step.as_dict(), files.extension)
     log.info("loop step %s: %s", name, step.why)
+    if not step.fitted:  # before the model steps' imports (the sampler's, arviz's): a skip costs next to nothing
+        common.variant_step(paths, name, "point_estimate", lambda: common.skip(f"not fitted: {step.why}"),
+                            _placeholders(files) if placeholders else [])
+        return step
+    from gyrocal.pipeline.steps import calibrate, diagnostics, point_estimate, posterior
+
     pe = PointEstimateSettings(effects=step.effects, **settings.point_estimate)
 
-    def first():
-        if not step.fitted:
-            raise VariantSkipped(f"not fitted: {step.why}")
-        point_estimate.run(paths, maneuver_ids, name, pe)
-
     diag_out = [files.diagnostics] if placeholders else []
-    post_out = [files.posterior, files.summary, files.fit, files.sampler, files.elpd_maneuvers, files.elpd_blocks,
-                files.calibration, files.correction] + diag_out if placeholders else []
-    if common.variant_step(paths, name, "point_estimate", first,
-                           ([files.point_estimate] if placeholders else []) + post_out) is not None:
+    post_out = _placeholders(files)[1:] if placeholders else []
+    if common.variant_step(paths, name, "point_estimate", lambda: point_estimate.run(paths, maneuver_ids, name, pe),
+                           _placeholders(files) if placeholders else []) is not None:
         return step
 
     def sample():
@@ -67,3 +68,10 @@ def run(paths: CampaignPaths, maneuver_ids, models, name: str, settings: ExtendS
                         lambda: diagnostics.run(paths, maneuver_ids, name, DiagnosticsSettings(**settings.diagnostics)),
                         diag_out)
     return step
+
+
+def _placeholders(files) -> list:
+    """The variant's files after ``extension.json``, in the order its steps write them: what a skipped
+    or refused step leaves its record in, from that step on."""
+    return [files.point_estimate, files.posterior, files.summary, files.fit, files.sampler, files.elpd_maneuvers,
+            files.elpd_blocks, files.calibration, files.correction, files.diagnostics]
