@@ -7,16 +7,18 @@ import json
 import re
 from html import unescape
 from html.parser import HTMLParser
+from pathlib import Path
 
 import pytest
 import yaml
 
-from conftest import DATA
 from gyrocal.criticism.extension import extension_names, next_effect
 from gyrocal.pipeline import run
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.report.review import FOLD_CHARS, fold
 from gyrocal.simulation import simulate
+
+from conftest import DATA
 
 BASE = ["scale_factor", "misalignment", "bias"]
 
@@ -124,12 +126,12 @@ def test_where_the_reviewed_model_fits_the_loop_skips_its_variant_with_the_reaso
     out, _ = tiny_run
     shutil.copytree(out, tmp_path / "run")
     paths = CampaignPaths.under(tmp_path / "run")
-    ids = json.loads(open(paths.input_json).read())["maneuvers"]
+    ids = json.loads(Path(paths.input_json).read_text())["maneuvers"]
     cfg = copy.deepcopy(config)
     cfg["models"] = {"baseline": BASE}
-    assert json.loads(open(paths.model("baseline").diagnostics).read())["misfit"] is False
+    assert json.loads(Path(paths.model("baseline").diagnostics).read_text())["misfit"] is False
     assert run.extend_models(paths, ids, cfg, ["baseline"]) == ["extended"]
-    step = json.loads(open(paths.model("extended").extension).read())
+    step = json.loads(Path(paths.model("extended").extension).read_text())
     assert not step["fitted"] and step["why"] == "model baseline has no misfit: nothing to extend"
     assert common.read_refusal(paths, "extended")["status"] == "skipped"
     assert common.compared(paths, ["baseline", "extended"]) == ["baseline"]
@@ -155,21 +157,21 @@ def loop_run(tmp_path_factory, short_chains):
 
 @pytest.mark.full  # the correlated model's posterior: about 2 minutes
 def test_the_white_models_misfit_is_named_and_the_extended_model_is_fitted_in_the_same_run(loop_run):
-    step = json.loads(open(loop_run.model("extended").extension).read())
+    step = json.loads(Path(loop_run.model("extended").extension).read_text())
     assert step["fitted"] and (step["base"], step["effect"]) == ("baseline", "st_correlated_noise")
-    before = json.loads(open(loop_run.model("baseline").diagnostics).read())
-    after = json.loads(open(loop_run.model("extended").diagnostics).read())
+    before = json.loads(Path(loop_run.model("baseline").diagnostics).read_text())
+    after = json.loads(Path(loop_run.model("extended").diagnostics).read_text())
     assert before["misfit"] and before["ranking"][0]["name"] == "st_correlated_noise"
     assert abs(after["whiteness"]["z"]) < abs(before["whiteness"]["z"]) / 2
-    verdict = json.loads(open(loop_run.verdict).read())
+    verdict = json.loads(Path(loop_run.verdict).read_text())
     assert verdict["model"] == "extended"
 
 
 @pytest.mark.full
 def test_the_review_shows_the_loop_before_and_after(loop_run):
     page = _Review()
-    page.feed(open(loop_run.report).read())
-    verdict = json.loads(open(loop_run.verdict).read())
+    page.feed(Path(loop_run.report).read_text())
+    verdict = json.loads(Path(loop_run.verdict).read_text())
     checks = page.tables["checks"][1:]
     assert [r[0]["shown"] for r in checks] == [c["check"] for c in verdict["checks"]]
     assert all(len(r[2]["shown"]) <= FOLD_CHARS for r in checks)
