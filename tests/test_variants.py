@@ -176,4 +176,4 @@ def test_where_the_gyros_are_symmetric_the_symmetric_model_is_reviewed_by_the_ru
         row = cal.loc[(channel, "sf")]
         assert row["ci95_low"] <= terms["sf_pos"] <= row["ci95_high"], (channel, row.to_dict())
     html = (tmp_path / "out" / "report.html").read_text()
-    assert "symmetric is reviewed: of the plausible variants (symmetric)" in html
+    assert "symmetric is reviewed: the only plausible variant of the 2 compared" in html
