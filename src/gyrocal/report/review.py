@@ -218,9 +218,9 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         loop=inputs.loop, loop_steps=list(inputs.loop_steps), disagreement=inputs.disagreement)
 
 
-FOLD_CHARS = 300
-"""A check's detail shown in full up to this many characters (about three lines of the checks table);
-the rest folds into ``<details>`` (`fold`)."""
+FOLD_CHARS = 200
+"""A check's detail shown in full up to this many characters (about three lines of the checks table's
+detail column, at least 420 px wide); the rest folds into ``<details>`` (`fold`)."""
 
 
 def fold(text: str, limit: int = FOLD_CHARS) -> Markup:
