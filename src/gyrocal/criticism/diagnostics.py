@@ -94,7 +94,7 @@ def _augmented(maneuvers, estimate: PointEstimate, candidates, var):
     spec = estimate.spec.augmented(candidates)
     theta = np.concatenate([estimate.theta, np.zeros(len(spec) - len(estimate.spec))])
     noises = (covariance.build(errormodel.linearize(data, spec, theta, estimate.biases[m]), estimate.boresight,
-                          estimate.correlation_time_s) for m, data in enumerate(maneuvers))
+                          estimate.correlation_time_s, estimate.spec.jitter_noise) for m, data in enumerate(maneuvers))
     if estimate.group_offsets is None:
         return spec, campaign_stats(noises, var)  # one maneuver's noise at a time: summed, then freed
     index = noise_groups(maneuvers)[1]
@@ -213,7 +213,7 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
                                                        for i in per_channel}
     if white is not None and not estimate.spec.correlated_noise:
         fitted = white["gauss_markov"]
-        for effect in (e for e in effects.LIBRARY.values() if e.noise):
+        for effect in (e for e in effects.LIBRARY.values() if e.noise and not e.rate_noise):
             ranking.append(_entry(effect.name, "effect", fitted["chi2"], correlation.GAUSS_MARKOV_DF,
                                   effect.description + correlation.caveat(fitted)))
     ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
@@ -227,7 +227,7 @@ def linearized(maneuvers, estimate: PointEstimate):
     time (`linearize_all` holds every maneuver's: over 1 GB at 10x the default campaign)."""
     for m in range(len(maneuvers)):
         lin = estimate.linearize(maneuvers, m)
-        yield lin, covariance.build(lin, estimate.boresight, estimate.correlation_time_s)
+        yield lin, covariance.build(lin, estimate.boresight, estimate.correlation_time_s, estimate.spec.jitter_noise)
 
 
 def _measuring(walk_variances, pairs, measured: list):

@@ -46,7 +46,8 @@ def _whitened(maneuvers, estimate: PointEstimate, added):
     index = noise_groups(maneuvers)[1]
     for m, data in enumerate(maneuvers):
         lin = errormodel.linearize(data, spec, theta, estimate.biases[m])
-        wm = WhitenedManeuver(covariance.build(lin, estimate.boresight, estimate.correlation_time_s), ratios)
+        wm = WhitenedManeuver(covariance.build(lin, estimate.boresight, estimate.correlation_time_s,
+                                                   estimate.spec.jitter_noise), ratios)
         q = np.linalg.qr(wm.wg)[0]
         unit = innovation_sd(estimate, index[m])
         x = (wm.wx - q @ (q.T @ wm.wx)) / unit
