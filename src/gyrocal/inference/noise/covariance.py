@@ -26,11 +26,35 @@ from gyrocal.inference.noise import markov
 from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
 __all__ = [
-    "COMPONENTS", "CORRELATED_SCALES", "JITTER_FLOOR_S", "JITTER_SCALE", "JITTER_SCALES", "NOISE_LABELS", "NOISE_SCALES",
-    "ManeuverNoise", "NoiseScale", "absolute_of", "build", "is_jitter", "jitter_stated_ms",
-    "difference", "filtered", "log_sigma_of", "noise_knowledge", "noise_labels", "noise_scales", "nuisance_design",
-    "ratios_of", "scales_in_units", "stated_scales", "stated_si", "transformed", "unit_variances", "untransformed",
-    "variances", "whiten"
+    "COMPONENTS",
+    "CORRELATED_SCALES",
+    "JITTER_FLOOR_S",
+    "JITTER_SCALE",
+    "JITTER_SCALES",
+    "NOISE_LABELS",
+    "NOISE_SCALES",
+    "ManeuverNoise",
+    "NoiseScale",
+    "absolute_of",
+    "build",
+    "difference",
+    "filtered",
+    "is_jitter",
+    "jitter_stated_ms",
+    "log_sigma_of",
+    "noise_knowledge",
+    "noise_labels",
+    "noise_scales",
+    "nuisance_design",
+    "ratios_of",
+    "scales_in_units",
+    "stated_scales",
+    "stated_si",
+    "transformed",
+    "unit_variances",
+    "untransformed",
+    "variances",
+    "whiten"
 ]
 
 COMPONENTS = ("cross", "about", "walk")

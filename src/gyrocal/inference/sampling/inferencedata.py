@@ -16,7 +16,14 @@ import pandas as pd
 import xarray as xr
 
 from gyrocal import __version__
-from gyrocal.inference.noise.covariance import CORRELATED_SCALES, JITTER_SCALE, build, noise_scales, scales_in_units, stated_scales
+from gyrocal.inference.noise.covariance import (
+    CORRELATED_SCALES,
+    JITTER_SCALE,
+    build,
+    noise_scales,
+    scales_in_units,
+    stated_scales,
+)
 from gyrocal.inference.sampling import predictive
 from gyrocal.maneuvers import preprocess
 from gyrocal.model import channels as ch
