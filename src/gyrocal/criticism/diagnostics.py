@@ -222,7 +222,9 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
                               jitter.description))
     ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
     _encompass(ranking, groups, stats, n_model)
-    noiseranking.demote_explained(ranking, maneuvers, estimate, {e.name: e for _, e, _ in groups}, ENCOMPASS_TOP)
+    deterministic = {e.name: e for _, e, _ in groups}
+    for noise_effect in noiseranking.SCORES_GIVEN:
+        noiseranking.demote_explained(ranking, maneuvers, estimate, deterministic, ENCOMPASS_TOP, noise_effect)
     return ranking, detail
 
 
