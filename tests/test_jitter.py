@@ -119,3 +119,42 @@ def test_the_ranking_names_the_jitter_and_sets_it_below_a_latency_that_explains_
     names = [r["name"] for r in ranking]
     assert names[0] == "st_latency" and names.index("st_jitter") > 0
     assert ranking[names.index("st_jitter")]["leftover_log10_p"] > -2
+
+
+def _sampled(campaign, truth, names):
+    """The posterior (a short run) of a model on the campaign: its draws of the timing jitter (ms, None
+    without it) and each channel parameter's z-score against the truth."""
+    from gyrocal.inference.sampling import posterior
+
+    cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
+    maneuvers, est = _fitted(campaign, names)
+    ready = posterior.prepare(maneuvers, est, posterior.model_priors(est, cfg["priors"]), cfg["grid"])
+    sampler = {**cfg["sampler"], "walkers": 32, "ensembles": 2, "burn_steps": 100, "initial_steps": 100,
+               "min_tau_multiple": 20}
+    draws = posterior.run(ready, sampler, 1).result.chains
+    draws = draws.reshape(-1, draws.shape[-1])
+    p = len(est.spec.labels)
+    theta = est.theta + draws[:, :p]
+    z = {}
+    for i, spec in enumerate(est.spec.parameters):
+        true = truth["parameters"][spec.owner].get(spec.name, 0.0) * spec.si_per_unit
+        z[spec.label] = (theta[:, i].mean() - true) / theta[:, i].std()
+    jitter = np.exp(draws[:, p + 3]) * 1e3 if est.spec.jitter_noise else None
+    return jitter, z
+
+
+def test_sampled_jitter_and_the_calibrations_intervals_cover_the_truth():
+    """With 5 ms of jitter the posterior's 95 % interval of sigma_t holds 5 ms (4.2-5.5 here) and every
+    channel parameter lies within 3 sd of its truth; without jitter sigma_t's posterior stays far below
+    it (consistent with 0 under its prior) and the channel estimates are the white model's."""
+    campaign, truth = _campaign(5.0)
+    jitter, z = _sampled(campaign, truth, BASE + ["st_jitter"])
+    low, high = np.percentile(jitter, [2.5, 97.5])
+    assert low < 5.0 < high and high / low < 2.0, (low, high)
+    assert max(abs(v) for v in z.values()) < 3.0, z
+    assert np.mean([abs(v) < 1.96 for v in z.values()]) >= 0.8, z
+    campaign, truth = _campaign(0.0)
+    jitter, z = _sampled(campaign, truth, BASE + ["st_jitter"])
+    assert np.percentile(jitter, 97.5) < 1.0, np.percentile(jitter, [2.5, 50, 97.5])
+    _, z_white = _sampled(campaign, truth, BASE)
+    assert max(abs(z[k] - z_white[k]) for k in z) < 0.2, {k: z[k] - z_white[k] for k in z}
