@@ -6,7 +6,7 @@ A timing jitter ``sigma_t`` leaves the reference at sample j off by ``R_j omega_
 speed leaves ``sigma_b^2 |omega_j|^2 I``, the same in every direction. Their traces are alike, so the
 binned variance of `real_residual_vs_rate` cannot tell them apart; the direction can.
 
-On a campaign directory: the baseline's point estimate and its inertial residual at the reference
+On a campaign directory: the baseline's point estimate (with ``--effects``' beside it) and its inertial residual at the reference
 samples (as `real_residual_vs_rate`), the increments ``d_j = r_j - r_(j-1)``, of which every second
 one (j even) is kept: under white reference noise those are independent, so their Gaussian likelihood
 is exact. Each is modelled as
@@ -19,7 +19,7 @@ constant in time), ARW the stated one. Maximum likelihood with ``sigma_t``, ``si
 neither; each term's likelihood ratio given the other (chi-square on one dof, halved: the boundary),
 and the odd increments as a second, independent look.
 
-    python studies/rate_noise_axis.py CAMPAIGN [--config config/tstick.yaml] [--arw 0.31]
+    python studies/rate_noise_axis.py CAMPAIGN [--config config/tstick.yaml] [--arw 0.31] [--effects st_latency]
 """
 
 import argparse
@@ -107,16 +107,18 @@ def half_chi2_log10p(lr: float) -> float:
     return float(log_ndtr(-np.sqrt(max(lr, 0.0))) / np.log(10)) if lr > 0 else 0.0
 
 
-def analyse(directory: Path, config: Path, arw, smooth_s: float):
+def analyse(directory: Path, config: Path, arw, smooth_s: float, extra=()):
     noise_defaults = yaml.safe_load(config.read_text())["noise"]
     if arw is not None:
         noise_defaults["arw_deg_sqrt_h"] = arw
     maneuvers, note = load(directory)
     info = read_campaign(labelled(directory))
     stated = noise_knowledge({"star_tracker": info.star_tracker, "gyro": info.gyro}, noise_defaults)
-    spec = ModelSpec.build("baseline", effects.resolve("baseline", list(effects.BASELINE), {}), maneuvers[0].channels)
+    names = list(effects.BASELINE) + list(extra)
+    spec = ModelSpec.build("model", effects.resolve("model", names, {}), maneuvers[0].channels)
     est = point_estimate(maneuvers, spec, stated, classic.classic_start(maneuvers, spec))
-    print(f"campaign {directory}: {len(maneuvers)} maneuvers; {note}; ARW {stated['arw_deg_sqrt_h']} deg/sqrt(h)")
+    print(f"campaign {directory}: {len(maneuvers)} maneuvers; {note}; ARW {stated['arw_deg_sqrt_h']:.3g} deg/sqrt(h); "
+          f"residuals of {' + '.join(names)}")
     print("| increments | n | none | jitter | blur | both | jitter given blur: LR, log10 p | "
           "blur given jitter: LR, log10 p |")
     print("|---|---|---|---|---|---|---|---|")
@@ -143,9 +145,11 @@ def main(argv=None):
     p.add_argument("--config", type=Path, default=Path(__file__).resolve().parents[1] / "config" / "tstick.yaml",
                    help="a config whose noise section states the noise where campaign.yaml does not")
     p.add_argument("--arw", type=float, help="the gyro's ARW, deg/sqrt(h), in place of the config's (BROAD: 0.31)")
+    p.add_argument("--effects", nargs="*", default=[], help="library effects fitted beside the baseline "
+                   "before the residuals are taken (e.g. st_latency: a latency's error lies along the change of R omega)")
     p.add_argument("--smooth-s", type=float, default=0.05, help="half window of the rate at a sample, s")
     a = p.parse_args(argv)
-    analyse(a.campaign, a.config, a.arw, a.smooth_s)
+    analyse(a.campaign, a.config, a.arw, a.smooth_s, a.effects)
     return 0
 
 
