@@ -4,7 +4,10 @@ direction (a marker blur)? (issue 42 item 2: whether `st_jitter` needs an isotro
 A timing jitter ``sigma_t`` leaves the reference at sample j off by ``R_j omega_j dt``: a covariance
 ``sigma_t^2 a_j a_j^T`` with ``a_j = R_j omega_j`` (inertial, rank one). A blur that grows with the
 speed leaves ``sigma_b^2 |omega_j|^2 I``, the same in every direction. Their traces are alike, so the
-binned variance of `real_residual_vs_rate` cannot tell them apart; the direction can.
+binned variance of `real_residual_vs_rate` cannot tell them apart; the direction can. A third form
+is the gyro's: a white scale-factor noise of density ``k`` (ppm/sqrt(Hz)) adds ``k^2 int |omega|^2 dt I``
+over the interval, an error that grows with the interval where the reference's two do not; fitting
+all three at several reference intervals tells a per-sample reference error from an integrated one.
 
 On a campaign directory: the baseline's point estimate (with ``--effects``' beside it) and its inertial residual at the reference
 samples (as `real_residual_vs_rate`), the increments ``d_j = r_j - r_(j-1)``, of which every second
@@ -12,12 +15,12 @@ one (j even) is kept: under white reference noise those are independent, so thei
 is exact. Each is modelled as
 
     d_j ~ N(0, C_m + ARW^2 dt_j I + sigma_t^2 (a_j a_j^T + a_(j-1) a_(j-1)^T)
-                  + sigma_b^2 (|omega_j|^2 + |omega_(j-1)|^2) I)
+                  + sigma_b^2 (|omega_j|^2 + |omega_(j-1)|^2) I + k^2 int_(t_(j-1))^(t_j) |omega|^2 dt I)
 
 with ``C_m`` a free 3x3 covariance per trial (the reference's own noise, anisotropic as it likes, and
 constant in time), ARW the stated one. Maximum likelihood with ``sigma_t``, ``sigma_b``, both or
-neither; each term's likelihood ratio given the other (chi-square on one dof, halved: the boundary),
-and the odd increments as a second, independent look.
+with subsets of the three; each term's likelihood ratio given the two others (chi-square on one dof,
+halved: the boundary), and the odd increments as a second, independent look.
 
     python studies/rate_noise_axis.py CAMPAIGN [--config config/tstick.yaml] [--arw 0.31] [--effects st_latency]
 """
@@ -32,22 +35,26 @@ from scipy.optimize import minimize
 from scipy.special import log_ndtr
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from real_residual_vs_rate import labelled, load, residuals, smoothed_rate  # noqa: E402
+from real_residual_vs_rate import labelled, load, residuals, smoothed_rate
 
-from gyrocal.inference.fit import classic  # noqa: E402
-from gyrocal.inference.fit.estimate import point_estimate  # noqa: E402
-from gyrocal.inference.noise.covariance import noise_knowledge  # noqa: E402
-from gyrocal.io.telemetry import read_campaign  # noqa: E402
-from gyrocal.model import effects  # noqa: E402
-from gyrocal.model.spec import ModelSpec  # noqa: E402
-from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S  # noqa: E402
+from gyrocal.inference.fit import classic
+from gyrocal.inference.fit.estimate import point_estimate
+from gyrocal.inference.noise.covariance import noise_knowledge
+from gyrocal.io.telemetry import read_campaign
+from gyrocal.model import effects
+from gyrocal.model.spec import ModelSpec
+from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
-TERMS = ("jitter", "blur")
+TERMS = ("jitter", "blur", "gyro")
+START = {"jitter": np.log(1e-3 ** 2), "blur": np.log(1e-3 ** 2), "gyro": np.log(1e-3 ** 2)}
+"""Each term's starting log variance: 1 ms of jitter or blur, 1000 ppm/sqrt(Hz)."""
+UNIT = {"jitter": ("sigma_t", "ms", 1e3), "blur": ("sigma_b", "ms", 1e3), "gyro": ("k", "ppm/sqrt(Hz)", 1e6)}
 
 
 def increments(maneuvers, est, arw_rad_sqrt_s: float, smooth_s: float, parity: int) -> list:
     """Per trial: the kept increments (n, 3, rad), their walk covariance (n, rad^2), the axial shapes
-    ``a_j a_j^T + a_(j-1) a_(j-1)^T`` (n, 3, 3, rad^2/s^2) and the isotropic ``|omega_j|^2 + |omega_(j-1)|^2``."""
+    ``a_j a_j^T + a_(j-1) a_(j-1)^T`` (n, 3, 3, rad^2/s^2), the isotropic ``|omega_j|^2 + |omega_(j-1)|^2`` and
+the gyro's ``int |omega|^2 dt`` over the interval (rad^2/s)."""
     out = []
     for data, (r, R, walk) in zip(maneuvers, residuals(maneuvers, est)):
         w, _ = smoothed_rate(data, smooth_s)
@@ -57,7 +64,10 @@ def increments(maneuvers, est, arw_rad_sqrt_s: float, smooth_s: float, parity: i
         d = r[keep] - r[keep - 1]
         axial = np.einsum("ja,jb->jab", a[keep], a[keep]) + np.einsum("ja,jb->jab", a[keep - 1], a[keep - 1])
         iso = np.sum(w[keep] ** 2, axis=1) + np.sum(w[keep - 1] ** 2, axis=1)
-        out.append((d, arw_rad_sqrt_s ** 2 * np.asarray(walk)[keep], axial, iso))
+        energy = np.concatenate([[0.0], np.cumsum(np.sum(data.increments[:, :3] ** 2, axis=1) / data.dt)])
+        at_st = np.interp(data.st_time, data.gyro_time, energy)  # int |omega|^2 dt from the start, rad^2/s
+        integrated = at_st[keep] - at_st[keep - 1]
+        out.append((d, arw_rad_sqrt_s ** 2 * np.asarray(walk)[keep], axial, iso, integrated))
     return out
 
 
@@ -71,21 +81,24 @@ def _base(params6):
 
 def negloglik(x, parts, terms):
     """Negative log-likelihood; ``x``: 6 Cholesky entries per trial (radians scaled by 1 arcsec), then the
-    log variances of ``terms`` (s^2 for the jitter, (rad/(rad/s))^2 = s^2 too for the blur)."""
+    log variances of ``terms`` (s^2 for the jitter, (rad/(rad/s))^2 = s^2 too for the blur, 1/Hz for the gyro's)."""
     n_tr = len(parts)
     extra = dict(zip(terms, np.exp(x[6 * n_tr:])))
     total = 0.0
-    for m, (d, walk, axial, iso) in enumerate(parts):
+    for m, (d, walk, axial, iso, integrated) in enumerate(parts):
         S = _base(x[6 * m:6 * m + 6]) * ARCSEC_RAD ** 2 + walk[:, None, None] * np.eye(3)
-        S = S + extra.get("jitter", 0.0) * axial + extra.get("blur", 0.0) * iso[:, None, None] * np.eye(3)
+        S = S + extra.get("jitter", 0.0) * axial
+        S = S + (extra.get("blur", 0.0) * iso + extra.get("gyro", 0.0) * integrated)[:, None, None] * np.eye(3)
         sign, logdet = np.linalg.slogdet(S)
+        if np.any(sign <= 0) or not np.all(np.isfinite(logdet)):
+            return np.inf  # a step out of the positive definite cone: the optimizer steps back
         quad = np.einsum("ja,ja->j", d, np.linalg.solve(S, d[..., None])[..., 0])
         total += 0.5 * float(np.sum(logdet + quad))
     return total
 
 
 def fit(parts, terms):
-    """Maximum likelihood with the given rate terms; returns (neg log-lik, their sd in ms)."""
+    """Maximum likelihood with the given rate terms; returns (neg log-lik, each term's sd in its `UNIT`)."""
     x0 = []
     for d, *_ in parts:
         c = np.cov(d.T) / ARCSEC_RAD ** 2
@@ -93,13 +106,13 @@ def fit(parts, terms):
         L[np.diag_indices(3)] = np.log(np.diag(L))
         x0.extend(L[np.tril_indices(3)])
     best = None
-    for start in (np.log(1e-3 ** 2), np.log(1e-2 ** 2)):
-        x = np.concatenate([x0, np.full(len(terms), start)])
+    for shift in (0.0, np.log(100.0)):
+        x = np.concatenate([x0, [START[t] + shift for t in terms]])
         res = minimize(negloglik, x, args=(parts, terms), method="L-BFGS-B")
         if best is None or res.fun < best.fun:
             best = res
-    sd_ms = {t: 1e3 * float(np.exp(0.5 * v)) for t, v in zip(terms, best.x[6 * len(parts):])}
-    return float(best.fun), sd_ms
+    sd = {t: UNIT[t][2] * float(np.exp(0.5 * v)) for t, v in zip(terms, best.x[6 * len(parts):])}
+    return float(best.fun), sd
 
 
 def half_chi2_log10p(lr: float) -> float:
@@ -119,23 +132,26 @@ def analyse(directory: Path, config: Path, arw, smooth_s: float, extra=()):
     est = point_estimate(maneuvers, spec, stated, classic.classic_start(maneuvers, spec))
     print(f"campaign {directory}: {len(maneuvers)} maneuvers; {note}; ARW {stated['arw_deg_sqrt_h']:.3g} deg/sqrt(h); "
           f"residuals of {' + '.join(names)}")
-    print("| increments | n | none | jitter | blur | both | jitter given blur: LR, log10 p | "
-          "blur given jitter: LR, log10 p |")
-    print("|---|---|---|---|---|---|---|---|")
+    print("| increments | n | model | twice the log-likelihood gain over none | estimates |")
+    print("|---|---|---|---|---|")
     rows = []
+    subsets = [()] + [(t,) for t in TERMS] + [tuple(t for t in TERMS if t != u) for u in TERMS] + [TERMS]
     for parity, name in ((0, "even"), (1, "odd")):
         parts = increments(maneuvers, est, stated["arw_deg_sqrt_h"] * DEG_SQRT_H_RAD_SQRT_S, smooth_s, parity)
-        fits = {k: fit(parts, t) for k, t in (("none", ()), ("jitter", ("jitter",)), ("blur", ("blur",)),
-                                                ("both", TERMS))}
-        lr_j = 2 * (fits["blur"][0] - fits["both"][0])
-        lr_b = 2 * (fits["jitter"][0] - fits["both"][0])
+        fits = {t: fit(parts, t) for t in subsets}
         n = sum(len(p[0]) for p in parts)
-        cell = {k: ", ".join(f"sigma_{t[0]} {v:.2f} ms" for t, v in f[1].items()) or f"-" for k, f in fits.items()}
-        gain = {k: 2 * (fits["none"][0] - f[0]) for k, f in fits.items()}
-        print(f"| {name} | {n} | 0 | {cell['jitter']} (LR {gain['jitter']:.1f}) | {cell['blur']} (LR {gain['blur']:.1f}) "
-              f"| {cell['both']} (LR {gain['both']:.1f}) | {lr_j:.1f}, {half_chi2_log10p(lr_j):.2f} | "
-              f"{lr_b:.1f}, {half_chi2_log10p(lr_b):.2f} |")
-        rows.append(dict(parity=name, n=n, lr_jitter_given_blur=lr_j, lr_blur_given_jitter=lr_b, **gain))
+        for t, (nll, sd) in fits.items():
+            est_txt = ", ".join(f"{UNIT[k][0]} {v if v > 1e-3 else 0:.3g} {UNIT[k][1]}" for k, v in sd.items()) or "-"
+            print(f"| {name} | {n} | {' + '.join(t) or 'none'} | {2 * (fits[()][0] - nll):.1f} | {est_txt} |")
+        row = dict(increments=name, n=n)
+        for u in TERMS:
+            others = tuple(t for t in TERMS if t != u)
+            lr = 2 * (fits[others][0] - fits[TERMS][0])
+            row[f"lr_{u}_given_others"], row[f"log10p_{u}"] = round(lr, 1), round(half_chi2_log10p(lr), 2)
+        rows.append(row)
+    print("\neach term given the two others (likelihood ratio, log10 p halved for the boundary):")
+    for row in rows:
+        print("  " + ", ".join(f"{k} {v}" for k, v in row.items()))
     return rows
 
 
