@@ -97,22 +97,29 @@ def negloglik(x, parts, terms):
     return total
 
 
-def fit(parts, terms):
-    """Maximum likelihood with the given rate terms; returns (neg log-lik, each term's sd in its `UNIT`)."""
+def fit(parts, terms, warm=()):
+    """Maximum likelihood with the given rate terms, from two cold starts and from each ``warm`` fit's
+    optimum (``(terms, x)`` of a nested model; a term it lacks starts at nothing, one it has beyond
+    ``terms`` is dropped), so a larger model never ends below a smaller one; returns (neg log-lik,
+    each term's sd in its `UNIT`, the optimum ``x``)."""
     x0 = []
     for d, *_ in parts:
         c = np.cov(d.T) / ARCSEC_RAD ** 2
         L = np.linalg.cholesky(c + 1e-6 * np.eye(3))
         L[np.diag_indices(3)] = np.log(np.diag(L))
         x0.extend(L[np.tril_indices(3)])
+    starts = [np.concatenate([x0, [START[t] + shift for t in terms]]) for shift in (0.0, np.log(100.0))]
+    n_base = 6 * len(parts)
+    for other, x in warm:
+        value = dict(zip(other, x[n_base:]))
+        starts.append(np.concatenate([x[:n_base], [value.get(t, START[t] - 20.0) for t in terms]]))
     best = None
-    for shift in (0.0, np.log(100.0)):
-        x = np.concatenate([x0, [START[t] + shift for t in terms]])
+    for x in starts:
         res = minimize(negloglik, x, args=(parts, terms), method="L-BFGS-B")
         if best is None or res.fun < best.fun:
             best = res
-    sd = {t: UNIT[t][2] * float(np.exp(0.5 * v)) for t, v in zip(terms, best.x[6 * len(parts):])}
-    return float(best.fun), sd
+    sd = {t: UNIT[t][2] * float(np.exp(0.5 * v)) for t, v in zip(terms, best.x[n_base:])}
+    return float(best.fun), sd, best.x
 
 
 def half_chi2_log10p(lr: float) -> float:
@@ -138,9 +145,14 @@ def analyse(directory: Path, config: Path, arw, smooth_s: float, extra=()):
     subsets = [()] + [(t,) for t in TERMS] + [tuple(t for t in TERMS if t != u) for u in TERMS] + [TERMS]
     for parity, name in ((0, "even"), (1, "odd")):
         parts = increments(maneuvers, est, stated["arw_deg_sqrt_h"] * DEG_SQRT_H_RAD_SQRT_S, smooth_s, parity)
-        fits = {t: fit(parts, t) for t in subsets}
+        fits = {}
+        for t in subsets:  # smaller models first: each larger one starts from their optima too
+            fits[t] = fit(parts, t, [(u, f[2]) for u, f in fits.items() if set(u) < set(t)])
+        for t in subsets[::-1]:  # and each smaller one from the larger ones' optima, the extra terms dropped
+            better = fit(parts, t, [(u, f[2]) for u, f in fits.items() if set(t) < set(u)])
+            fits[t] = min(fits[t], better, key=lambda f: f[0])
         n = sum(len(p[0]) for p in parts)
-        for t, (nll, sd) in fits.items():
+        for t, (nll, sd, _) in fits.items():
             est_txt = ", ".join(f"{UNIT[k][0]} {v if v > 1e-3 else 0:.3g} {UNIT[k][1]}" for k, v in sd.items()) or "-"
             print(f"| {name} | {n} | {' + '.join(t) or 'none'} | {2 * (fits[()][0] - nll):.1f} | {est_txt} |")
         row = dict(increments=name, n=n)
