@@ -14,7 +14,10 @@ fitted by least squares on the increments of samples turning faster than ``--min
 is noise at rest), with standard errors from the residuals' spread. The blur is needed where
 ``sigma_b^2`` is significantly above 0.
 
-    python studies/jitter_axis.py CAMPAIGN [--config config/tstick.yaml] [--arw 0.31]
+``--latency``: the residuals of the baseline plus `st_latency` (a latency left out errs by ``tau omega``,
+along the axis too, and grows with the rate).
+
+    python studies/jitter_axis.py CAMPAIGN [--config config/tstick.yaml] [--arw 0.31] [--latency]
 """
 
 import argparse
@@ -71,6 +74,7 @@ def main(argv=None):
     parser.add_argument("--arw", type=float, default=None)
     parser.add_argument("--smooth-s", type=float, default=0.05)
     parser.add_argument("--min-rate-deg-s", type=float, default=5.0)
+    parser.add_argument("--latency", action="store_true", help="fit st_latency with the baseline")
     args = parser.parse_args(argv)
     defaults = yaml.safe_load(args.config.read_text())["noise"]
     if args.arw is not None:
@@ -78,13 +82,17 @@ def main(argv=None):
     maneuvers, note = rate_study.load(args.campaign)
     info = read_campaign(rate_study.labelled(args.campaign))
     stated = noise_knowledge({"star_tracker": info.star_tracker, "gyro": info.gyro}, defaults)
-    spec = ModelSpec.build("baseline", effects.resolve("baseline", list(effects.BASELINE), {}), maneuvers[0].channels)
+    names = list(effects.BASELINE) + (["st_latency"] if args.latency else [])
+    spec = ModelSpec.build("model", effects.resolve("model", names, {}), maneuvers[0].channels)
     est = point_estimate(maneuvers, spec, stated, classic.classic_start(maneuvers, spec))
     rows = split(maneuvers, est, args.smooth_s)
     fast = rows[:, 2] > np.deg2rad(args.min_rate_deg_s) ** 2
     rows = rows[fast]
     s_along, se_along = fit(rows[:, 0], rows[:, 2], rows[:, 3])
     s_across, se_across = fit(rows[:, 1], rows[:, 2], rows[:, 3])
+    if args.latency:
+        print(f"latency fitted: {est.theta[spec.labels.index('campaign.latency')] * 1e3:.2f} ms" if
+              "campaign.latency" in spec.labels else f"latency labels: {[x for x in spec.labels if 'latency' in x]}")
     print(f"campaign {args.campaign}: {note}; {fast.sum()} increments turning faster than {args.min_rate_deg_s} deg/s")
     print(f"mean squared increment: along the axis {np.sqrt(rows[:, 0].mean()) / ARCSEC_RAD:.0f} arcsec, across it "
           f"{np.sqrt(rows[:, 1].mean()) / ARCSEC_RAD:.0f} arcsec per direction")
