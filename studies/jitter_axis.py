@@ -91,8 +91,7 @@ def main(argv=None):
     s_along, se_along = fit(rows[:, 0], rows[:, 2], rows[:, 3])
     s_across, se_across = fit(rows[:, 1], rows[:, 2], rows[:, 3])
     if args.latency:
-        print(f"latency fitted: {est.theta[spec.labels.index('campaign.latency')] * 1e3:.2f} ms" if
-              "campaign.latency" in spec.labels else f"latency labels: {[x for x in spec.labels if 'latency' in x]}")
+        print(f"latency fitted: {est.theta[spec.labels.index('st_latency.latency')] * 1e3:.2f} ms")
     print(f"campaign {args.campaign}: {note}; {fast.sum()} increments turning faster than {args.min_rate_deg_s} deg/s")
     print(f"mean squared increment: along the axis {np.sqrt(rows[:, 0].mean()) / ARCSEC_RAD:.0f} arcsec, across it "
           f"{np.sqrt(rows[:, 1].mean()) / ARCSEC_RAD:.0f} arcsec per direction")

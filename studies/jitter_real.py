@@ -66,8 +66,8 @@ def main(argv=None):
         rms = float(np.sqrt(np.mean(resid**2))) / ARCSEC_RAD
         scales = ", ".join(f"{k.split('_')[0] if k != 'st_jitter_ms' else 'jitter'} {v:.3g}"
                            for k, v in stated_scales(est.log_sigma).items())
-        latency = f"; latency {1e3 * est.theta[spec.labels.index('campaign.latency')]:.2f} ms" \
-            if "campaign.latency" in spec.labels else ""
+        latency = f"; latency {1e3 * est.theta[spec.labels.index('st_latency.latency')]:.2f} ms" \
+            if "st_latency.latency" in spec.labels else ""
         print(f"| {name} | {scales}{latency} | {rms:.0f} | {rms / predicted:.2f} | {white['z']:+.1f} | "
               f"{white['rate_growth']['log10_p']:.1f} | {-negative:.1f} |", flush=True)
 
