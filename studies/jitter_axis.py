@@ -67,21 +67,32 @@ def fit(y, q, trial):
     return coef[-1], float(np.sqrt(cov[-1, -1]))
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def campaign_parser(description: str) -> argparse.ArgumentParser:
+    """The arguments both jitter studies take: the campaign, the config whose ``noise`` is stated, an ARW."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("campaign", type=Path)
     parser.add_argument("--config", type=Path, default=Path("config/tstick.yaml"))
     parser.add_argument("--arw", type=float, default=None)
-    parser.add_argument("--smooth-s", type=float, default=0.05)
-    parser.add_argument("--min-rate-deg-s", type=float, default=5.0)
-    parser.add_argument("--latency", action="store_true", help="fit st_latency with the baseline")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def stated_campaign(args) -> tuple:
+    """The campaign's maneuvers (`real_residual_vs_rate.load`), how they were read, and the stated noise."""
     defaults = yaml.safe_load(args.config.read_text())["noise"]
     if args.arw is not None:
         defaults["arw_deg_sqrt_h"] = args.arw
     maneuvers, note = rate_study.load(args.campaign)
     info = read_campaign(rate_study.labelled(args.campaign))
-    stated = noise_knowledge({"star_tracker": info.star_tracker, "gyro": info.gyro}, defaults)
+    return maneuvers, note, noise_knowledge({"star_tracker": info.star_tracker, "gyro": info.gyro}, defaults)
+
+
+def main(argv=None):
+    parser = campaign_parser(__doc__.splitlines()[0])
+    parser.add_argument("--smooth-s", type=float, default=0.05)
+    parser.add_argument("--min-rate-deg-s", type=float, default=5.0)
+    parser.add_argument("--latency", action="store_true", help="fit st_latency with the baseline")
+    args = parser.parse_args(argv)
+    maneuvers, note, stated = stated_campaign(args)
     names = list(effects.BASELINE) + (["st_latency"] if args.latency else [])
     spec = ModelSpec.build("model", effects.resolve("model", names, {}), maneuvers[0].channels)
     est = point_estimate(maneuvers, spec, stated, classic.classic_start(maneuvers, spec))

@@ -12,42 +12,30 @@ the checks refuse it).
     python studies/jitter_real.py CAMPAIGN [--config config/tstick.yaml] [--arw 0.31]
 """
 
-import argparse
 import importlib.util
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from gyrocal.criticism import diagnostics
 from gyrocal.inference.fit import classic, noisefit
 from gyrocal.inference.fit.estimate import linearize_all, point_estimate
-from gyrocal.inference.noise.covariance import noise_knowledge, ratios_of, stated_scales
-from gyrocal.io.telemetry import read_campaign
+from gyrocal.inference.noise.covariance import ratios_of, stated_scales
 from gyrocal.maneuvers import preprocess
 from gyrocal.model import effects
 from gyrocal.model.spec import ModelSpec
 from gyrocal.model.units import ARCSEC_RAD
 
-_spec = importlib.util.spec_from_file_location("rate_study", Path(__file__).with_name("real_residual_vs_rate.py"))
-rate_study = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(rate_study)
+_spec = importlib.util.spec_from_file_location("jitter_axis", Path(__file__).with_name("jitter_axis.py"))
+jitter_axis = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(jitter_axis)
 
 MODELS = {"baseline": [], "jitter": ["st_jitter"], "latency": ["st_latency"], "latency_jitter": ["st_latency", "st_jitter"]}
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("campaign", type=Path)
-    parser.add_argument("--config", type=Path, default=Path("config/tstick.yaml"))
-    parser.add_argument("--arw", type=float, default=None)
-    args = parser.parse_args(argv)
-    defaults = yaml.safe_load(args.config.read_text())["noise"]
-    if args.arw is not None:
-        defaults["arw_deg_sqrt_h"] = args.arw
-    maneuvers, note = rate_study.load(args.campaign)
-    info = read_campaign(rate_study.labelled(args.campaign))
-    stated = noise_knowledge({"star_tracker": info.star_tracker, "gyro": info.gyro}, defaults)
+    args = jitter_axis.campaign_parser(__doc__.splitlines()[0]).parse_args(argv)
+    maneuvers, note, stated = jitter_axis.stated_campaign(args)
     index = preprocess.noise_groups(maneuvers)[1]
     groups = index if np.max(index) > 0 else None
     predicted = diagnostics.noise_rms_arcsec(maneuvers, stated)
