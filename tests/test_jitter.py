@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import yaml
-from test_numerics import BORESIGHT, M, SETS, band_to_dense, dense_covariance, difference_matrix, tiny_linearization
+from test_numerics import BORESIGHT, SETS, M, band_to_dense, dense_covariance, difference_matrix, tiny_linearization
 
 from gyrocal.criticism import rategrowth
 from gyrocal.inference.noise import covariance
