@@ -248,6 +248,28 @@ def test_a_free_maneuver_kept_whole_is_one_per_file(tmp_path):
     assert [(m.id, m.axis, m.direction, m.t_end) for m in campaign.maneuvers] == [("trial_A", None, None, 24.99)]
 
 
+def test_windows_cut_each_span_into_equal_pieces_of_about_the_given_length():
+    """``round(length / window)`` pieces per span, at least one, end to end: 25 s at 0.01 s in 10-s
+    windows is 2 pieces (12.5 s each), 3 s is kept whole, and no window length keeps the spans."""
+    assert rests.windows([(0, 2500)], 0.01, 10.0) == [(0, 1250), (1250, 2500)]
+    assert rests.windows([(0, 300), (300, 2500)], 0.01, 10.0) == [(0, 300), (300, 1400), (1400, 2500)]
+    assert rests.windows([(0, 2500)], 0.01, None) == [(0, 2500)]
+
+
+def test_a_mapping_window_cuts_a_free_maneuver_into_windows_each_its_own_maneuver(tmp_path):
+    """``maneuver.window_s: 5`` on a 25-s trial cut at its inner rest (two 12.5-s stretches): each
+    stretch becomes two windows, free motion, one noise group, end to end without a shared row."""
+    from scipy.io import savemat
+
+    savemat(tmp_path / "trial_A.mat", broad_like())
+    mapping = importer.read_mapping("broad")
+    mapping["maneuver"] = {"split": "rests", "free": True, "window_s": 5.0}
+    campaign, _ = importer.build_campaign([tmp_path / "trial_A.mat"], mapping, "c")
+    got = [(m.id, m.axis, m.noise_group, round(m.t_start, 2), round(m.t_end, 2)) for m in campaign.maneuvers]
+    assert got == [("trial_A_1", None, "trial_A", 0.0, 6.24), ("trial_A_2", None, "trial_A", 6.25, 12.49),
+                   ("trial_A_3", None, "trial_A", 12.5, 18.74), ("trial_A_4", None, "trial_A", 18.75, 24.99)]
+
+
 def test_an_hdf5_file_stored_columns_by_rows_reads_as_the_mat_file(tmp_path):
     """HDF5 as MATLAB v7.3 stores an N x 3 array (3 x N): turned, the same campaign as the .mat."""
     import h5py
