@@ -12,6 +12,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 from gyrocal import checks
 from gyrocal.criticism import diagnostics
@@ -23,7 +24,6 @@ from gyrocal.model import effects
 from gyrocal.model.spec import ModelSpec
 from gyrocal.model.units import ARCSEC_RAD
 
-import yaml
 NOISE = yaml.safe_load((Path(__file__).parents[1] / "config" / "config.yaml").read_text())["noise"]
 """The default run's noise knowledge where campaign.yaml is silent."""
 
@@ -61,7 +61,7 @@ def main():
     p.add_argument("--windows", type=float, nargs="+", default=[0.0])
     p.add_argument("--effects", nargs="*", default=[])
     a = p.parse_args()
-    campaign, findings = checks.read_checked(a.campaign)
+    campaign, _ = checks.read_checked(a.campaign)
     for w in a.windows:
         for extra in [[]] + [[e] for e in a.effects]:
             names = list(effects.BASELINE) + extra
@@ -73,7 +73,6 @@ def main():
                   f"REML cross/about {s[0] / ARCSEC_RAD:.3g}/{s[1] / ARCSEC_RAD:.3g} arcsec ARW "
                   f"{s[2] / (np.pi / 180 / 60):.3g} deg/sqrt(h); residual RMS {np.round(rms).astype(int)} arcsec; "
                   f"{time.perf_counter() - t0:.0f} s")
-            print("    theta:", {k: round(float(v), 6) for k, v in zip(est.spec.names, est.theta)} if hasattr(est.spec, "names") else "")
             print("    white:", white if not hasattr(white, "summary") else white.summary())
             for r in ranking[:4]:
                 print("    rank:", r)
