@@ -162,6 +162,7 @@ def test_a_study_of_clean_campaigns_alone_has_an_empty_extended_coverage_table()
     params = validation.parameter_table(_records(np.random.default_rng(13).normal(0, 2.0, 50), 2.0))
     table = validation.extended_coverage(params)
     assert table.empty and {"group", "kind", "rate", "max_abs_z"} <= set(table.columns)
+    assert validation.detection(params).empty and "misfit" in validation.detection(params).columns
 
 
 def test_overconfident_intervals_undercover():

@@ -64,9 +64,26 @@ def test_convergence_and_bounds_name_their_worst_term_against_the_threshold():
     converged = verdict.convergence_check(table, SPEC, SAMPLER, CFG["convergence"])
     assert not converged.passed and (converged.figure, converged.threshold) == (1.02, 1.01)
     assert converged.where == "dtg1_roll.mis_pitch" and "sampler.max_steps" in converged.action
-    bounds = verdict.bounds_check(table, SPEC, CFG["report"])
+    bounds = verdict.bounds_check(table, SPEC, verdict.physical_bounds(CFG["report"], None))
     assert not bounds.passed and (bounds.figure, bounds.threshold, bounds.unit) == (25000.0, 20000.0, "ppm")
     assert bounds.why == "outside: dtg1_roll.sf_pos = -25000 ppm"
+
+
+def test_the_physical_bounds_are_the_campaigns_sensor_class_unless_the_config_sets_them():
+    """A MEMS triad's 3 % scale factor is physical (its class's bound is 5 %), a DTG's is not (2 %)."""
+    table = calibration(mean=(-30000.0, -1000.0, 20.0, -5.0))
+    unset = {"physical_bound_ppm": None, "physical_bound_arcsec": None}
+    assert verdict.physical_bounds(unset, None) == {"ppm": 20000.0, "arcsec": 3600.0}
+    assert verdict.physical_bounds(unset, "mems") == {"ppm": 50000.0, "arcsec": 3600.0}
+    dtg = verdict.bounds_check(table, SPEC, verdict.physical_bounds(unset, "dtg"))
+    assert not dtg.passed and (dtg.figure, dtg.threshold) == (30000.0, 20000.0)
+    mems = verdict.bounds_check(table, SPEC, verdict.physical_bounds(unset, "mems"))
+    assert mems.passed and (mems.figure, mems.threshold) == (30000.0, 50000.0)
+    assert mems.why == "every estimate is within 50000 ppm / 3600 arcsec"
+    rlg = verdict.bounds_check(calibration(mean=(-6000.0, -1000.0, 20.0, -5.0)), SPEC, verdict.physical_bounds(unset, "rlg"))
+    assert not rlg.passed and rlg.threshold == 5000.0
+    stated = verdict.bounds_check(table, SPEC, verdict.physical_bounds({**unset, "physical_bound_ppm": 25000}, "mems"))
+    assert not stated.passed and stated.threshold == 25000.0
 
 
 def test_the_correction_check_judges_the_worst_ratio_of_the_error_after_to_before():

@@ -12,9 +12,11 @@ import time
 from pathlib import Path
 
 from gyrocal.errors import InputError as _InputError
+from gyrocal.criticism.extension import extension_names as _extension_names
 from gyrocal.io import scenario as _scenario
 from gyrocal.pipeline.steps import REFUSED as _REFUSED
 from gyrocal.pipeline.paths import CampaignPaths as _CampaignPaths
+from gyrocal.pipeline.settings import ExtendSettings as _ExtendSettings
 from gyrocal.pipeline.settings import canonical as _canonical
 from gyrocal.pipeline.settings import models_to_run as _models_to_run
 from gyrocal.pipeline.settings import section as _section
@@ -76,11 +78,17 @@ try:
 except _InputError as refused:
     sys.exit(f"gyrocal: the config was refused:\n{refused}")
 PLUGINS = config["plugins"]
+EXTENDED = _extension_names(config["loop"]["depth"])
+"""The loop's variants (config ``loop.depth``), each fitted where the one before misfits
+(`gyrocal.criticism.extension`); compared and reviewed after MODELS."""
+EXTENDED_MODEL = PATHS.model("{extension}")
+"""Every file of one extended variant, with the campaign and the extension wildcards."""
 
 wildcard_constraints:
     campaign="|".join(re.escape(c) for c in CAMPAIGNS),
     maneuver="|".join(sorted({re.escape(m) for c in CAMPAIGNS.values() for m in c["maneuvers"]})),
     model="|".join(MODELS),
+    extension="|".join(EXTENDED) or "(?!)",
 
 
 _STARTED = time.time()
@@ -129,8 +137,23 @@ def truth_input(wildcards):
 
 
 def model_files(name):
-    """One file of every model variant (a `ModelPaths` property), in MODELS' order, as an input."""
-    return [getattr(PATHS.model(m), name) for m in MODELS]
+    """One file of every model variant (a `ModelPaths` property), the loop's after MODELS, as an input."""
+    return [getattr(PATHS.model(m), name) for m in MODELS + EXTENDED]
+
+
+def extension_input(wildcards):
+    """What a step of the loop reads: the first, every variant's comparison files (it extends the
+    reviewed one); a later one, the step before it."""
+    paths = _CampaignPaths(results_of(wildcards.campaign))
+    k = EXTENDED.index(wildcards.extension)
+    bases = MODELS if k == 0 else [EXTENDED[k - 1]]
+    return {f"{m}_{f}": getattr(paths.model(m), f) for m in bases
+            for f in ("diagnostics", "summary", "elpd_blocks", "elpd_maneuvers")}
+
+
+def extend_settings():
+    """The loop's settings (`gyrocal.pipeline.settings.ExtendSettings`), as its rule's param."""
+    return _canonical(vars(_ExtendSettings.of(config)))
 
 
 def settings(step):
@@ -150,7 +173,7 @@ def whole_config():
 
 
 def all_outputs():
-    out = [path for campaign in CAMPAIGNS for path in _CampaignPaths(results_of(campaign)).outputs(MODELS)]
+    out = [path for campaign in CAMPAIGNS for path in _CampaignPaths(results_of(campaign)).outputs(MODELS + EXTENDED)]
     if FLEET:
         out += [f"{results_of('fleet')}/summary.csv", f"{results_of('fleet')}/summary.png"]
     return out

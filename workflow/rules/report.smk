@@ -20,7 +20,7 @@ rule report:
     params:
         results=campaign_results,
         maneuvers=maneuver_ids,
-        models=MODELS,
+        models=MODELS + EXTENDED,
         settings=whole_config(),
     threads: 2
     conda:

@@ -30,9 +30,9 @@ from scipy.special import logsumexp, softmax
 from gyrocal.finding import Finding
 
 __all__ = [
-    "MEASURES", "SEPARATED_BY", "branch_labels", "branch_rows", "classify", "disagreements", "interval_widths",
-    "paired_se", "plausibility_check", "reviewed_model", "reviewed_reason", "sensitivity_check", "separating_advice",
-    "stacking_weights", "too_wide", "typed"
+    "MEASURES", "SEPARATED_BY", "branch_labels", "branch_rows", "classify", "disagreement_table", "disagreements",
+    "interval_widths", "paired_se", "plausibility_check", "reviewed_model", "reviewed_reason", "sensitivity_check",
+    "separating_advice", "stacking_weights", "too_wide", "typed"
 ]
 
 SEPARATED_BY = {
@@ -169,19 +169,18 @@ def branch_labels(labels) -> list:
 
 
 def reviewed_reason(classified: pd.DataFrame) -> str:
-    """Why the rule reviews the variant it does (`reviewed_model`), in a sentence naming the others."""
+    """Why the rule reviews the variant it does (`reviewed_model`), in one sentence; the variants' elpd
+    are the comparison table's."""
     reviewed = reviewed_model(classified)
-    best = classified.set_index("model")["elpd_lomo"]
     plausible = list(classified.loc[classified["plausible"], "model"])
-    if plausible:
-        why = (f"{reviewed} is reviewed: of the plausible variants ({', '.join(plausible)}), it has the best "
-               f"exact leave-one-maneuver-out elpd ({best[reviewed]:.1f})")
-    else:
-        why = (f"{reviewed} is reviewed, though no variant is plausible: it has the best exact "
-               f"leave-one-maneuver-out elpd ({best[reviewed]:.1f})")
-    others = [f"{r.model} {r.elpd_lomo - best[reviewed]:+.1f}" + ("" if r.plausible else f" (not plausible: {r.rejected_by})")
-              for r in classified.itertuples() if r.model != reviewed]
-    return why + (f"; the others' elpd against it: {', '.join(others)}" if others else "; it is the only variant compared")
+    if not plausible:
+        return (f"{reviewed} is reviewed, though no variant is plausible: it predicts the left-out maneuvers best "
+                f"of the {len(classified)} compared")
+    if len(plausible) == 1:
+        return (f"{reviewed} is reviewed: the only plausible variant of the {len(classified)} compared "
+                "(no misfit, not rejected by leave-one-maneuver-out)")
+    return (f"{reviewed} is reviewed: of the plausible variants ({', '.join(plausible)}), it predicts the "
+            "left-out maneuvers best")
 
 
 def typed(comparison: pd.DataFrame) -> pd.DataFrame:
@@ -191,26 +190,57 @@ def typed(comparison: pd.DataFrame) -> pd.DataFrame:
                              rejected_by=comparison["rejected_by"].astype("string").fillna(""))
 
 
-def sensitivity_check(classified: pd.DataFrame, calibrations: dict, core_labels: list, agree_sd: float,
-                      width_limits: dict) -> Finding:
-    """The verdict check "the answer does not hang on the model" (rule 3 of the module); its
-    figure is the largest disagreement between the variants LOO does not reject, in combined sd.
-
-    ``width_limits`` maps a unit to the widest acceptable 95 % interval (the report's
-    ``max_ci_width_<unit>``).
-    """
-    name = "the answer does not hang on the model"
+def _model_disagreement(classified: pd.DataFrame, calibrations: dict, core_labels: list, agree_sd: float,
+                        width_limits: dict):
+    """What the sensitivity check judges: the variants LOO does not reject, every disagreement between
+    them (largest first), those beyond ``agree_sd``, and the intervals too wide under a variant not
+    reviewed (by variant)."""
     reviewed = reviewed_model(classified)
     members = list(classified.loc[~classified["loo_rejected"].astype(bool), "model"])
     calibrations = {m: branch_rows(t) for m, t in calibrations.items()}
     core_labels = branch_labels(core_labels)
     every = disagreements({m: calibrations[m] for m in members}, core_labels, 0.0)
     found = [d for d in every if d["z"] > agree_sd]
+    wide = {m: too_wide(calibrations[m], core_labels, width_limits) for m in members if m != reviewed}
+    return reviewed, members, every, found, {m: w for m, w in wide.items() if w}
+
+
+def disagreement_table(classified: pd.DataFrame, calibrations: dict, core_labels: list, agree_sd: float,
+                       width_limits: dict) -> pd.DataFrame:
+    """The sensitivity check's detail as a table, a row per pair of variants and term: the models,
+    the term, the difference (its size, and in combined sd), and what would separate the two
+    (`separating_advice`), each distinct advice once, on its first row. A term known too loosely
+    under a variant has no sd: its row says how wide its interval is."""
+    reviewed, _, _, found, wide = _model_disagreement(classified, calibrations, core_labels, agree_sd, width_limits)
+    effects = {r.model: r.effects.split("+") for r in classified.itertuples()}
+    rows = [{"models": f"{d['models'][0]} / {d['models'][1]}", "term": d["label"],
+             "difference": f"{abs(d['difference']):,.1f} {d['unit']}", "difference (sd)": round(d["z"], 1),
+             "advice": separating_advice(effects[d["models"][0]], effects[d["models"][1]])} for d in found]
+    rows += [{"models": f"{reviewed} / {other}", "term": x["label"],
+              "difference": f"under {other} known only within {x['width']:,.0f} {x['unit']} (95 %; limit {x['limit']:g})",
+              "difference (sd)": None, "advice": separating_advice(effects[reviewed], effects[other])}
+             for other, w in wide.items() for x in w]
+    table = pd.DataFrame(rows, columns=["models", "term", "difference", "difference (sd)", "advice"])
+    first = ~table["advice"].duplicated()
+    return table.assign(advice=table["advice"].where(first, "")).rename(
+        columns={"advice": "what would separate them"})
+
+
+def sensitivity_check(classified: pd.DataFrame, calibrations: dict, core_labels: list, agree_sd: float,
+                      width_limits: dict) -> Finding:
+    """The verdict check "the answer does not hang on the model" (rule 3 of the module); its
+    figure is the largest disagreement between the variants LOO does not reject, in combined sd
+    (the report shows each, `disagreement_table`).
+
+    ``width_limits`` maps a unit to the widest acceptable 95 % interval (the report's
+    ``max_ci_width_<unit>``).
+    """
+    name = "the answer does not hang on the model"
+    reviewed, members, every, found, wide = _model_disagreement(classified, calibrations, core_labels, agree_sd,
+                                                                width_limits)
     details = {"threshold": float(agree_sd), "unit": "sd"}
     if every:
         details.update(figure=every[0]["z"], where=f"{every[0]['label']}, {' against '.join(every[0]['models'])}")
-    wide = {m: too_wide(calibrations[m], core_labels, width_limits) for m in members if m != reviewed}
-    wide = {m: w for m, w in wide.items() if w}
     if not found and not wide:
         why = (f"the variants LOO does not reject ({', '.join(members)}) agree on every channel-model term within "
                f"{agree_sd} combined sd, each within the interval limits" if len(members) > 1 else

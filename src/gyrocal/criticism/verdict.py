@@ -1,8 +1,9 @@
 """The GO/NO-GO verdict: each check behind it as a `Finding`, and the verdict a pure function of them.
 
 The checks apply to the channel model's terms (what the uplinked correction is made of), with
-the thresholds of the config's ``convergence``, ``report`` (``max_ci_width_<unit>``,
-``physical_bound_<unit>``) and ``model_choice`` sections. The report renders these findings;
+the thresholds of the config's ``convergence``, ``report`` (``max_ci_width_<unit>``, and
+``physical_bound_<unit>`` where set, else the campaign's sensor class's, `physical_bounds`) and
+``model_choice`` sections. The report renders these findings;
 ``verdict.json`` holds `verdict` of them.
 """
 
@@ -14,11 +15,12 @@ from gyrocal.finding import Finding
 from gyrocal.inference.fit.classic import hold_windows
 from gyrocal.io.calibration import core_rows, posterior_mean_params
 from gyrocal.maneuvers import preprocess
+from gyrocal.model import sensorclass
 from gyrocal.model.units import AXES, rad_to_arcsec
 
 __all__ = ["RANKED_SHOWN", "bounds_check", "checks", "convergence_check", "correction_check", "correction_effect",
-           "estimate_effect", "informed_check", "informed_core", "interval_check", "misfit_check", "verdict",
-           "width_limits"]
+           "estimate_effect", "informed_check", "informed_core", "interval_check", "misfit_check", "physical_bounds",
+           "verdict", "width_limits"]
 
 
 def width_limits(rcfg: dict, spec) -> dict:
@@ -143,14 +145,28 @@ def interval_check(calibration: pd.DataFrame, spec, rcfg: dict) -> Finding:
                           action="" if not wide else "fly more or longer maneuvers that excite these terms (gyrocal plan)")
 
 
-def bounds_check(calibration: pd.DataFrame, spec, rcfg: dict) -> Finding:
+def physical_bounds(rcfg: dict, sensor_class: str | None) -> dict:
+    """``{unit: bound}`` a GO accepts of the channel-model terms: the campaign's gyro sensor class's
+    (`gyrocal.model.sensorclass.SensorClass.physical_bounds`; None: a DTG's), unless the config's
+    ``report.physical_bound_<unit>`` sets one (a number, not null)."""
+    bounds = sensorclass.limits(sensor_class).physical_bounds()
+    return {unit: bound if rcfg.get(f"physical_bound_{unit}") is None else rcfg[f"physical_bound_{unit}"]
+            for unit, bound in bounds.items()}
+
+
+def _number(x) -> str:
+    """A bound as the config would write it: 20000, not 20000.0."""
+    return f"{x:g}" if float(x) != int(x) else str(int(x))
+
+
+def bounds_check(calibration: pd.DataFrame, spec, bounds: dict) -> Finding:
     """Every channel-model term's posterior mean is within the physical bound of its unit
-    (``physical_bound_<unit>``); the figure is the largest relative to its bound."""
+    (``bounds``, `physical_bounds`); the figure is the largest relative to its bound."""
     base = core_rows(spec, calibration)
-    bound = np.array([rcfg[f"physical_bound_{unit}"] for unit in base["unit"]])
+    bound = np.array([bounds[unit] for unit in base["unit"]], dtype=float)
     size = np.abs(base["mean"].to_numpy())
     out = base[size > bound]
-    why = (f"every estimate is within {rcfg['physical_bound_ppm']} ppm / {rcfg['physical_bound_arcsec']} arcsec"
+    why = (f"every estimate is within {_number(bounds['ppm'])} ppm / {_number(bounds['arcsec'])} arcsec"
            if out.empty else "outside: " + ", ".join(f"{r.channel}.{r.parameter} = {r.mean:.0f} {r.unit}"
                                                      for r in out.itertuples()))
     details = {}
@@ -185,13 +201,15 @@ def correction_check(effect_table: pd.DataFrame) -> Finding:
 
 
 def checks(model: str, calibrations: dict, spec, sampler: dict, diagnostics: dict, comparison: pd.DataFrame,
-             effect_table: pd.DataFrame, cfg: dict, prior_conflict: Finding | None = None) -> list:
+             effect_table: pd.DataFrame, cfg: dict, prior_conflict: Finding | None = None,
+             sensor_class: str | None = None) -> list:
     """Every check behind the verdict on the reviewed ``model``, in the order of ``verdict.json``.
 
     ``calibrations`` maps every model to its ``calibration.csv`` (the others' for the
     model-sensitivity check), ``comparison`` is ``model_comparison.csv``, ``effect_table``
     the reviewed model's `estimate_effect`, ``cfg`` the whole config and ``prior_conflict`` the
-    reviewed model's `gyrocal.criticism.priorconflict.conflict_check` (after the misfit check).
+    reviewed model's `gyrocal.criticism.priorconflict.conflict_check` (after the misfit check);
+    ``sensor_class`` the campaign's gyro class (``campaign.yaml``), whose limits bound the estimates.
     """
     calibration, rcfg = calibrations[model], cfg["report"]
     classified = modelchoice.typed(comparison)
@@ -201,7 +219,7 @@ def checks(model: str, calibrations: dict, spec, sampler: dict, diagnostics: dic
             *conflict,
             informed_check(spec),
             interval_check(calibration, spec, rcfg),
-            bounds_check(calibration, spec, rcfg),
+            bounds_check(calibration, spec, physical_bounds(rcfg, sensor_class)),
             correction_check(effect_table),
             modelchoice.plausibility_check(classified),
             modelchoice.sensitivity_check(classified, calibrations, informed_core(spec),

@@ -36,6 +36,7 @@ import numpy as np
 
 from gyrocal.errors import InputError
 from gyrocal.model.channels import MOVING_RATE_FRACTION
+from gyrocal.model.priorfamily import EFFECT_PRIOR_DOF
 from gyrocal.model.units import AXES, DEG_H_RAD_S, PPM, STANDARD_GRAVITY_M_S2, arcsec_to_rad
 
 __all__ = [
@@ -54,12 +55,17 @@ class Parameter:
     unit: str
     si_per_unit: float
     prior_sd: float
-    """Prior standard deviation in ``unit`` (a normal prior, zero mean unless configured)."""
+    """Prior scale in ``unit`` (zero mean unless configured): the standard deviation of a normal
+    prior, the scale of a Student-t one (`prior_dof`)."""
     bound: float = np.inf
     """Physical bound on ``|value|`` in ``unit``."""
     per_channel: bool = True
     """One copy per gyro channel (named ``<channel>.<name>``) or one for the campaign
     (named ``<effect>.<name>``)."""
+    prior_dof: float = np.inf
+    """The prior's family, declared here once (`gyrocal.model.priorfamily`): ``inf``, normal (the
+    channel model's terms); finite, Student-t with this many degrees of freedom at scale
+    ``prior_sd`` (the library's other effects: `EFFECT_PRIOR_DOF`)."""
 
 
 class Effect:
@@ -165,7 +171,7 @@ class Bias(Effect):
 class BiasDrift(Effect):
     name = "bias_drift"
     description = "the residual bias ramps linearly in time within a maneuver"
-    parameters = (Parameter("bias_drift", "deg/h/h", DEG_H_RAD_S / 3600.0, 0.5, 100.0),)
+    parameters = (Parameter("bias_drift", "deg/h/h", DEG_H_RAD_S / 3600.0, 0.5, 100.0, prior_dof=EFFECT_PRIOR_DOF),)
     signature = "time"
 
     def gyro(self, m):
@@ -178,7 +184,8 @@ class SfNonlinearity(Effect):
     # Prior sd as wide as the magnitudes a plan with one rate per direction cannot see (MOM: 90 %
     # detection at 57,800): there the data confound it with the scale factor, and the scale
     # factor's interval is only as wide as this prior lets it be (docs/validation.md).
-    parameters = (Parameter("sf_quadratic", "ppm/(deg/s)^2", PPM / np.deg2rad(1.0) ** 2, 1e5, 1e6),)
+    parameters = (Parameter("sf_quadratic", "ppm/(deg/s)^2", PPM / np.deg2rad(1.0) ** 2, 1e5, 1e6,
+                            prior_dof=EFFECT_PRIOR_DOF),)
     signature = "rate_squared"
 
     def gyro(self, m):
@@ -189,7 +196,8 @@ class GSensitivity(Effect):
     name = "g_sensitivity"
     description = "a bias that follows the specific force (the accelerometer's acc_x, acc_y, acc_z columns)"
     # A MEMS rate gyro's g-sensitivity is of order 0.01-0.1 deg/s/g; a DTG's mass unbalance, deg/h/g.
-    parameters = tuple(Parameter(f"g_{a}", "deg/s/g", np.deg2rad(1.0) / STANDARD_GRAVITY_M_S2, 0.1, 2.0)
+    parameters = tuple(Parameter(f"g_{a}", "deg/s/g", np.deg2rad(1.0) / STANDARD_GRAVITY_M_S2, 0.1, 2.0,
+                                 prior_dof=EFFECT_PRIOR_DOF)
                        for a in "xyz")
 
     def gyro(self, m):
@@ -209,7 +217,7 @@ class GravityOffset(Effect):
     # rotation of the triad, which the misalignments also describe: the report's model check
     # names what moves.
     parameters = tuple(Parameter(f"offset_{e}_acc_{a}", "arcsec/g", arcsec_to_rad(1.0) / STANDARD_GRAVITY_M_S2,
-                                 3600.0, 36000.0, per_channel=False)
+                                 3600.0, 36000.0, per_channel=False, prior_dof=EFFECT_PRIOR_DOF)
                        for i, e in enumerate(AXES) for a in "xyz" if a != "xyz"[i])
 
     def star_tracker(self, m):
@@ -226,7 +234,7 @@ class StLatency(Effect):
     name = "st_latency"
     description = "time-tag offset of the star tracker behind the gyros (positive: its attitude is late)"
     # In ms: a latency is a few to hundreds of ms, which seconds print as "-0.00".
-    parameters = (Parameter("latency", "ms", 1e-3, 1000.0, 10000.0, per_channel=False),)
+    parameters = (Parameter("latency", "ms", 1e-3, 1000.0, 10000.0, per_channel=False, prior_dof=EFFECT_PRIOR_DOF),)
 
     def star_tracker(self, m):
         return {"latency": -m.st_body_rate}

@@ -43,6 +43,8 @@ class ParameterSpec:
     prior_only: str = ""
     """Why the data cannot inform this parameter (e.g. "no -pitch maneuver"); empty when they can.
     A prior-only parameter is kept out of the fit: its column is zero, its posterior its prior."""
+    prior_dof: float = np.inf
+    """The prior's family (`gyrocal.model.effects.Parameter.prior_dof`): ``inf`` normal, else Student-t."""
 
 
 CONFIG_PRIOR_KEYS = {"sf_sd_ppm": (fx.SCALE_FACTORS, "prior_sd"), "sf_bound_ppm": (fx.SCALE_FACTORS, "bound"),
@@ -61,7 +63,7 @@ def _specs_of(effect, parameter, channels, core) -> list:
 
 def _spec(effect, p, owner, channel, core) -> ParameterSpec:
     return ParameterSpec(f"{owner}.{p.name}", owner, p.name, effect.name, p.unit, float(p.si_per_unit), 0.0,
-                         float(p.prior_sd), float(p.bound), channel, core)
+                         float(p.prior_sd), float(p.bound), channel, core, prior_dof=float(p.prior_dof))
 
 
 class ModelSpec:
@@ -150,6 +152,11 @@ class ModelSpec:
         return self.to_si([p.prior_sd for p in self.parameters])
 
     @property
+    def prior_dof(self) -> np.ndarray:
+        """Each parameter's prior degrees of freedom (``inf``: normal; `gyrocal.model.priorfamily`)."""
+        return np.array([p.prior_dof for p in self.parameters], dtype=float)
+
+    @property
     def bound_si(self) -> np.ndarray:
         return self.to_si([p.bound for p in self.parameters])
 
@@ -227,13 +234,16 @@ class ModelSpec:
                 unit = self.parameters[self._index[label]].unit
                 if row.unit != unit:
                     raise ValueError(f"{source}: {label} is in {row.unit}, but this model declares it in {unit}")
-                overrides.setdefault(label, {}).update(prior_mean=float(row.mean), prior_sd=float(row.sd))
+                # an earlier posterior, normal to the sampler's accuracy
+                overrides.setdefault(label, {}).update(prior_mean=float(row.mean), prior_sd=float(row.sd),
+                                                       prior_dof=np.inf)
         parameters = [replace(p, **overrides.get(p.label, {})) for p in self.parameters]
         return ModelSpec(self.model, self.channels, parameters, self.effect_names, self.correlated_noise,
                          self._effects)
 
     def to_json(self) -> str:
-        rows = [{**asdict(p), "bound": None if np.isinf(p.bound) else p.bound} for p in self.parameters]
+        rows = [{**asdict(p), "bound": None if np.isinf(p.bound) else p.bound,
+                 "prior_dof": None if np.isinf(p.prior_dof) else p.prior_dof} for p in self.parameters]
         return json.dumps({"model": self.model, "effects": list(self.effect_names),
                            "correlated_noise": self.correlated_noise,
                            "channels": [asdict(c) for c in self.channels], "parameters": rows})
@@ -250,7 +260,8 @@ class ModelSpec:
                 raise ValueError(f"model {doc['model']} uses effect(s) {missing}, which are neither in the "
                                  f"library nor in the configured plugins")
             effects = {n: known_effects[n] for n in doc["effects"]}
-        parameters = [ParameterSpec(**{**p, "bound": np.inf if p["bound"] is None else p["bound"]})
+        parameters = [ParameterSpec(**{**p, "bound": np.inf if p["bound"] is None else p["bound"],
+                                       "prior_dof": np.inf if p.get("prior_dof") is None else p["prior_dof"]})
                       for p in doc["parameters"]]
         return cls(doc["model"], [ch.Channel(**c) for c in doc["channels"]], parameters, doc["effects"],
                    doc["correlated_noise"], effects)

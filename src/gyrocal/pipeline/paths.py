@@ -29,6 +29,8 @@ class ModelPaths:
     calibration = _under_root("calibration.csv")
     correction = _under_root("correction.json")
     diagnostics = _under_root("diagnostics.json")
+    extension = _under_root("extension.json", "An extended variant's: the model it extends, the effect it adds, "
+                                              "and why (`gyrocal.criticism.extension`).")
     refusal = _under_root("refused.json", "Where the variant was refused or skipped: the step and the reason "
                                           "(`gyrocal.pipeline.steps.common.variant_step`).")
 

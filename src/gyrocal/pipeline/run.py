@@ -2,11 +2,13 @@
 what its rule gives it: what the validation study and the tests call where Snakemake is not used.
 The rules call the same step functions, one job each."""
 
+from gyrocal.criticism.extension import extension_names
 from gyrocal.inference import interval
 from gyrocal.io import telemetry
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import (
     DiagnosticsSettings,
+    ExtendSettings,
     ModelChoiceSettings,
     PointEstimateSettings,
     PosteriorSettings,
@@ -19,6 +21,7 @@ from gyrocal.pipeline.steps import (
     common,
     compare_models,
     diagnostics,
+    extend,
     point_estimate,
     posterior,
     preprocess,
@@ -26,7 +29,7 @@ from gyrocal.pipeline.steps import (
     validate,
 )
 
-__all__ = ["calibrate_campaign", "calibrate_models", "review_campaign", "run_campaign"]
+__all__ = ["calibrate_campaign", "calibrate_models", "extend_models", "review_campaign", "run_campaign"]
 
 
 def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=None, figures=True,
@@ -73,6 +76,17 @@ def calibrate_models(paths: CampaignPaths, ids, cfg: dict, models, through="diag
                          lambda model=model: diagnostics.run(paths, ids, model, DiagnosticsSettings.of(cfg)))
 
 
+def extend_models(paths: CampaignPaths, ids, cfg: dict, models) -> list:
+    """The model-criticism loop after the variants ``models`` (`gyrocal.pipeline.steps.extend`, one
+    step per name up to the config's ``loop.depth``), as the workflow's rule ``extended`` runs it:
+    each fitted where the model before misfits and a library effect explains it, else skipped with
+    the reason. Returns the loop's variant names, to compare after ``models``."""
+    names = extension_names(ExtendSettings.of(cfg).loop["depth"])
+    for name in names:
+        extend.run(paths, ids, list(models), name, ExtendSettings.of(cfg))
+    return names
+
+
 def review_campaign(paths: CampaignPaths, ids, cfg: dict, models=None, truth_json=None, processes: int = 1):
     """Compare the models and write the pre-uplink review and its verdict."""
     models = models_to_run(cfg) if models is None else models
@@ -81,8 +95,12 @@ def review_campaign(paths: CampaignPaths, ids, cfg: dict, models=None, truth_jso
 
 
 def run_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=None, truth_json=None) -> list:
-    """Every step of one campaign's run, as ``snakemake`` runs them (``models`` None: the config's
-    `models_to_run`). Returns the maneuver ids."""
+    """Every step of one campaign's run, as ``snakemake`` runs them: ``models`` None, the config's
+    `models_to_run` and the loop after them (`extend_models`); the variants ``models`` alone where
+    given. Returns the maneuver ids."""
     ids = calibrate_campaign(campaign_dir, paths, cfg, models)
+    if models is None:
+        models = models_to_run(cfg)
+        models = list(models) + extend_models(paths, ids, cfg, models)
     review_campaign(paths, ids, cfg, models, truth_json)
     return ids

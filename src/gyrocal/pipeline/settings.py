@@ -7,8 +7,8 @@ from typing import ClassVar
 
 from gyrocal.errors import InputError
 
-__all__ = ["SECTIONS", "DiagnosticsSettings", "ModelChoiceSettings", "PointEstimateSettings", "PosteriorSettings",
-           "ReportSettings", "canonical", "models_to_run", "section"]
+__all__ = ["SECTIONS", "DiagnosticsSettings", "ExtendSettings", "ModelChoiceSettings", "PointEstimateSettings",
+           "PosteriorSettings", "ReportSettings", "canonical", "models_to_run", "section"]
 
 SECTIONS = {
     "point_estimate": ("noise", "plugins"),
@@ -30,6 +30,10 @@ def models_to_run(cfg: dict) -> list:
     ``baseline`` first. A name ``models:`` does not define is refused, naming those it does."""
     defined = list(cfg["models"])
     chosen = list(cfg.get("run_models") or [])
+    reserved = [m for m in defined if m == "extended" or m.startswith("extended_")]
+    if reserved:
+        raise InputError(f"config: models: {reserved}: the names extended and extended_<k> are the loop's "
+                         "(loop.depth), which fits them where the reviewed model misfits; name the variant otherwise")
     if not chosen:
         return sorted(defined, key=lambda m: m != "baseline")
     unknown = [m for m in chosen if m not in defined]
@@ -106,6 +110,23 @@ class ModelChoiceSettings:
     @classmethod
     def of(cls, cfg: dict) -> "ModelChoiceSettings":
         return cls(**canonical(cfg["model_choice"]))
+
+
+@dataclass(frozen=True)
+class ExtendSettings:
+    """An extended variant's (`gyrocal.pipeline.steps.extend`): the sections of the three model steps
+    it runs, the model choice that names the model it extends, and the loop's depth."""
+
+    point_estimate: dict
+    posterior: dict
+    diagnostics: dict
+    model_choice: dict
+    loop: dict
+
+    @classmethod
+    def of(cls, cfg: dict) -> "ExtendSettings":
+        return cls(**{step: section(cfg, step) for step in SECTIONS},
+                   model_choice=canonical(cfg["model_choice"]), loop=canonical(cfg.get("loop") or {"depth": 1}))
 
 
 @dataclass(frozen=True)

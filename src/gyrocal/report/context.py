@@ -49,6 +49,12 @@ class ReviewInputs:
     """The refusal records (``<model>/refused.json``) of the variants refused or skipped."""
     reference_interval: dict | None = None
     """``preprocess/reference_interval.json``: the reference interval used and why; None for runs before it."""
+    loop: pd.DataFrame = field(default_factory=pd.DataFrame)
+    """The loop's error before and after each fitted step (`gyrocal.criticism.extension.before_after`)."""
+    loop_steps: list = field(default_factory=list)
+    """Every step of the loop (``extension.json``), fitted or not, with why."""
+    disagreement: pd.DataFrame = field(default_factory=pd.DataFrame)
+    """The model disagreement behind the sensitivity check (`gyrocal.criticism.modelchoice.disagreement_table`)."""
 
 
 @dataclass(frozen=True)
@@ -144,4 +150,10 @@ class ReviewContext:
     words: dict = field(default_factory=lambda: dict(FLIGHT_WORDS))
     """The words that fit the campaign (`campaign_words`): a flight's (spacecraft axes, the correction to
     uplink, the in-loop set) or a lab's (body axes, the correction to apply, the first set)."""
+    loop: pd.DataFrame = field(default_factory=pd.DataFrame)
+    """The loop's error before and after each fitted step; empty where none was fitted."""
+    loop_steps: list = field(default_factory=list)
+    """Every step of the loop, fitted or not, with why (``extension.json``)."""
+    disagreement: pd.DataFrame = field(default_factory=pd.DataFrame)
+    """The model disagreement: pair, term, difference, what would separate them; empty where they agree."""
 

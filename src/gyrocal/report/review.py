@@ -31,7 +31,7 @@ from gyrocal.report.context import CorrectionSet, ReviewContext, ReviewInputs, c
 
 __all__ = [
     "COMBINATION_HEADINGS", "EMBED_PNG", "ReviewContext", "ReviewInputs", "build_context", "channel_kind", "draw_all",
-    "embed_png", "entry", "html_table", "mounting_text", "number", "paper_tables", "render"
+    "embed_png", "entry", "fold", "html_table", "mounting_text", "number", "paper_tables", "render"
 ]
 
 EMBED_PNG = {"dpi": 80, "pil_kwargs": {"compress_level": 3}}  # zlib 3: 28 % faster, 8 % larger
@@ -214,7 +214,26 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         config=yaml.safe_dump(inputs.config, sort_keys=False),
         channel_kind=channel_kind(spec.channels),
         reviewed_why=modelchoice.reviewed_reason(modelchoice.typed(inputs.comparison)),
-        refused=pd.DataFrame(inputs.refused, columns=["model", "status", "step", "reason"]), words=words)
+        refused=pd.DataFrame(inputs.refused, columns=["model", "status", "step", "reason"]), words=words,
+        loop=inputs.loop, loop_steps=list(inputs.loop_steps), disagreement=inputs.disagreement)
+
+
+FOLD_CHARS = 200
+"""A check's detail shown in full up to this many characters (about three lines of the checks table's
+detail column, at least 420 px wide); the rest folds into ``<details>`` (`fold`)."""
+
+
+def fold(text: str, limit: int = FOLD_CHARS) -> Markup:
+    """A finding's detail, at most ``limit`` characters shown, cut after the last sentence or clause that
+    fits (else at a space), the rest folded into ``<details>``: the template's ``fold`` filter."""
+    text = str(text)
+    if len(text) <= limit:
+        return Markup.escape(text)
+    head = text[:limit]
+    cut = max(head.rfind(". "), head.rfind("; "))
+    cut = cut + 1 if cut > limit // 3 else (head.rfind(" ") if head.rfind(" ") > 0 else limit)
+    return (Markup.escape(text[:cut].rstrip()) + Markup(" <details class='more'><summary>more</summary>")
+            + Markup.escape(text[cut:].strip()) + Markup("</details>"))
 
 
 def number(value) -> str:
@@ -225,7 +244,7 @@ def number(value) -> str:
 TEMPLATES = jinja2.Environment(loader=jinja2.FileSystemLoader(Path(__file__).parent / "templates"),
                                autoescape=True, undefined=jinja2.StrictUndefined, trim_blocks=True, lstrip_blocks=True)
 """The report's templates, autoescaped: every text from the data is escaped unless it is `Markup`."""
-TEMPLATES.filters.update(table=html_table, number=number)
+TEMPLATES.filters.update(table=html_table, number=number, fold=fold)
 
 
 def render(ctx: ReviewContext) -> str:

@@ -72,6 +72,11 @@ def detection_figure(table, predicted=None):
     """Per effect: how often the baseline's misfit is raised with the effect ranked first, against
     its magnitude; the plan's predicted 90 %-detection magnitude as a vertical line."""
     effects = list(dict.fromkeys(table["effect"]))
+    if not effects:  # a study of clean campaigns alone: the figure says so
+        fig, ax = plt.subplots(figsize=(4, 1.5))
+        ax.text(0.5, 0.5, "no hidden effect in this study", ha="center", va="center")
+        ax.set_axis_off()
+        return fig
     fig, axes = plt.subplots(1, len(effects), figsize=(3.2 * len(effects), 3.2), squeeze=False)
     for ax, effect in zip(axes[0], effects):
         g = table[table["effect"] == effect]

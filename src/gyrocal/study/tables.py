@@ -237,7 +237,8 @@ def detection(models: pd.DataFrame, signatures: dict | None = None) -> pd.DataFr
                      "detected_and_first": (g["misfit"] & first).mean(),
                      "detected_and_first_lo": binomial_interval(int((g["misfit"] & first).sum()), n)[0],
                      "detected_and_first_hi": binomial_interval(int((g["misfit"] & first).sum()), n)[1]})
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows, columns=[*SUMMARY_COLUMNS["detection"], "detected_and_first_lo",
+                                       "detected_and_first_hi"])
 
 
 def extended_coverage(params: pd.DataFrame) -> pd.DataFrame:
@@ -301,5 +302,6 @@ def markdown(tables: dict) -> str:
     """Every table of the study as one markdown document (``tables.md``), for docs/validation.md."""
     parts = []
     for name, columns in SUMMARY_COLUMNS.items():
-        parts += [f"### {name}", "", markdown_table(tables[name][columns]), ""]
+        table = tables[name]
+        parts += [f"### {name}", "", markdown_table(table[columns]) if len(table) else "None in this study.", ""]
     return "\n".join(parts)

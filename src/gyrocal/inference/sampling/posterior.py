@@ -42,6 +42,7 @@ from gyrocal.inference.sampling.proposal import (
 )
 from gyrocal.io.calibration import parameter_rows
 from gyrocal.maneuvers.preprocess import noise_groups
+from gyrocal.model import priorfamily
 
 __all__ = [
     "AUTOCORR_WINDOW_C", "DE_SHARE", "GM_FRACTION_LOGIT_SD", "GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDIAN",
@@ -64,13 +65,34 @@ TAU_PRIOR_LOG_SD = 2.0
 
 @dataclass
 class Priors:
-    """Normal priors with bounds that say what is physical (SI), and log-normal noise priors."""
+    """The parameters' priors, normal or Student-t (``dof``, `gyrocal.model.priorfamily`; ``sd`` their
+    scale), with bounds that say what is physical (SI), and log-normal noise priors."""
 
     mean: np.ndarray
     sd: np.ndarray
     bound: np.ndarray
     log_sigma_center: np.ndarray
     log_sigma_sd: np.ndarray
+    dof: np.ndarray | None = None
+    """Each parameter's prior degrees of freedom; None or ``inf``: normal."""
+
+    @property
+    def heavy(self) -> bool:
+        """Whether any parameter's prior is Student-t."""
+        return self.dof is not None and bool(priorfamily.heavy(self.dof).any())
+
+    def log_density(self, theta) -> np.ndarray:
+        """The parameters' log prior (W,) at ``theta`` (W, P), up to a constant."""
+        if not self.heavy:
+            return -0.5 * np.sum(((theta - self.mean) / self.sd) ** 2, axis=1)
+        return priorfamily.log_density((theta - self.mean) / self.sd, self.dof)
+
+    def gaussian_sd(self, theta_hat) -> np.ndarray:
+        """The sd of the normal prior that stands in for each where a Gaussian one is needed, about the
+        data's estimate ``theta_hat`` (`priorfamily.proposal_sd`): ``sd`` itself where all are normal."""
+        if not self.heavy:
+            return self.sd
+        return priorfamily.proposal_sd(self.sd, (np.asarray(theta_hat) - self.mean) / self.sd, self.dof)
 
     @classmethod
     def from_spec(cls, spec, stated_noise: dict, noise_log_sd: float) -> "Priors":
@@ -82,7 +104,7 @@ class Priors:
         if spec.correlated_noise:
             center = np.concatenate([center, [0.0, np.log(TAU_PRIOR_CENTER_S)]])
             sd = np.concatenate([sd, [GM_FRACTION_LOGIT_SD, TAU_PRIOR_LOG_SD]])
-        return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, center, sd)
+        return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, center, sd, spec.prior_dof)
 
     @property
     def log_ratio_sd(self) -> float:
@@ -136,6 +158,9 @@ class LogPosterior:
         self.priors = priors
         self.n_params = len(theta_hat)
         self.n_noise = len(priors.log_sigma_center)
+        self.conditional_sd = priors.gaussian_sd(theta_hat)
+        """The normal priors of the channel offsets' conditional (`conditional`): the priors' own where
+        normal, a stand-in for a Student-t one (`Priors.gaussian_sd`); `__call__` has the exact density."""
 
     def conditional(self, noise_x, z=None):
         """The channel offsets' Gaussian conditional given the noise slots ``noise_x`` (W, dim - P), as its
@@ -153,15 +178,16 @@ class LogPosterior:
         else:
             weight = np.exp(-2 * noise_x[:, k:-1])
             precision, linear = np.einsum("wgij,wg->wij", A, weight), np.einsum("wgi,wg->wi", b, weight)
-        precision = precision + np.diag(pr.sd**-2.0)
-        linear = linear + (pr.mean - self.theta_hat) / pr.sd**2
+        sd = self.conditional_sd
+        precision = precision + np.diag(sd**-2.0)
+        linear = linear + (pr.mean - self.theta_hat) / sd**2
         precision = 0.5 * (precision + np.swapaxes(precision, 1, 2))
         ok = np.ones(len(precision), dtype=bool)
         try:
             chol = np.linalg.cholesky(precision)
         except np.linalg.LinAlgError:  # off the grid, extrapolated statistics may not be positive definite
             ok = np.all(np.linalg.eigvalsh(precision) > 0, axis=1)
-            precision[~ok] = np.diag(pr.sd**-2.0)
+            precision[~ok] = np.diag(sd**-2.0)
             chol = np.linalg.cholesky(precision)
         shift = np.zeros_like(linear) if z is None else np.einsum("wij,wj->wi", chol, z)
         both = np.linalg.solve(precision, np.stack([linear, linear + shift], axis=-1))
@@ -189,7 +215,7 @@ class LogPosterior:
             logprior = (-0.5 * np.sum(offsets**2, axis=1) * np.exp(-2 * log_sd) - offsets.shape[1] * log_sd
                         - 0.5 * ((log_sd - np.log(GROUP_SD_PRIOR_MEDIAN)) / GROUP_SD_PRIOR_LOG_SD) ** 2)
         theta = self.theta_hat + d
-        logprior = logprior - 0.5 * np.sum(((theta - pr.mean) / pr.sd) ** 2, axis=1)
+        logprior = logprior + pr.log_density(theta)
         logprior += -0.5 * np.sum(((log_sigma - pr.log_sigma_center) / pr.log_sigma_sd) ** 2, axis=1)
         ok = inside & np.all(np.abs(theta) <= pr.bound, axis=1)
         value = loglik + logprior
@@ -390,7 +416,8 @@ def leave_one_maneuver_out(post: Posterior, priors: Priors) -> np.ndarray:
     linearised model is Gaussian given the noise scales (held at the point estimate's), so each refit
     is a ratio of two closed-form evidences: no importance sampling.
     """
-    return leave_one_out_log_evidence(post.parts, priors.mean - post.estimate.theta, priors.sd)
+    return leave_one_out_log_evidence(post.parts, priors.mean - post.estimate.theta,
+                                      priors.gaussian_sd(post.estimate.theta))
 
 
 @dataclass
@@ -454,7 +481,7 @@ def run(ready: Prepared, sampler_cfg: dict, seed: int) -> Posterior:
     """Start at the Laplace approximation about the conditional posterior and run the ensembles
     (`run_ensembles`; `budget.SamplingStopped` where the budget cannot converge)."""
     estimate, priors, grid, stats, index = ready.estimate, ready.priors, ready.grid, ready.stats, ready.group_index
-    mean, cov = conditional_posterior(stats, priors.mean - estimate.theta, priors.sd)
+    mean, cov = conditional_posterior(stats, priors.mean - estimate.theta, priors.gaussian_sd(estimate.theta))
     start_mean = np.concatenate([mean, estimate.log_sigma])
     start_cov = start_covariance(cov, stats.n, grid.sd)
     if index is not None:

@@ -15,7 +15,7 @@ from gyrocal.maneuvers import preprocess
 from gyrocal.pipeline.steps import REFUSED
 
 __all__ = ["VARIANT_STEPS", "compared", "finish", "load_maneuvers", "peak_rss", "read_json", "read_refusal", "refusal",
-           "refusals", "start", "variant_step"]
+           "refusals", "skip", "start", "variant_step"]
 
 log = logging.getLogger("gyrocal")
 
@@ -112,6 +112,13 @@ def compared(paths, models) -> list:
         raise InputError("every model variant was refused or skipped, so there is nothing to review: "
                          + " ".join(f"[{m}, {r['status']} at {r['step']}] {r['reason']}" for m, r in records.items()))
     return kept
+
+
+def skip(reason: str):
+    """Skip a variant with ``reason`` (`gyrocal.checks.fit.VariantSkipped`, which `variant_step` records)."""
+    from gyrocal.checks.fit import VariantSkipped  # the checks' imports, only where a variant is skipped
+
+    raise VariantSkipped(reason)
 
 
 def variant_step(paths, model: str, step: str, run, outputs=()) -> dict | None:

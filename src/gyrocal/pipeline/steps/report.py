@@ -6,7 +6,7 @@ import arviz as az
 import pandas as pd
 import xarray as xr
 
-from gyrocal.criticism import priorconflict, verdict
+from gyrocal.criticism import extension, modelchoice, priorconflict, verdict
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.sampling.posterior import posterior_spec
 from gyrocal.io.outputs import write_json, write_text
@@ -29,7 +29,9 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
     """
     cfg = settings.config
     refused = list(refusals(paths, models).values())
+    steps = [(m, read_json(paths.model(m).extension)) for m in models if Path(paths.model(m).extension).is_file()]
     models = compared(paths, models)
+    fitted = [(m, s) for m, s in steps if m in models]
     table = pd.read_csv(paths.comparison)
     model = str(table.loc[table["reviewed"], "model"].iloc[0])
     files = paths.model(model)
@@ -40,10 +42,17 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
     effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases)
     used = posterior_spec(est.spec, cfg["priors"], cfg.get("prior_from"))
     conflict = priorconflict.conflict_check(priorconflict.conflict_table(used, est.theta, est.cov, calibrations[model]))
-    findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg, conflict)
+    findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg, conflict,
+                              info["gyro"].get("sensor_class"))
     # its posterior group alone (the predictive draws are 100 MB at 10x), in memory: forked processes draw
     with xr.open_dataset(files.posterior, group="posterior", engine="h5netcdf") as group:
         posterior = az.InferenceData(posterior=group.load())
+    shown = {m for name, step in fitted for m in (step["base"], name)}  # each fitted step's model before and after
+    loop = extension.before_after(fitted, {m: read_json(paths.model(m).diagnostics) for m in shown},
+                                  {m: pd.read_csv(paths.model(m).fit) for m in shown}, table)
+    disagreement = modelchoice.disagreement_table(modelchoice.typed(table), calibrations, verdict.informed_core(est.spec),
+                                                  cfg["model_choice"]["agree_sd"],
+                                                  verdict.width_limits(cfg["report"], est.spec))
     inputs = review.ReviewInputs(
         model=model, spec=used, maneuvers=maneuvers,
         tables=[pd.read_csv(p) for p in paths.maneuvers(maneuver_ids, "csv")],
@@ -51,6 +60,7 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
         sampler=sampler, correction=read_json(files.correction), correction_path=files.correction,
         comparison=table, info=info, config=cfg, findings=findings, effect_table=effect,
         truth=read_json(truth_json)["parameters"] if truth_json else None, refused=refused,
-        reference_interval=read_json(paths.reference_interval) if Path(paths.reference_interval).exists() else None)
+        reference_interval=read_json(paths.reference_interval) if Path(paths.reference_interval).exists() else None,
+        loop=loop, loop_steps=[step for _, step in steps], disagreement=disagreement)
     write_text(review.render(review.build_context(inputs, processes)), paths.report)
     write_json(verdict.verdict(info["campaign"], model, findings), paths.verdict)
