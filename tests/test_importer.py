@@ -209,7 +209,7 @@ def test_a_mat_file_with_nan_reference_rows_imports_them_invalid_and_counted_as_
 
     savemat(tmp_path / "trial_A.mat", broad_like())
     out = tmp_path / "campaign"
-    campaign, counts = importer.import_files("broad", out, [tmp_path / "trial_A.mat"])
+    campaign, counts = importer.import_files("broad", out, [tmp_path / "trial_A.mat"], reference_interval_s=0)
     assert counts["trial_A"]["reference_missing"] == 3 and counts["trial_A"]["reference_dropouts"] == 0
     written = pd.read_csv(out / "star_tracker.csv")
     assert list(np.flatnonzero(written["valid"] == 0)) == [10, 11, 700] and len(written) == 2500
@@ -248,6 +248,28 @@ def test_a_free_maneuver_kept_whole_is_one_per_file(tmp_path):
     assert [(m.id, m.axis, m.direction, m.t_end) for m in campaign.maneuvers] == [("trial_A", None, None, 24.99)]
 
 
+def test_windows_cut_each_span_into_equal_pieces_of_about_the_given_length():
+    """``round(length / window)`` pieces per span, at least one, end to end: 25 s at 0.01 s in 10-s
+    windows is 2 pieces (12.5 s each), 3 s is kept whole, and no window length keeps the spans."""
+    assert rests.windows([(0, 2500)], 0.01, 10.0) == [(0, 1250), (1250, 2500)]
+    assert rests.windows([(0, 300), (300, 2500)], 0.01, 10.0) == [(0, 300), (300, 1400), (1400, 2500)]
+    assert rests.windows([(0, 2500)], 0.01, None) == [(0, 2500)]
+
+
+def test_a_mapping_window_cuts_a_free_maneuver_into_windows_each_its_own_maneuver(tmp_path):
+    """``maneuver.window_s: 5`` on a 25-s trial cut at its inner rest (two 12.5-s stretches): each
+    stretch becomes two windows, free motion, one noise group, end to end without a shared row."""
+    from scipy.io import savemat
+
+    savemat(tmp_path / "trial_A.mat", broad_like())
+    mapping = importer.read_mapping("broad")
+    mapping["maneuver"] = {"split": "rests", "free": True, "window_s": 5.0}
+    campaign, _ = importer.build_campaign([tmp_path / "trial_A.mat"], mapping, "c")
+    got = [(m.id, m.axis, m.noise_group, round(m.t_start, 2), round(m.t_end, 2)) for m in campaign.maneuvers]
+    assert got == [("trial_A_1", None, "trial_A", 0.0, 6.24), ("trial_A_2", None, "trial_A", 6.25, 12.49),
+                   ("trial_A_3", None, "trial_A", 12.5, 18.74), ("trial_A_4", None, "trial_A", 18.75, 24.99)]
+
+
 def test_an_hdf5_file_stored_columns_by_rows_reads_as_the_mat_file(tmp_path):
     """HDF5 as MATLAB v7.3 stores an N x 3 array (3 x N): turned, the same campaign as the .mat."""
     import h5py
@@ -259,9 +281,9 @@ def test_an_hdf5_file_stored_columns_by_rows_reads_as_the_mat_file(tmp_path):
         for name in ("imu_gyr", "opt_quat", "imu_acc", "sampling_rate"):
             f[name] = np.asarray(arrays[name]).T
     mapping = importer.read_mapping("broad")
-    from_mat, _ = importer.build_campaign([tmp_path / "trial_A.mat"], mapping, "c")
+    from_mat, _ = importer.build_campaign([tmp_path / "trial_A.mat"], mapping, "c", reference_interval_s=0)
     mapping["format"] = {"type": "hdf5"}
-    from_h5, counts = importer.build_campaign([tmp_path / "trial_A.h5"], mapping, "c")
+    from_h5, counts = importer.build_campaign([tmp_path / "trial_A.h5"], mapping, "c", reference_interval_s=0)
     assert counts["trial_A"]["reference_missing"] == 3
     assert np.array_equal(from_h5.gyro_columns["gyro_x"], from_mat.gyro_columns["gyro_x"])
     assert np.array_equal(from_h5.st_valid, from_mat.st_valid) and np.array_equal(from_h5.st_quat, from_mat.st_quat)
@@ -362,7 +384,7 @@ def test_gyrocal_import_of_a_mat_file_prints_its_missing_rows_rests_and_maneuver
     from scipy.io import savemat
 
     savemat(tmp_path / "trial_A.mat", broad_like())
-    assert cli.main(["import", "broad", str(tmp_path / "out"), str(tmp_path / "trial_A.mat")]) == 0
+    assert cli.main(["import", "--reference-interval", "0", "broad", str(tmp_path / "out"), str(tmp_path / "trial_A.mat")]) == 0
     out = capsys.readouterr().out
     assert "wrote " in out and "2 maneuvers" in out and "sensor class mems" in out
     assert "trial_A                  2500 rows at 100 Hz, 0 reference dropouts" in out
@@ -376,14 +398,19 @@ BROAD = Path(__file__).resolve().parents[2] / "shared" / "data" / "broad"
 
 @pytest.mark.skipif(not BROAD.is_dir(), reason=f"the BROAD trials are not at {BROAD} (see docs/usage.md, "
                                                "'gyrocal import')")
-def test_the_broad_trials_import_at_their_full_rate_with_their_occluded_rows_invalid(tmp_path):
-    """The two BROAD trials: 285.714 Hz, every reference row kept, 162 and 306 NaN rows (markers
-    occluded) flagged invalid, one free maneuver and one noise group each (their rests open and
-    close them; the gyro finds the motion where the data set's own ``movement`` flag does)."""
+def test_the_broad_trials_import_the_gyro_at_its_full_rate_and_the_reference_every_tenth_second(tmp_path):
+    """The two BROAD trials: the gyro at 285.714 Hz, the reference every 0.1 s (the mapping's: resampled
+    from the cameras' frames, its error is white only rows apart), 162 and 306 NaN rows (markers
+    occluded) of which 4 and 9 fall on kept rows, flagged invalid; one free maneuver and one noise group each
+    (their rests open and close them; the gyro finds the motion where the data set's ``movement`` flag does);
+    at --reference-interval 0 every row is kept and every NaN row counted."""
     files = [BROAD / "01_undisturbed_slow_rotation_A.mat", BROAD / "06_undisturbed_fast_rotation_A.mat"]
     campaign, counts = importer.import_files("broad", tmp_path / "broad", files)
-    assert [c["reference_missing"] for c in counts.values()] == [162, 306]
-    assert [c["rows"] for c in counts.values()] == [c["reference_kept"] for c in counts.values()] == [56940, 56380]
+    assert [c["reference_missing"] for c in counts.values()] == [4, 9]
+    assert [c["rows"] for c in counts.values()] == [56940, 56380]
+    assert [c["reference_kept"] for c in counts.values()] == [1965, 1946]
+    _, every = importer.build_campaign(files[:1], importer.read_mapping("broad"), "c", reference_interval_s=0)
+    assert every[files[0].stem]["reference_kept"] == 56940 and every[files[0].stem]["reference_missing"] == 162
     walk = campaign.gyro.pop("arw_deg_sqrt_h")  # measured in the trial's own rests (rests.arw_at_rest)
     assert campaign.gyro == {"sensor_class": "mems", "rate_hz": pytest.approx(285.714285714)}
     assert 0.3 < walk < 0.7  # deg/sqrt(h): a MEMS gyro's, not the DTG default 0.003

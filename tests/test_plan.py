@@ -133,7 +133,7 @@ def test_cli_plan_on_the_default_campaign_prints_and_writes_the_tables(tmp_path,
     assert table["predicted_sd"].between(1.0, 50.0).all()   # tens of ppm and a few arcsec on MOM
     detection = pd.read_csv(tmp_path / "plan_detection.csv")
     assert set(detection["effect"]) == {"bias_drift", "sf_nonlinearity", "g_sensitivity", "gravity_offset",
-                                        "st_latency", "st_correlated_noise"}
+                                        "st_latency", "st_correlated_noise", "st_jitter"}
     for needs_accelerometer in ("g_sensitivity", "gravity_offset"):
         row = detection.set_index("effect").loc[needs_accelerometer]
         assert not row["detectable"] and "needs 'acc_" in row["why_not"]

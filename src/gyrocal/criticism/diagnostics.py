@@ -14,7 +14,7 @@ import pandas as pd
 from scipy.special import chdtr, chdtrc, gammaln
 
 from gyrocal.checks.fit import noise_beyond
-from gyrocal.criticism import correlation, noiseranking
+from gyrocal.criticism import correlation, noiseranking, rategrowth
 from gyrocal.criticism.bands import band_findings
 from gyrocal.criticism.increments import smoothness_finding
 from gyrocal.finding import Finding
@@ -22,7 +22,7 @@ from gyrocal.inference import errormodel
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.fit.likelihood import campaign_stats, maneuver_stats, total
 from gyrocal.inference.noise import covariance, smoothness
-from gyrocal.inference.noise.covariance import CORRELATED_SCALES, NOISE_SCALES, ratios_of, variances
+from gyrocal.inference.noise.covariance import CORRELATED_SCALES, JITTER_SCALE, NOISE_SCALES, ratios_of, variances
 from gyrocal.inference.sampling.predictive import WhitenedManeuver
 from gyrocal.maneuvers.preprocess import noise_groups
 from gyrocal.model import effects
@@ -94,7 +94,7 @@ def _augmented(maneuvers, estimate: PointEstimate, candidates, var):
     spec = estimate.spec.augmented(candidates)
     theta = np.concatenate([estimate.theta, np.zeros(len(spec) - len(estimate.spec))])
     noises = (covariance.build(errormodel.linearize(data, spec, theta, estimate.biases[m]), estimate.boresight,
-                          estimate.correlation_time_s) for m, data in enumerate(maneuvers))
+                          estimate.correlation_time_s, estimate.spec.jitter_noise) for m, data in enumerate(maneuvers))
     if estimate.group_offsets is None:
         return spec, campaign_stats(noises, var)  # one maneuver's noise at a time: summed, then freed
     index = noise_groups(maneuvers)[1]
@@ -213,12 +213,18 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
                                                        for i in per_channel}
     if white is not None and not estimate.spec.correlated_noise:
         fitted = white["gauss_markov"]
-        for effect in (e for e in effects.LIBRARY.values() if e.noise):
+        for effect in (e for e in effects.LIBRARY.values() if e.noise and not e.rate_noise):
             ranking.append(_entry(effect.name, "effect", fitted["chi2"], correlation.GAUSS_MARKOV_DF,
                                   effect.description + correlation.caveat(fitted)))
+    if white is not None and white.get("rate_growth") and not estimate.spec.jitter_noise:
+        jitter = effects.LIBRARY["st_jitter"]
+        ranking.append(_entry(jitter.name, "effect", white["rate_growth"]["chi2"], rategrowth.RATE_DF,
+                              jitter.description))
     ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
     _encompass(ranking, groups, stats, n_model)
-    noiseranking.demote_explained(ranking, maneuvers, estimate, {e.name: e for _, e, _ in groups}, ENCOMPASS_TOP)
+    deterministic = {e.name: e for _, e, _ in groups}
+    for noise_effect in noiseranking.SCORES_GIVEN:
+        noiseranking.demote_explained(ranking, maneuvers, estimate, deterministic, ENCOMPASS_TOP, noise_effect)
     return ranking, detail
 
 
@@ -227,7 +233,7 @@ def linearized(maneuvers, estimate: PointEstimate):
     time (`linearize_all` holds every maneuver's: over 1 GB at 10x the default campaign)."""
     for m in range(len(maneuvers)):
         lin = estimate.linearize(maneuvers, m)
-        yield lin, covariance.build(lin, estimate.boresight, estimate.correlation_time_s)
+        yield lin, covariance.build(lin, estimate.boresight, estimate.correlation_time_s, estimate.spec.jitter_noise)
 
 
 def _measuring(walk_variances, pairs, measured: list):
@@ -242,11 +248,13 @@ def whiteness(maneuvers, pairs, estimate: PointEstimate):
     """Lag-1 autocorrelation of the standardised innovations at the fitted model, per
     maneuver and overall, with its z-score (``rho sqrt(n)``, n the star-tracker samples), and the
     Whittle likelihood ratio of white plus Gauss-Markov noise over white on the first channel set's
-    innovations (`correlation.score`, ``gauss_markov``) that ranks correlated reference noise.
+    innovations (`correlation.score`, ``gauss_markov``) that ranks correlated reference noise, and the
+    likelihood ratio of their variance growing with the squared rate (`rategrowth.score`, ``rate_growth``)
+    that ranks the reference's timing jitter.
     ``pairs``: each maneuver's linearisation and noise structure, e.g. `linearized`'s."""
     ratios = ratios_of(estimate.log_sigma)
     index = noise_groups(maneuvers)[1]
-    per, spectra, pooled_num, pooled_den = {}, [], 0.0, 0.0
+    per, spectra, pooled_num, pooled_den, rated = {}, [], 0.0, 0.0, []
     for m, (data, (lin, nz)) in enumerate(zip(maneuvers, pairs)):
         wm = WhitenedManeuver(nz, ratios)
         zero = np.zeros((1, nz.n_params))
@@ -259,10 +267,12 @@ def whiteness(maneuvers, pairs, estimate: PointEstimate):
         pooled_num += num
         pooled_den += den
         spectra.append(correlation.periodogram(w, lag))
+        if lin.st_body_rate is not None:
+            rated.append(rategrowth.per_sample(w, lag, lin.st_body_rate))
     n = sum(len(d.st_time) for d in maneuvers)
     rho = pooled_num / pooled_den
     return {"lag1": round(rho, 4), "z": round(rho * np.sqrt(n), 2), "per_maneuver": per,
-            "gauss_markov": correlation.score(spectra)}
+            "gauss_markov": correlation.score(spectra), "rate_growth": rategrowth.score(rated) if rated else None}
 
 
 def noise_rms_arcsec(maneuvers, stated_noise) -> float:
@@ -349,10 +359,10 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
     white = whiteness(maneuvers, _measuring(walks, linearized(maneuvers, estimate), measured), estimate)
     ranking, detail = rank(maneuvers, estimate, list(maneuvers[0].extras), plugin_effects, white)
     keys = [s.key for s in NOISE_SCALES]
-    noise_post = {s.key: float(summary.loc[f"noise.{s.key}", "mean"]) for s in CORRELATED_SCALES
-                  if f"noise.{s.key}" in summary.index}
+    sampled = CORRELATED_SCALES + (JITTER_SCALE,)
+    noise_post = {s.key: float(summary.loc[f"noise.{s.key}", "mean"]) for s in sampled if f"noise.{s.key}" in summary.index}
     noise_ci = {s.key: [float(summary.loc[f"noise.{s.key}", c]) for c in ("ci95_low", "ci95_high")]
-                for s in CORRELATED_SCALES if f"noise.{s.key}" in summary.index and "ci95_low" in summary.columns}
+                for s in sampled if f"noise.{s.key}" in summary.index and "ci95_low" in summary.columns}
     checks = misfit_checks(residual_rms, noise_rms, white, ranking, noise_post, estimate.stated_noise, thresholds,
                            noise_ci)
     groups = {d.id: d.noise_group for d in maneuvers}

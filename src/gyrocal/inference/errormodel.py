@@ -81,6 +81,9 @@ class Linearization:
     """(M,) each star-tracker step's walk variance per unit ARW^2 (`walk_steps`); None: ``st_dt``."""
     walk_lag1: np.ndarray | None = None
     """(M,) the walk covariance of step j with step j - 1 per unit ARW^2 (the first: 0); None: none."""
+    st_body_rate: np.ndarray | None = None
+    """(M, 3) the body rate at the star-tracker times (rad/s, body axes, first set): what a timing
+    jitter of the reference turns into attitude error (`covariance.build`); None: not kept."""
 
     def random_walk(self) -> np.ndarray:
         """`shared_walk`, built from the steps' walk variances where it was not given."""
@@ -228,11 +231,12 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
         design[:, s, :, spec.extra] = at_st_jac[:, :, n + 3:] + st_columns
         if s == 0:
             st_matrix = at_st.as_matrix()
+            st_rate = phi[k] / data.dt[k, None]
     design[..., ~spec.free] = 0.0
     st_dt = np.diff(np.concatenate([[data.gyro_time[0]], data.st_time]))
     walk_var, shared = walk_steps(data.gyro_time, data.st_time)
     return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, None, body, walk_var,
-                         np.concatenate([[0.0], shared]))
+                         np.concatenate([[0.0], shared]), st_rate)
 
 
 def smoothed_columns(per_interval: np.ndarray, dt_s: np.ndarray, st_time_s: np.ndarray) -> np.ndarray:

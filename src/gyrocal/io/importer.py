@@ -70,13 +70,15 @@ def reference_rows(time, interval_s) -> np.ndarray:
 
 def split_file(imp: Imported, options: dict) -> tuple:
     """A file's maneuvers ``[(first row, row after the last)]`` and its `rests.Rests` (None when the
-    mapping keeps each file whole: ``maneuver.split: file``, the default)."""
+    mapping keeps each file whole: ``maneuver.split: file``, the default); with ``maneuver.window_s``,
+    each of those cut into windows of about that length (`rests.windows`)."""
+    step = float(np.median(np.diff(imp.time)))
     if options.get("split", "file") != "rests":
-        return [(0, len(imp.time))], None
+        return rests.windows([(0, len(imp.time))], step, options.get("window_s")), None
     rate = imp.rate if imp.rate is not None else np.vstack([imp.increments[1:2] * 0, imp.increments[1:]
                                                             / np.diff(imp.time)[:, None]])
-    found = rests.find_rests(rate, float(np.median(np.diff(imp.time))), float(options.get("min_rest_s", rests.MIN_REST_S)))
-    return rests.pieces(len(imp.time), found.runs), found
+    found = rests.find_rests(rate, step, float(options.get("min_rest_s", rests.MIN_REST_S)))
+    return rests.windows(rests.pieces(len(imp.time), found.runs), step, options.get("window_s")), found
 
 
 def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tuple:

@@ -86,6 +86,22 @@ def pieces(n: int, runs) -> list:
     return [(a, b) for a, b in itertools.pairwise(edges) if b > a]
 
 
+def windows(spans, step_s: float, window_s) -> list:
+    """Each span ``(first row, row after the last)`` cut into windows of about ``window_s`` seconds
+    (``round(length / window_s)`` equal pieces, at least one; None or 0: the spans as they are). Each
+    window becomes a maneuver with its own anchor attitude and bias (the MOM model's per-maneuver terms):
+    an error that wanders slowly over a long free motion (a MEMS bias's instability, a slow drift of
+    the reference) then cannot pile up into an attitude error the white noise model cannot carry."""
+    if not window_s:
+        return list(spans)
+    out = []
+    for a, b in spans:
+        n = max(1, round((b - a) * step_s / window_s))
+        edges = np.linspace(a, b, n + 1).round().astype(int)
+        out.extend((int(lo), int(hi)) for lo, hi in itertools.pairwise(edges) if hi > lo)
+    return out
+
+
 def _moving_mean(x: np.ndarray, k: int) -> np.ndarray:
     """The mean of each row's ``k`` neighbours centred on it (fewer at the ends)."""
     if k <= 1:

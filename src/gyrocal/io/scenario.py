@@ -46,6 +46,7 @@ EFFECT_DEFAULTS = {
     "sf_nonlinearity_ppm_per_deg2_s2": 0.0,
     "st_latency_s": 0.0,
     "st_correlation_time_s": 0.0,
+    "st_jitter_ms": 0.0,
     "sf_temperature_ppm_per_K": 0.0,
     "temperature_swing_K": 0.0,
     "g_sensitivity_deg_s_per_g": 0.0,
@@ -55,7 +56,9 @@ EFFECT_DEFAULTS = {
 per g need ``accelerometer.gravity_m_s2`` (a campaign on a rate table in a lab): every channel's
 bias then follows ``g_sensitivity`` times the specific force along each body axis, and the star
 tracker sits ``gravity_offset`` per g of the force along each of the two other axes off about each
-body axis, as the library effects of those names describe them with every coefficient equal."""
+body axis, as the library effects of those names describe them with every coefficient equal.
+``st_jitter_ms``: each star-tracker attitude is the truth at its time tag plus a white normal error
+of this sd (the reference's clock jittering against the gyros'; the library's ``st_jitter``)."""
 
 
 def _merge(defaults: dict, given: dict, where: str) -> dict:

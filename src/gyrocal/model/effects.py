@@ -78,6 +78,8 @@ class Effect:
     """Baseline terms whose columns come from the exact channel model."""
     noise = False
     """A noise-model effect: it changes the covariance, not the mean."""
+    rate_noise = False
+    """A noise-model effect whose variance follows the body rate (`StJitter`), not a correlated one."""
     signature = ""
     """The residual signature whose columns are this effect's own (ranked once, under the effect)."""
 
@@ -247,8 +249,18 @@ class StCorrelatedNoise(Effect):
     noise = True
 
 
+class StJitter(Effect):
+    name = "st_jitter"
+    description = ("timing jitter of the reference against the gyros' clock: each reference attitude is taken a "
+                   "random dt off its time tag, an error omega dt along the rotation axis, its sd sigma_t "
+                   "(st_jitter_ms) estimated with the other noise scales")
+    noise = True
+    rate_noise = True
+
+
 LIBRARY = {e.name: e for e in (ScaleFactor(), ScaleFactorSymmetric(), Misalignment(), Bias(), BiasDrift(), SfNonlinearity(),
-                                GSensitivity(), GravityOffset(), StLatency(), StCorrelatedNoise())}
+                                GSensitivity(), GravityOffset(), StLatency(), StCorrelatedNoise(),
+                                StJitter())}
 BASELINE = ("scale_factor", "misalignment", "bias")
 SCALE_FACTORS = ("scale_factor", "scale_factor_symmetric")
 """The channel model's scale-factor terms: a model holds exactly one of them in place of the baseline's."""

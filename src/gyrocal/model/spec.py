@@ -96,8 +96,17 @@ class ModelSpec:
                 for p in e.channel_parameters(c) for s in [_spec(e, p, c.name, i, True)]]
         extra = [s for e in effects if not (e.core or e.noise) for p in e.parameters
                  for s in _specs_of(e, p, channels, False)]
-        return cls(model, channels, core + extra, [e.name for e in effects], any(e.noise for e in effects),
+        correlated = any(e.noise and not e.rate_noise for e in effects)
+        if correlated and any(e.rate_noise for e in effects):
+            raise ValueError(f"model {model}: st_jitter and st_correlated_noise cannot be combined yet "
+                             "(the Gauss-Markov filter has no timing-jitter component)")
+        return cls(model, channels, core + extra, [e.name for e in effects], correlated,
                    {e.name: e for e in effects})
+
+    @property
+    def jitter_noise(self) -> bool:
+        """The reference's timing jitter (`effects.StJitter`) is a fourth noise scale."""
+        return "st_jitter" in self.effect_names
 
     def __len__(self) -> int:
         return len(self.parameters)

@@ -284,8 +284,12 @@ def simulate(scenario: dict, seed=None):
     # Star tracker: true attitude at its (possibly late) sample times, times its noise.
     dt_st = 1.0 / scenario["star_tracker_hz"]
     t_st = t0 + eff["st_latency_s"] + dt_st * np.arange(int((t_final - t0 - eff["st_latency_s"]) / dt_st))
+    taken = t_st - eff["st_latency_s"]
+    if eff["st_jitter_ms"]:  # the attitude of a time off its tag by the clocks' jitter (no draw while off)
+        fine_end = t0 + dt_sub * n_gyro * n_sub
+        taken = np.clip(taken + rng.normal(0.0, eff["st_jitter_ms"] * 1e-3, len(t_st)), t0, fine_end)
     true_st = kinematics.attitude_at(t0 + dt_sub * np.arange(n_gyro * n_sub + 1), attitudes_fine, increments_fine,
-                                     t_st - eff["st_latency_s"])
+                                     taken)
     del attitudes_fine, increments_fine
     noise = star_tracker_noise(len(t_st), dt_st, st_cfg, eff["st_correlation_time_s"], rng,
                                maneuver_scale(profiles, t_st, False))

@@ -269,7 +269,8 @@ class FullRun:
         """Linearisation and noise structure of maneuver ``m`` about the full point estimate."""
         if m not in self._linear:
             lin = self.estimate.linearize(self.maneuvers, m)
-            self._linear[m] = lin, covariance.build(lin, self.estimate.boresight, self.estimate.correlation_time_s)
+            self._linear[m] = lin, covariance.build(lin, self.estimate.boresight, self.estimate.correlation_time_s,
+                                                         self.estimate.spec.jitter_noise)
         return self._linear[m]
 
     def terms(self, m: int) -> list:

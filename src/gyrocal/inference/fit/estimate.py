@@ -236,7 +236,7 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
     # only the factors are kept of the noise: its right-hand sides are the REML's, not the WLS's
     chols, filters = [], []
     for lin in lins0:
-        nz = covariance.build(lin, boresight, correlation_time_s)
+        nz = covariance.build(lin, boresight, correlation_time_s, spec.jitter_noise)
         chols.append(nz.factor(levels.maneuver_variances(len(chols), index[len(chols)])))
         filters.append(nz.filter)
         del nz
@@ -263,7 +263,8 @@ def wls(maneuvers, spec: ModelSpec, stated_noise: dict, log_sigma, theta0=None, 
 def linearize_all(maneuvers, estimate: PointEstimate):
     """Linearisations and noise structures of every maneuver about a point estimate."""
     lins = [estimate.linearize(maneuvers, m) for m in range(len(maneuvers))]
-    return lins, [covariance.build(lin, estimate.boresight, estimate.correlation_time_s) for lin in lins]
+    return lins, [covariance.build(lin, estimate.boresight, estimate.correlation_time_s, estimate.spec.jitter_noise)
+                  for lin in lins]
 
 
 def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estimate_scales=True) -> PointEstimate:
@@ -278,7 +279,7 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     time are what the model is for), from the residuals' correlation time as a start.
     """
     spec = spec.with_prior_only(identification.unflown(maneuvers, spec, stated_noise))
-    log_sigma = covariance.log_sigma_of(stated_noise)
+    log_sigma = covariance.log_sigma_of(stated_noise, spec.jitter_noise)
     n_man, n_ch = len(maneuvers), len(spec.channels)
 
     def start_at(spec):

@@ -137,6 +137,15 @@ def estimate_noise(noises, log_sigma0, groups=None):
     """
     log_sigma0 = np.asarray(log_sigma0, dtype=float)
     start = log_sigma0[1:] - log_sigma0[0]
+    if covariance.is_jitter(log_sigma0):  # sigma_t kept above its floor (there the profile is flat)
+        floor = np.log(covariance.JITTER_FLOOR_S) - log_sigma0[0]
+
+        def negative(r):
+            return profile_reml(noises, np.append(r[:2], max(r[2], floor)), groups)[0]
+        opt = minimize(negative, start, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-3})
+        ratios = np.append(opt.x[:2], max(opt.x[2], floor))
+        log_cross, offsets = campaign_level(profile_reml(noises, ratios, groups)[1], noises, groups)
+        return covariance.absolute_of(log_cross, ratios), offsets
     opt = minimize(lambda r: profile_reml(noises, r, groups)[0], start, method="Nelder-Mead",
                    options={"xatol": 1e-3, "fatol": 1e-3})
     log_cross, offsets = campaign_level(profile_reml(noises, opt.x, groups)[1], noises, groups)

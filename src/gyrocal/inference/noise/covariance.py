@@ -8,7 +8,10 @@ the walk into white noise and the star-tracker noise into an MA(1) process, so t
 covariance of the differenced, set-stacked series is block tridiagonal: O(N) to
 factor with LAPACK's banded Cholesky. Its three components are linear in
 ``sigma_cross^2``, ``sigma_about^2`` and ``ARW^2``. Star-tracker noise with a Gauss-Markov
-part is filtered instead (`markov`): two samples deep, two more components.
+part is filtered instead (`markov`): two samples deep, two more components. A timing jitter of
+the reference (sd ``sigma_t``, `st_jitter`) adds a fourth, linear in ``sigma_t^2``: the
+reference attitude taken ``dt`` off its time tag errs by ``omega dt``, a white error of covariance
+``sigma_t^2 omega omega^T`` at each sample, along the rotation axis (rank one), as banded as the rest.
 """
 
 from dataclasses import dataclass
@@ -23,10 +26,35 @@ from gyrocal.inference.noise import markov
 from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
 __all__ = [
-    "COMPONENTS", "CORRELATED_SCALES", "NOISE_LABELS", "NOISE_SCALES", "ManeuverNoise", "NoiseScale", "build",
-    "difference", "filtered", "log_sigma_of", "noise_knowledge", "noise_labels", "noise_scales", "nuisance_design",
-    "ratios_of", "scales_in_units", "stated_scales", "stated_si", "transformed", "unit_variances", "untransformed",
-    "variances", "whiten"
+    "COMPONENTS",
+    "CORRELATED_SCALES",
+    "JITTER_FLOOR_S",
+    "JITTER_SCALE",
+    "JITTER_SCALES",
+    "NOISE_LABELS",
+    "NOISE_SCALES",
+    "ManeuverNoise",
+    "NoiseScale",
+    "absolute_of",
+    "build",
+    "difference",
+    "filtered",
+    "is_jitter",
+    "jitter_stated_ms",
+    "log_sigma_of",
+    "noise_knowledge",
+    "noise_labels",
+    "noise_scales",
+    "nuisance_design",
+    "ratios_of",
+    "scales_in_units",
+    "stated_scales",
+    "stated_si",
+    "transformed",
+    "unit_variances",
+    "untransformed",
+    "variances",
+    "whiten"
 ]
 
 COMPONENTS = ("cross", "about", "walk")
@@ -40,6 +68,10 @@ class NoiseScale:
     key: str
     si_per_unit: float
     logit: bool = False
+    prior_center: float | None = None
+    """The prior's median in the unit of ``key`` where no data sheet states it (None: the stated value)."""
+    prior_log_sd: float | None = None
+    """The log-normal prior's sd where it is the scale's own (None: the config's ``noise_log_sd``)."""
 
 
 NOISE_SCALES = (NoiseScale("sigma_cross_arcsec", ARCSEC_RAD), NoiseScale("sigma_about_arcsec", ARCSEC_RAD),
@@ -53,22 +85,46 @@ variance that is Gauss-Markov (the same share across and about the boresight, so
 ``sigma_cross`` and ``sigma_about`` stay its total sd, as data sheets state it), and its
 correlation time (s)."""
 
+JITTER_SCALE = NoiseScale("st_jitter_ms", 1e-3, prior_center=1.0, prior_log_sd=2.0)
+"""The reference's timing jitter against the gyros' clock (`st_jitter`), sampled as its log after
+the three white scales: the prior's median 1 ms (a clock sync over USB or a network), its sd a
+factor e^2, 0.14 to 7 ms within one sd and 18 us to 55 ms within two; a campaign.yaml's
+``star_tracker: st_jitter_ms`` moves the median."""
+
+JITTER_SCALES = NOISE_SCALES + (JITTER_SCALE,)
+
+JITTER_FLOOR_S = 1e-6
+"""The REML keeps ``sigma_t`` above this: 1 us, 0.2 arcsec at 1 rad/s, where the profile is flat."""
+
 NOISE_LABELS = [f"noise.{s.key}" for s in NOISE_SCALES]
 """The noise scales' labels in ``posterior_summary.csv`` (beside the channel parameters')."""
 
 
-def noise_scales(correlated: bool) -> tuple:
-    """The scales a model samples: three, or five with correlated star-tracker noise."""
+def noise_scales(correlated: bool, jitter: bool = False) -> tuple:
+    """The scales a model samples: three, four with the reference's timing jitter, or five with
+    correlated star-tracker noise."""
+    if jitter:
+        return JITTER_SCALES
     return CORRELATED_SCALES if correlated else NOISE_SCALES
 
 
-def noise_labels(correlated: bool) -> list:
-    """`NOISE_LABELS` of a model: with correlated noise, its two scales too."""
-    return [f"noise.{s.key}" for s in noise_scales(correlated)]
+def noise_labels(correlated: bool, jitter: bool = False) -> list:
+    """`NOISE_LABELS` of a model: with correlated noise or jitter, their scales too."""
+    return [f"noise.{s.key}" for s in noise_scales(correlated, jitter)]
 
 
 def _scales_of(log_sigma) -> tuple:
-    return NOISE_SCALES if np.shape(log_sigma)[-1] == len(NOISE_SCALES) else CORRELATED_SCALES
+    return {len(s): s for s in (NOISE_SCALES, JITTER_SCALES, CORRELATED_SCALES)}[np.shape(log_sigma)[-1]]
+
+
+def is_jitter(log_sigma) -> bool:
+    """Whether ``log_sigma`` (last axis) holds the timing jitter's scale (four scales)."""
+    return np.shape(log_sigma)[-1] == len(JITTER_SCALES)
+
+
+def jitter_stated_ms(stated: dict) -> float:
+    """The stated timing jitter (ms): the campaign's ``st_jitter_ms``, or `JITTER_SCALE`'s prior median."""
+    return float(stated.get(JITTER_SCALE.key, JITTER_SCALE.prior_center))
 
 
 def stated_si(stated: dict) -> np.ndarray:
@@ -76,8 +132,11 @@ def stated_si(stated: dict) -> np.ndarray:
     return np.array([stated[s.key] * s.si_per_unit for s in NOISE_SCALES])
 
 
-def log_sigma_of(stated: dict) -> np.ndarray:
-    """``log_sigma`` of noise given in the contract's units."""
+def log_sigma_of(stated: dict, jitter: bool = False) -> np.ndarray:
+    """``log_sigma`` of noise given in the contract's units; ``jitter``: the timing jitter's appended
+    (`jitter_stated_ms`)."""
+    if jitter:
+        return np.log(np.append(stated_si(stated), jitter_stated_ms(stated) * JITTER_SCALE.si_per_unit))
     return np.log(stated_si(stated))
 
 
@@ -100,7 +159,11 @@ def noise_knowledge(info: dict, defaults: dict) -> dict:
     ``input.json``, or a plan's scenario) first, then the config's ``noise`` section."""
     keys = ("sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "arw_deg_sqrt_h")
     stated = {**info["star_tracker"], **info["gyro"]}
-    return {k: stated.get(k, defaults[k]) for k in keys}
+    out = {k: stated.get(k, defaults[k]) for k in keys}
+    jitter = stated.get(JITTER_SCALE.key, defaults.get(JITTER_SCALE.key))
+    if jitter is not None:  # only where stated: the default's knowledge stays the three scales
+        out[JITTER_SCALE.key] = jitter
+    return out
 
 
 def variances(log_sigma) -> dict:
@@ -111,15 +174,19 @@ def variances(log_sigma) -> dict:
     s = np.exp(2.0 * log_sigma[:3])
     if len(log_sigma) == 3:
         return {"cross": s[0], "about": s[1], "walk": s[2]}
+    if len(log_sigma) == 4:  # timing jitter: sigma_t^2 (s^2)
+        return {"cross": s[0], "about": s[1], "walk": s[2], "jitter": float(np.exp(2.0 * log_sigma[3]))}
     white, gm = expit(-log_sigma[3]), expit(log_sigma[3])
     return {"cross": s[0] * white, "about": s[1] * white, "walk": s[2], "gm_cross": s[0] * gm, "gm_about": s[1] * gm}
 
 
 def ratios_of(log_sigma) -> np.ndarray:
     """What the covariance's shape depends on (last axis): the log ratios of ``sigma_about`` and the
-    ARW to ``sigma_cross``, and with correlated noise ``logit st_gm_fraction`` and ``log tau_s``;
-    ``sigma_cross^2`` enters in closed form."""
+    ARW to ``sigma_cross``, and with correlated noise ``logit st_gm_fraction`` and ``log tau_s``, with
+    the timing jitter the log ratio of ``sigma_t`` to it; ``sigma_cross^2`` enters in closed form."""
     log_sigma = np.asarray(log_sigma, dtype=float)
+    if is_jitter(log_sigma):
+        return log_sigma[..., 1:] - log_sigma[..., :1]
     return np.concatenate([log_sigma[..., 1:3] - log_sigma[..., :1], log_sigma[..., 3:]], axis=-1)
 
 
@@ -127,6 +194,13 @@ def unit_variances(ratios) -> dict:
     """`variances` at unit ``sigma_cross`` from `ratios_of`'s ratios."""
     ratios = np.asarray(ratios, dtype=float)
     return variances(np.concatenate([[0.0], ratios]))
+
+
+def absolute_of(log_cross, ratios) -> np.ndarray:
+    """`ratios_of`'s inverse: ``log_sigma`` from ``log sigma_cross`` and the ratios."""
+    ratios = np.asarray(ratios, dtype=float)
+    rel = len(ratios) if len(ratios) == len(JITTER_SCALES) - 1 else 2
+    return np.concatenate([[log_cross], log_cross + ratios[:rel], ratios[rel:]])
 
 
 def _banded_lower(diag_blocks, lower_blocks, depth=1):
@@ -257,12 +331,13 @@ def filtered(maneuver: str, z, design, nuisance, st_matrix, walk, st_dt, walk_la
     return ManeuverNoise(maneuver, components, rhs, design.shape[-1], nuisance.shape[-1], filt)
 
 
-def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -> ManeuverNoise:
+def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0, jitter: bool = False) -> ManeuverNoise:
     """Covariance components and transformed right-hand sides of a linearised maneuver.
 
     White star-tracker noise: first differences, the covariance one sample deep. With
     ``correlation_time_s`` > 0 the star-tracker noise has a first-order Gauss-Markov part too
-    (`filtered`).
+    (`filtered`). ``jitter``: a fourth component, the reference's timing jitter, ``omega omega^T``
+    per unit ``sigma_t^2`` at each sample (body rate ``lin.st_body_rate``), white like the tracker's.
     """
     m_samples, n_sets = lin.z.shape[:2]
     block = 3 * n_sets
@@ -272,18 +347,23 @@ def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0) -
         return filtered(lin.maneuver, lin.z, lin.design, nuis, lin.st_matrix, lin.random_walk(), lin.st_dt,
                         lin.walk_lag1_or_none(), boresight_body, correlation_time_s)
     shapes = _body_shapes(boresight_body)
+    if jitter:
+        if lin.st_body_rate is None:
+            raise ValueError(f"maneuver {lin.maneuver}: the timing jitter needs the body rate at the reference samples")
+        shapes["jitter"] = np.einsum("ja,jb->jab", lin.st_body_rate, lin.st_body_rate)
     R = lin.st_matrix
     ones = np.ones((n_sets, n_sets))
     diag, lower = {}, {}
     for name, body_cov in shapes.items():
-        u = np.einsum("jab,jcb->jac", np.einsum("jab,bc->jac", R, body_cov), R)
+        per_sample = "jbc" if body_cov.ndim == 3 else "bc"
+        u = np.einsum("jab,jcb->jac", np.einsum(f"jab,{per_sample}->jac", R, body_cov), R)
         u = markov.over_sets(ones, u)
         # D_j = Z_j - Z_(j-1), D_0 = Z_0: Var D_j = U_j + U_(j-1), Cov(D_(k+1), D_k) = -U_k
         d0 = u.copy()
         d0[1:] += u[:-1]
         diag[name], lower[name] = d0, [-u[:-1]]
     walk = lin.random_walk().transpose(0, 1, 3, 2, 4).reshape(m_samples, block, block)
-    components = {k: _banded_lower(diag[k], lower[k]) for k in COMPONENTS[:2]}
+    components = {k: _banded_lower(diag[k], lower[k]) for k in shapes}
     on_diagonal = np.einsum("jaa->ja", walk)
     shared = lin.walk_lag1_or_none()
     if shared is None and np.count_nonzero(walk) == np.count_nonzero(on_diagonal):  # isotropic: dt I

@@ -16,7 +16,14 @@ import pandas as pd
 import xarray as xr
 
 from gyrocal import __version__
-from gyrocal.inference.noise.covariance import CORRELATED_SCALES, build, noise_scales, scales_in_units, stated_scales
+from gyrocal.inference.noise.covariance import (
+    CORRELATED_SCALES,
+    JITTER_SCALE,
+    build,
+    noise_scales,
+    scales_in_units,
+    stated_scales,
+)
 from gyrocal.inference.sampling import predictive
 from gyrocal.maneuvers import preprocess
 from gyrocal.model import channels as ch
@@ -68,7 +75,7 @@ def posterior_dataset(draws, theta_hat, spec, noise_groups=()) -> az.InferenceDa
     ``sigma_cross`` over the campaign's) and their log sd follow, as ``noise_group_level`` and
     ``noise_group_sd``."""
     p = len(spec)
-    scales = noise_scales(spec.correlated_noise)
+    scales = noise_scales(spec.correlated_noise, spec.jitter_noise)
     k = len(scales)
     values = spec.to_unit(theta_hat + draws[..., :p])
     noise = scales_in_units(draws[..., p:p + k])
@@ -98,7 +105,7 @@ def summarize(idata, per_walker, labels, convergence: dict) -> pd.DataFrame:
     tail = (1 - CI_PROB) / 2
     low, high = (draws.quantile(q, dim=("chain", "draw")) for q in (tail, 1 - tail))
     rows = []
-    noise_labels = [f"noise.{s.key}" for s in CORRELATED_SCALES if s.key in draws]
+    noise_labels = [f"noise.{s.key}" for s in CORRELATED_SCALES + (JITTER_SCALE,) if s.key in draws]
     group_labels = {}
     if "noise_group_level" in draws:
         group_labels = {f"noise.level.{g}": ("noise_group_level", {"noise_group": g})

@@ -30,7 +30,7 @@ from gyrocal.inference.fit.likelihood import (
     total,
 )
 from gyrocal.inference.noise import segments
-from gyrocal.inference.noise.covariance import log_sigma_of, noise_labels, ratios_of, variances
+from gyrocal.inference.noise.covariance import JITTER_SCALE, log_sigma_of, noise_labels, ratios_of, variances
 from gyrocal.inference.sampling.budget import SamplingBudget
 from gyrocal.inference.sampling.noisegrid import NoiseShapes, RatioGrid, ratio_curvature
 from gyrocal.inference.sampling.proposal import (
@@ -100,10 +100,13 @@ class Priors:
         scales' priors are centred on the stated noise. With correlated noise, the star tracker's
         Gauss-Markov share has a logit-normal prior about one half (`GM_FRACTION_LOGIT_SD`), its
         correlation time a log-normal one about `TAU_PRIOR_CENTER_S`."""
-        center, sd = log_sigma_of(stated_noise), np.full(3, float(noise_log_sd))
+        center, sd = log_sigma_of(stated_noise), np.full(3, float(noise_log_sd))  # the jitter's below
         if spec.correlated_noise:
             center = np.concatenate([center, [0.0, np.log(TAU_PRIOR_CENTER_S)]])
             sd = np.concatenate([sd, [GM_FRACTION_LOGIT_SD, TAU_PRIOR_LOG_SD]])
+        if spec.jitter_noise:  # log-normal about the stated jitter, or the scale's own median (`JITTER_SCALE`)
+            center = log_sigma_of(stated_noise, jitter=True)
+            sd = np.append(sd, JITTER_SCALE.prior_log_sd)
         return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, center, sd, spec.prior_dof)
 
     @property
@@ -445,7 +448,7 @@ class Prepared:
     def labels(self) -> list:
         """The sampled dimensions' names, in the order of the log posterior's ``x`` (`LogPosterior`)."""
         est = self.estimate
-        labels = list(est.spec.labels) + noise_labels(est.spec.correlated_noise)
+        labels = list(est.spec.labels) + noise_labels(est.spec.correlated_noise, est.spec.jitter_noise)
         if self.group_index is not None:
             labels += [f"noise.level.{g}" for g in est.noise_groups] + ["noise.group_sd"]
         return labels
@@ -462,6 +465,8 @@ def prepare(maneuvers, estimate, priors: Priors, grid_cfg: dict) -> Prepared:
     if estimate.spec.correlated_noise:
         shapes = NoiseShapes(noises, lins, estimate.boresight, index, segments.Chains.of(maneuvers))
         fallback = np.concatenate([[fallback, fallback], priors.log_sigma_sd[3:]])
+    if estimate.spec.jitter_noise:
+        fallback = np.array([fallback, fallback, np.hypot(priors.log_sigma_sd[0], priors.log_sigma_sd[3])])
     ratio_sd = ratio_curvature(shapes, ratios, fallback)
     grid = RatioGrid(shapes, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"])
     logpost = LogPosterior(grid, estimate.theta, priors)
