@@ -71,8 +71,9 @@ def test_the_runs_json_results_conform_to_their_schemas(workflow_run):
         if path.name in OUTPUT_SCHEMAS:
             assert output_errors(json.loads(path.read_text()), OUTPUT_SCHEMAS[path.name]) == [], path
             checked[path.name] = checked.get(path.name, 0) + 1
-    # the verdict; four variants' diagnostics and sampler records, g_sensitivity's the refusal record
-    assert checked == {"verdict.json": 1, "diagnostics.json": 4, "sampler.json": 4, "refused.json": 1}
+    # the verdict; four variants' diagnostics and sampler records, g_sensitivity's the refusal record, and the
+    # loop's step (extended), skipped with no misfit to extend: its files hold its record
+    assert checked == {"verdict.json": 1, "diagnostics.json": 5, "sampler.json": 5, "refused.json": 2}
 
 
 def dry_run_with(tiny, work, tmp_path, override: str):
@@ -103,8 +104,9 @@ def test_a_report_threshold_change_reruns_the_report_and_nothing_upstream(tiny, 
 
 def test_a_sampler_setting_change_reruns_the_posterior_but_not_the_point_estimate(tiny, workflow_run, tmp_path):
     jobs, said = dry_run_with(tiny, workflow_run, tmp_path, "sampler:\n  chunk_steps: 150\n")
-    # one posterior per model of the default config, and what reads it; no point estimate, no preprocess
-    assert jobs == {"posterior": 4, "diagnostics": 4, "report": 1, "all": 1}, said[-3000:]  # 4 variants
+    # one posterior per model of the default config, and what reads it (the loop's step reads their
+    # diagnostics); no point estimate, no preprocess
+    assert jobs == {"posterior": 4, "diagnostics": 4, "extended": 1, "report": 1, "all": 1}, said[-3000:]
 
 
 def test_an_unchanged_config_schedules_nothing(tiny, workflow_run, tmp_path):

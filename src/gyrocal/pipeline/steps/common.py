@@ -140,7 +140,8 @@ def variant_step(paths, model: str, step: str, run, outputs=()) -> dict | None:
         except InputError as exc:
             record = {"model": model, "status": getattr(exc, "status", "refused"), "step": step, "reason": str(exc)}
             said = f"gyrocal: model {model} {record['status']} at step {step} (the other variants go on):\n{exc}"
-            log.warning("%s", said)
+            # a variant skipped (nothing for it to add: the loop with no misfit) is a decision, not a fault
+            (log.info if record["status"] == "skipped" else log.warning)("%s", said)
             print(said, file=sys.stderr)
             write_json(record, record_path)
     text = json.dumps(record, indent=1)
