@@ -40,7 +40,7 @@ def main():
             root = Path(tmp) / case
             simulate.run(DATA / f"hidden_{case}.yaml", root / "sim")
             campaign, truth = root / "sim/campaign", json.loads((root / "sim/truth.json").read_text())
-            calibrate(campaign, root / "out", with_variant(cfg, effect, DATA / plugin if plugin else None),
+            calibrate(campaign, root / "out", with_variant(cfg, effect, ROOT / plugin if plugin else None),
                       truth_path=root / "sim/truth.json")
             comp = pd.read_csv(root / "out/model_comparison.csv").set_index("model")
             base = json.loads((root / "out/baseline/diagnostics.json").read_text())

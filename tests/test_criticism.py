@@ -16,7 +16,7 @@ from gyrocal.model import effects
 from gyrocal.simulation import simulate
 from gyrocal.study.hidden import BASE, CASES
 
-from conftest import DATA, config_with, run_campaign
+from conftest import DATA, ROOT, config_with, run_campaign
 
 FAST_CASE = "temperature"
 """The case the fast tier runs (a plugin's effect: the loop end to end, plugin loading included);
@@ -36,7 +36,7 @@ def runs(tmp_path_factory, config):
             root = tmp_path_factory.mktemp(case)
             simulate.run(DATA / f"hidden_{case}.yaml", root / "sim")
             cfg = config_with(config, {"baseline": BASE, "extended": BASE + [effect]},
-                              [str(DATA / plugin)] if plugin else [])
+                              [str(ROOT / plugin)] if plugin else [])
             run_campaign(root / "sim" / "campaign", root / "out", cfg, ("baseline", "extended"),
                          root / "sim" / "truth.json")
             made[case] = root

@@ -11,16 +11,17 @@ BASE = ["scale_factor", "misalignment", "bias"]
 """The baseline's effects, the paper's model."""
 
 CASES = {
-    # scenario: (variant effect, names that count as the right diagnosis, plugin file beside the scenario)
+    # scenario: (variant effect, names that count as the right diagnosis, plugin file from the repository root)
     "bias_drift": ("bias_drift", {"bias_drift", "time"}, None),
     "sf_nonlinearity": ("sf_nonlinearity", {"sf_nonlinearity", "rate_squared"}, None),
     "st_latency": ("st_latency", {"st_latency", "acceleration"}, None),
     "st_correlated_noise": ("st_correlated_noise", {"st_correlated_noise"}, None),
     "temperature": ("sf_temperature", {"sf_temperature", "temp_dtg1", "temp_dtg2", "temp_dtg3"},
-                    "plugin_sf_temperature.py"),
+                    "examples/temperature/plugin_sf_temperature.py"),
 }
 """Each case's scenario (``hidden_<case>.yaml``), the effect its variant adds, the ranking's names that
-count as the right diagnosis, and the plugin file that defines the effect (None: a library effect)."""
+count as the right diagnosis, and the plugin file that defines the effect, from the repository's root
+(the tutorial's own; None: a library effect)."""
 
 
 def with_variant(cfg: dict, effect: str, plugin=None) -> dict:
