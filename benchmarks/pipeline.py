@@ -28,7 +28,7 @@ def snakemake_run():
 
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile"), "--cores", "2",
+        subprocess.run([sys.executable, "-m", "snakemake", "-s", str(ROOT / "workflow" / "Snakefile"), "--cores", "2",
                         "-d", tmp, "-q"], check=True, capture_output=True)
         wall = time.perf_counter() - start
         jobs = [pd.read_csv(f, sep="\t").assign(rule=f.name.split(".")[0])

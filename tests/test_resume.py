@@ -1,7 +1,7 @@
 """An interrupted run resumes with the plain command, and gives what an uninterrupted run gives.
 
 A run stopped while the posterior runs leaves that job marked incomplete in ``.snakemake/``, and some of
-its outputs may exist; without ``rerun-incomplete`` (the workflow profile, ``profiles/default/``) the
+its outputs may exist; without ``rerun-incomplete`` (the workflow profile, ``workflow/profiles/default/``) the
 plain rerun stopped with IncompleteFilesException. Each file is written whole or not at all
 (`gyrocal.io.outputs`), and Snakemake deletes every output of an incomplete job before it runs again.
 """

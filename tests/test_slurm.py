@@ -20,7 +20,7 @@ from conftest import DATA, ROOT
 
 pytestmark = pytest.mark.slurm
 
-SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile")]
+SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "workflow" / "Snakefile")]
 NAMES = ("sat_a", "sat_b", "sat_c")
 TIMEOUT_S = 1800                      # each run; here 2 to 8 minutes
 

@@ -16,7 +16,7 @@ from conftest import DATA, ROOT
 
 MODEL_FILES = ("point_estimate", "posterior", "summary", "fit", "sampler", "elpd_maneuvers", "elpd_blocks",
                "calibration", "correction", "diagnostics")
-SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "Snakefile")]
+SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "workflow" / "Snakefile")]
 SHORT_CHAINS = str(DATA / "short_chains.yaml")
 """The runs here test the workflow's wiring and numbers, not convergence."""
 CONFIGS = [SHORT_CHAINS, str(DATA / "refused_variant.yaml")]

@@ -53,8 +53,8 @@ elif config["telemetry"]:
     _name, _entry = _user_campaign(config["telemetry"])
     CAMPAIGNS[_name] = _entry
 else:
-    if not Path(config["scenario"]).exists() and Path(workflow.basedir, config["scenario"]).exists():
-        config["scenario"] = str(Path(workflow.basedir, config["scenario"]))
+    if not Path(config["scenario"]).exists() and Path(ROOT, config["scenario"]).exists():
+        config["scenario"] = str(Path(ROOT, config["scenario"]))
     try:
         _meta = _scenario.peek(config["scenario"])
     except _InputError as refused:
