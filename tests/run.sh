@@ -23,6 +23,11 @@ python -m pip install --quiet -e ".[test,docs]"
 python -m ruff check .
 lint-imports --no-logo --no-cache
 python -m snakemake --lint >/dev/null 2>&1 || python -m snakemake --lint
+# The small configs of .test/ (snakemake-workflows' layout): lint the workflow under each, and dry-run it.
+for config in .test/config/*.yaml; do
+    python -m snakemake --lint --configfile "$config" >/dev/null 2>&1 || python -m snakemake --lint --configfile "$config"
+    python -m snakemake -n -q --configfile "$config" -d "$(mktemp -d)" >/dev/null
+done
 NO_MKDOCS_2_WARNING=1 mkdocs build --strict --quiet --site-dir "$(mktemp -d)"
 if [ "${1:-}" = "--full" ]; then
     shift
