@@ -64,6 +64,17 @@ def test_the_rules_write_every_file_the_paths_name(workflow_run):
         assert Path(path).exists(), path
 
 
+def test_the_runs_json_results_conform_to_their_schemas(workflow_run):
+    from gyrocal.io.outputs import OUTPUT_SCHEMAS, output_errors
+    checked = {}
+    for path in sorted((workflow_run / "results" / "tiny").rglob("*.json")):
+        if path.name in OUTPUT_SCHEMAS:
+            assert output_errors(json.loads(path.read_text()), OUTPUT_SCHEMAS[path.name]) == [], path
+            checked[path.name] = checked.get(path.name, 0) + 1
+    # the verdict; four variants' diagnostics and sampler records, g_sensitivity's the refusal record
+    assert checked == {"verdict.json": 1, "diagnostics.json": 4, "sampler.json": 4, "refused.json": 1}
+
+
 def dry_run_with(tiny, work, tmp_path, override: str):
     """What ``snakemake -n`` would run after a finished run, with a config file overriding some
     settings: the jobs by rule (from its ``Job stats`` table) and all it said."""

@@ -56,3 +56,17 @@ def test_config_readme_gives_the_default_a_run_takes(key):
     unit, default, constraint, _ = rows()[key]
     assert unit and constraint
     assert (None if default == "none" else yaml.safe_load(default.strip("`"))) == default_of(key)
+
+
+def test_the_output_schemas_refuse_what_a_script_could_not_read():
+    from gyrocal.io.outputs import output_errors
+    check = {"check": "converged", "passed": True, "why": "every parameter converged"}
+    verdict = {"campaign": "mom", "model": "baseline", "verdict": "GO", "checks": [check]}
+    assert output_errors(verdict, "verdict") == []
+    assert output_errors({**verdict, "verdict": "go"}, "verdict") == ["verdict: 'go' is not one of ['GO', 'NO-GO']"]
+    assert output_errors({**verdict, "checks": [{**check, "passed": "yes"}]}, "verdict") == \
+        ["checks.0.passed: 'yes' is not of type 'boolean'"]
+    refusal = {"model": "g_sensitivity", "status": "refused", "step": "point_estimate", "reason": "no acc_x"}
+    assert output_errors(refusal, "diagnostics") == output_errors(refusal, "sampler") == []
+    assert output_errors({**refusal, "status": "failed"}, "sampler")  # neither a record nor a refusal
+    assert output_errors({"converged": True}, "sampler")

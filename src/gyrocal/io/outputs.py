@@ -8,7 +8,12 @@ import shutil
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["atomic", "atomic_dir", "strict", "write_csv", "write_json", "write_text", "write_with"]
+__all__ = ["OUTPUT_SCHEMAS", "atomic", "atomic_dir", "output_errors", "strict", "write_csv", "write_json",
+           "write_text", "write_with"]
+
+OUTPUT_SCHEMAS = {"verdict.json": "verdict", "diagnostics.json": "diagnostics", "sampler.json": "sampler",
+                  "refused.json": "refusal"}
+"""The results with a JSON Schema (``gyrocal/io/schemas/<kind>.schema.json``), by file name: their kind."""
 
 
 @contextmanager
@@ -76,3 +81,13 @@ def write_with(save, path):
     """Write through ``save(handle)`` (e.g. an object's ``save`` method or a figure's)."""
     with atomic(path) as tmp, open(tmp, "wb") as handle:
         save(handle)
+
+
+def output_errors(doc, kind: str) -> list:
+    """What in ``doc`` (a result read back: ``verdict.json``, ``diagnostics.json``, ``sampler.json``,
+    ``refused.json``) its schema refuses (`OUTPUT_SCHEMAS`), each as ``<key path>: <message>``; empty
+    where it conforms. A script that reads results may check them so."""
+    from gyrocal.io.yamlfile import _validator
+
+    return [f"{'.'.join(map(str, e.absolute_path)) or '(top)'}: {e.message}"
+            for e in sorted(_validator(kind).iter_errors(doc), key=lambda e: list(map(str, e.absolute_path)))]

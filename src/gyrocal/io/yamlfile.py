@@ -31,8 +31,11 @@ MAX_BYTES = 1 << 20
 """A YAML file larger than this (1 MiB) is refused unread: a campaign.yaml is a few KB."""
 MAX_DEPTH = 32
 """Mappings and lists nested deeper than this are refused (gyrocal's files nest three or four deep)."""
-SCHEMAS = {"campaign": "campaign.schema.json", "scenario": "scenario.schema.json", "mapping": "mapping.schema.json"}
-"""The JSON Schema of each kind of file, in ``gyrocal/io/schemas/``."""
+SCHEMAS = {"campaign": "campaign.schema.json", "scenario": "scenario.schema.json", "mapping": "mapping.schema.json",
+           "verdict": "verdict.schema.json", "diagnostics": "diagnostics.schema.json", "sampler": "sampler.schema.json",
+           "refusal": "refusal.schema.json"}
+"""The JSON Schema of each kind of file, in ``gyrocal/io/schemas/``: the inputs gyrocal reads, and the
+outputs scripts read (`gyrocal.io.outputs.output_errors`); one may refer to another by its file name."""
 _MERGE_TAG = "tag:yaml.org,2002:merge"
 
 
@@ -185,8 +188,10 @@ def schema(kind: str) -> dict:
 @functools.cache
 def _validator(kind: str):
     import jsonschema  # 0.07 s; only where a file is checked
+    from referencing import Registry, Resource
 
-    return jsonschema.Draft202012Validator(schema(kind))
+    registry = Registry().with_resources((name, Resource.from_contents(schema(k))) for k, name in SCHEMAS.items())
+    return jsonschema.Draft202012Validator(schema(kind), registry=registry)
 
 
 def _deref(root: dict, sub):
