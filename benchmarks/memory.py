@@ -52,7 +52,7 @@ def run(tree: Path, k: int) -> dict:
         work = Path(tmp) / "work"
         env = {**os.environ, "PYTHONPATH": str(tree / "src"), "OPENBLAS_NUM_THREADS": "1"}
         start = time.perf_counter()
-        snakefile = next(s for s in (tree / "workflow" / "Snakefile", tree / "Snakefile") if s.is_file())  # older trees: top level
+        snakefile = next(s for s in (tree / "workflow" / "Snakefile", tree / "Snakefile") if s.is_file())  # older: top level
         proc = subprocess.Popen([sys.executable, "-m", "snakemake", "-s", str(snakefile), "--cores", "2", "-q",
                                  "-d", str(work), "--config", f"scenario={path}"], stdout=subprocess.PIPE,
                                 stderr=subprocess.STDOUT, env=env)
