@@ -134,7 +134,7 @@ def test_a_name_snakemake_cannot_use_is_refused_up_front(name, said, tmp_path, m
 
 
 def test_names_within_the_bounds_pass(tmp_path, meta_text):
-    for name in ("ab" * 9 + "c" * 46, "run_" + "0" * 19, "run_" + "01" * 19):
+    for name in ("abc" * 21 + "d", "run_" + "0" * 19, "run_" + "01" * 19):
         assert read_meta(campaign_dir(tmp_path, meta_text.replace("name: tiny", f"name: {name}"), name))["name"] == name
 
 
