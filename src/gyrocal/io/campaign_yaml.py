@@ -43,7 +43,7 @@ CHANNEL_PATTERN = re.compile(r"\A(?:dtg(\d+)_(roll|pitch|yaw))\Z")
 NAME_MAX = 64
 """The longest campaign name: it names folders and files of a run (``results/<name>/``, ``logs/<name>/``),
 and a file system refuses a name over 255 bytes ("File name too long")."""
-PERIODIC_TAIL = re.compile(r"(.+)\1{19}\Z")
+PERIODIC_TAIL = re.compile(r"(.+?)\1{19,}\Z")
 """A name ending in one part repeated 20 times or more (``run_000000000000000000000000``): Snakemake refuses
 such a wildcard value (PeriodicWildcardError), taking it for an endless recursion of a rule."""
 RESERVED_NAMES = ("fleet", "plan", "study")
