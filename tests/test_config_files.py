@@ -116,8 +116,35 @@ def test_a_duplicated_key_deep_inside_is_refused(tmp_path, meta_text):
 @pytest.mark.parametrize("name", RESERVED_NAMES)
 def test_a_reserved_name_is_refused(name, tmp_path, meta_text):
     message = refusal(campaign_dir(tmp_path, meta_text.replace("name: tiny", f"name: {name}")))
-    assert "name: must be a name of letters, digits and '_' only, other than fleet, plan and study" in message
+    assert "name: must be a name of letters, digits and '_' only, at most 64 of them" in message
     assert f"got '{name}' (line 1)" in message
+
+
+@pytest.mark.parametrize("name, said", [
+    ("a" * 300, "at most 64 of them"),  # Snakemake's run: "File name too long"
+    ("run_" + "0" * 24, "not ending in one part repeated 20 times or more"),  # Snakemake's run: PeriodicWildcardError
+])
+def test_a_name_snakemake_cannot_use_is_refused_up_front(name, said, tmp_path, meta_text, capsys):
+    from gyrocal.pipeline.cli import main
+    directory = campaign_dir(tmp_path, meta_text.replace("name: tiny", f"name: {name}"))
+    message = refusal(directory)
+    assert said in message and "(line 1)" in message
+    assert main(["validate", str(directory), "--config", str(ROOT / "config" / "config.yaml")]) == 2
+    assert said in capsys.readouterr().err
+
+
+def test_names_within_the_bounds_pass(tmp_path, meta_text):
+    for name in ("abc" * 21 + "d", "run_" + "0" * 19, "run_" + "01" * 19):
+        assert read_meta(campaign_dir(tmp_path, meta_text.replace("name: tiny", f"name: {name}"), name))["name"] == name
+
+
+@pytest.mark.parametrize("dirname, said", [
+    ("c" * 70, "70 characters, over the 64 a campaign name may have"),
+    ("run_" + "0" * 24, "ends in '0' repeated 24 times, which Snakemake refuses"),
+])
+def test_a_directory_name_snakemake_cannot_use_is_refused_without_name_key(dirname, said, tmp_path, meta_text):
+    message = refusal(campaign_dir(tmp_path, meta_text.replace("name: tiny\n", ""), name=dirname))
+    assert "name (from the directory's): " in message and said in message
 
 
 def test_a_directory_named_as_a_reserved_name_without_name_key_is_refused(tmp_path, meta_text):

@@ -7,13 +7,10 @@ independent jobs under ``results/<campaign>/``; a fleet adds ``results/fleet/``.
 
 import re
 import sys
-import threading
-import time
 from pathlib import Path
 
 from gyrocal.errors import InputError as _InputError
 from gyrocal.io import scenario as _scenario
-from gyrocal.pipeline.steps import REFUSED as _REFUSED
 from gyrocal.pipeline.paths import CampaignPaths as _CampaignPaths
 from gyrocal.pipeline.settings import canonical as _canonical
 from gyrocal.pipeline.settings import models_to_run as _models_to_run
@@ -83,29 +80,8 @@ wildcard_constraints:
     model="|".join(MODELS),
 
 
-_STARTED = time.time()
-
-
-def refusal_messages():
-    """What the steps of this run refused (their logs from `gyrocal.pipeline.steps.REFUSED` on), to repeat
-    when a run fails."""
-    found = []
-    for path in sorted(Path("logs").rglob("*.log")):
-        if path.stat().st_mtime < _STARTED:
-            continue
-        text = path.read_text()
-        if _REFUSED in text:
-            found.append(text[text.index(_REFUSED):].rstrip())
-    return found
-
-
 def campaign_dir(wildcards):
     return CAMPAIGNS[wildcards.campaign]["dir"]
-
-
-def campaign_results(wildcards):
-    """The campaign's results folder: the root of its `CampaignPaths`, which each step rebuilds."""
-    return results_of(wildcards.campaign)
 
 
 def maneuver_ids(wildcards):
@@ -154,13 +130,3 @@ def all_outputs():
     if FLEET:
         out += [f"{results_of('fleet')}/summary.csv", f"{results_of('fleet')}/summary.png"]
     return out
-
-
-def cancel_rescheduling_timers():
-    """Snakemake's job rate limiter arms a non-daemon one-second `threading.Timer` at each job
-    selection (`JobScheduler._schedule_reevalutation`), and the interpreter waits for the last one,
-    armed when the final job started, before it exits: about a second after every run. Once the
-    workflow has succeeded nothing is left to schedule, so they are cancelled."""
-    for thread in threading.enumerate():
-        if isinstance(thread, threading.Timer):
-            thread.cancel()

@@ -18,7 +18,6 @@ rule report:
         html=report(PATHS.report, caption="../report/review.rst", category="Review before uplink"),
         verdict=PATHS.verdict,
     params:
-        results=campaign_results,
         maneuvers=maneuver_ids,
         models=MODELS,
         settings=whole_config(),

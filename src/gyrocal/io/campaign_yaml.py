@@ -22,8 +22,10 @@ __all__ = [
     "DEFAULT_NOISE_GROUP",
     "DIRECTIONS",
     "GYRO_KEYS",
+    "NAME_MAX",
     "NAME_PATTERN",
     "NORM_REFUSE_TOL",
+    "PERIODIC_TAIL",
     "RESERVED_NAMES",
     "Labelled",
     "Maneuver",
@@ -41,6 +43,12 @@ NAME_PATTERN = re.compile(r"\A[A-Za-z0-9_]+\Z")
 r"""A campaign name, maneuver id or channel name, matched whole (`re.fullmatch`; ``\Z``, unlike ``$``,
 does not match before a final newline, so ``.match`` is whole too): ``evil\n`` is refused."""
 CHANNEL_PATTERN = re.compile(r"\A(?:dtg(\d+)_(roll|pitch|yaw))\Z")
+NAME_MAX = 64
+"""The longest campaign name: it names folders and files of a run (``results/<name>/``, ``logs/<name>/``),
+and a file system refuses a name over 255 bytes ("File name too long")."""
+PERIODIC_TAIL = re.compile(r"(.+?)\1{19,}\Z")
+"""A name ending in one part repeated 20 times or more (``run_000000000000000000000000``): Snakemake refuses
+such a wildcard value (PeriodicWildcardError), taking it for an endless recursion of a rule."""
 RESERVED_NAMES = ("fleet", "plan", "study")
 """Names no campaign may take: the folders ``results/fleet`` (a fleet's summary), ``results/plan``
 (``gyrocal plan``'s default) and ``results/study`` (the validation study's default)."""
@@ -223,6 +231,13 @@ def read_meta(directory) -> dict:
     where = f"name (line {document.line(['name'])})" if meta.get("name") else "name (from the directory's)"
     if not NAME_PATTERN.fullmatch(name):
         fail(cpath, f"only letters, digits and '_' are allowed, got {excerpt(name)}", where)
+    if len(name) > NAME_MAX:
+        fail(cpath, f"{len(name)} characters, over the {NAME_MAX} a campaign name may have (it names the run's "
+                    f"folders): {name[:20]}...", where, "give the campaign a shorter name: name: ...")
+    if repeated := PERIODIC_TAIL.search(name):
+        fail(cpath, f"{excerpt(name)} ends in {repeated.group(1)!r} repeated {len(repeated.group(0)) // len(repeated.group(1))} "
+                    "times, which Snakemake refuses in a run's paths (it takes it for an endless recursion)", where,
+             "give the campaign a name without such a repetition: name: ...")
     if name in RESERVED_NAMES:
         fail(cpath, f"{excerpt(name)} is reserved: results/{name} is where gyrocal writes "
                     + {"fleet": "a fleet's summary", "plan": "gyrocal plan's tables",

@@ -14,8 +14,8 @@ from gyrocal.io.outputs import write_json, write_text
 from gyrocal.maneuvers import preprocess
 from gyrocal.pipeline.steps import REFUSED
 
-__all__ = ["VARIANT_STEPS", "compared", "finish", "load_maneuvers", "peak_rss", "read_json", "read_refusal", "refusal",
-           "refusals", "start", "variant_step"]
+__all__ = ["REFUSAL_KEYS", "VARIANT_STEPS", "compared", "finish", "load_maneuvers", "peak_rss", "read_json", "read_refusal",
+           "refusal", "refusals", "start", "variant_step"]
 
 log = logging.getLogger("gyrocal")
 
@@ -92,21 +92,37 @@ VARIANT_STEPS = ("point_estimate", "posterior", "diagnostics")
 """A model variant's steps, in order; the first starts the variant afresh."""
 
 
-def read_refusal(paths, model) -> dict | None:
-    """A variant's refusal record (``<model>/refused.json``), or None where it was not refused."""
-    path = Path(paths.model(model).refusal)
-    return read_json(path) if path.is_file() else None
+REFUSAL_KEYS = ("model", "status", "step", "reason")
+"""A variant's refusal record (``refused.json``, and every later file of the variant in place of its
+results; ``gyrocal/io/schemas/refusal.schema.json``)."""
 
 
-def refusals(paths, models) -> dict:
-    """The refusal records of the variants ``models`` that have one, by model, in their order."""
-    return {m: r for m in models if (r := read_refusal(paths, m)) is not None}
+def read_refusal(path) -> dict | None:
+    """The refusal record in ``path`` (a variant's ``refused.json``, or any file of a refused variant,
+    which holds the record in place of its results), or None where there is none: the file is missing
+    or holds results."""
+    path = Path(path)
+    if not path.is_file():
+        return None
+    with open(path, "rb") as handle:
+        head = handle.read(1)
+    if head != b"{":  # a result: a .npz, .nc or .csv, or a JSON result other than a record
+        return None
+    doc = read_json(path)
+    return doc if isinstance(doc, dict) and sorted(doc) == sorted(REFUSAL_KEYS) else None
 
 
-def compared(paths, models) -> list:
-    """The variants ``models`` that were not refused, in their order (the first the comparison's
-    reference); refused with every variant's reason where none is left."""
-    records = refusals(paths, models)
+def refusals(models, files) -> dict:
+    """The refusal records of the variants ``models`` whose file in ``files`` (one per model, in their
+    order: any file every variant's run writes, as the report's rule gives its diagnostics) holds one,
+    by model, in their order."""
+    return {m: r for m, f in zip(models, files, strict=True) if (r := read_refusal(f)) is not None}
+
+
+def compared(models, files) -> list:
+    """The variants ``models`` that were not refused (`refusals` of their ``files``), in their order
+    (the first the comparison's reference); refused with every variant's reason where none is left."""
+    records = refusals(models, files)
     kept = [m for m in models if m not in records]
     if not kept:
         raise InputError("every model variant was refused or skipped, so there is nothing to review: "
@@ -114,18 +130,17 @@ def compared(paths, models) -> list:
     return kept
 
 
-def variant_step(paths, model: str, step: str, run, outputs=()) -> dict | None:
+def variant_step(record_path, model: str, step: str, run, outputs=()) -> dict | None:
     """Run one step of a model variant (``run()``, a `VARIANT_STEPS` step) so that a refused variant
     does not stop the others: refused input (`gyrocal.errors.InputError`; a variant skipped because
     the data cannot inform what it adds, `gyrocal.checks.fit.VariantSkipped`) is written to the
-    variant's ``refused.json`` (model, status refused or skipped, step, reason) and logged; a later
-    step of a variant refused earlier does not run. Either way each of ``outputs`` (the files the
-    workflow's rule declares) is written with that record in place of its results. Returns the
-    record, or None where the step ran."""
-    record_path = paths.model(model).refusal
+    variant's refusal record ``record_path`` (its ``refused.json``: model, status refused or skipped,
+    step, reason) and logged; a later step of a variant refused earlier does not run. Either way each
+    of ``outputs`` (the files the workflow's rule declares) is written with that record in place of
+    its results. Returns the record, or None where the step ran."""
     if step == VARIANT_STEPS[0]:
         Path(record_path).unlink(missing_ok=True)  # a new point estimate: an earlier refusal no longer holds
-    record = read_refusal(paths, model)
+    record = read_refusal(record_path)
     if record is None:
         try:
             run()
