@@ -1,5 +1,6 @@
-"""The ``gyrocal`` command: simulate, import or validate a campaign; compare two calibrations or fit several
-jointly; plan a campaign; measure a gyro's noise at rest; check the linear model against the exact one."""
+"""The ``gyrocal`` command: simulate, import or validate a campaign; run the workflow with settings from the
+command line; compare two calibrations or fit several jointly; plan a campaign; measure a gyro's noise at
+rest; check the linear model against the exact one."""
 
 import argparse
 import os
@@ -58,7 +59,19 @@ def main(argv=None):
                      "(default results/plan)")
     pln.add_argument("--config", default="config/config.yaml", help="gyrocal config (priors, models, thresholds)")
     pln.add_argument("--model", default="baseline", help="the model variant to plan for (default baseline)")
-    args = parser.parse_args(argv)
+    run = sub.add_parser("run", allow_abbrev=False,
+                         help="run the workflow (snakemake) with settings from the command line: --set KEY.SUB=VALUE",
+                         description="Run the workflow: every argument gyrocal does not take goes to snakemake "
+                                     "(gyrocal run --cores 2 --set sampler.walkers=32). Each --set is checked "
+                                     "against workflow/schemas/config.schema.yaml before any job.")
+    run.add_argument("--set", action="append", default=[], metavar="KEY.SUB=VALUE", dest="sets",
+                     help="one setting, nested keys joined by dots, its value read as YAML "
+                          "(sampler.walkers=64, report.physical_bound_ppm=500); repeat for more")
+    run.add_argument("--configfile", action="append", default=[], metavar="FILE",
+                     help="a config file over config/config.yaml (before every --set); repeat for more")
+    args, rest = parser.parse_known_args(argv)
+    if rest and args.command != "run":
+        parser.error(f"unrecognized arguments: {' '.join(rest)}")
     if args.command == "plan" and len(args.scenarios) > 2:
         parser.error("plan takes one scenario, or two to compare")
 
@@ -92,6 +105,9 @@ def main(argv=None):
         elif args.command == "linearity":
             from gyrocal.pipeline.readback import linearity_report
             print(linearity_report(args.results, args.model, args.plugin))
+        elif args.command == "run":
+            from gyrocal.pipeline.workflow_run import run
+            return run(args.sets, args.configfile, rest)
         elif args.command == "plan":
             import matplotlib
             matplotlib.use("Agg")
