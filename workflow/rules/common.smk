@@ -62,6 +62,13 @@ else:
     CAMPAIGNS[_meta["name"]] = {"dir": _CampaignPaths(results_of(_meta["name"])).simulated,
                                 "maneuvers": _meta["maneuvers"], "simulated": True}
 
+for _name, _entry in CAMPAIGNS.items():
+    _missing = _CampaignPaths(results_of(_name)).missing_in_folders(_entry["maneuvers"], _entry["simulated"])
+    if _missing:
+        _path, _rule = _missing[0]
+        sys.exit(f"gyrocal: {_path} is missing, and Snakemake takes the folder that held it for complete: run "
+                 f"again with --forcerun {_rule}, which redoes that step and every step after it")
+
 PATHS = _CampaignPaths(results_of("{campaign}"))
 """Every file of a campaign's run (`gyrocal.pipeline.paths`), with the campaign a wildcard."""
 MODEL = PATHS.model("{model}")

@@ -84,12 +84,26 @@ class CampaignPaths:
         return SimpleNamespace(**{name: [getattr(self.model(m), name) for m in models] for name in MODEL_FILES})
 
     def outputs(self, models) -> list:
-        """Everything a campaign's run leaves, as the workflow's targets."""
+        """Everything a campaign's run leaves, as the workflow's targets: every file a rule declares, the
+        intermediate ones too, so that a plain rerun redoes the step whose file went missing, and every
+        step after it (Snakemake redoes no job for a missing file that nothing it must build needs)."""
         out = [self.input_json, self.preprocess]
         for name in models:
             m = self.model(name)
-            out += [m.calibration, m.correction, m.diagnostics]
-        return out + [self.classic, self.comparison, self.report, self.verdict]
+            out += [getattr(m, f) for f in MODEL_FILES]
+        return out + [self.classic, self.comparison, self.comparison_figure, self.report, self.verdict]
+
+    def missing_in_folders(self, ids, simulated: bool) -> list:
+        """The files missing from a step's output folder that exists (the preprocessed maneuvers
+        ``ids``; the simulated campaign, where ``simulated``), each with the rule that writes it:
+        Snakemake takes a folder that exists for complete, and would not redo the step."""
+        folders = [("preprocess", self.preprocess, [f"{self.preprocess}/{m}.{ext}"
+                                                    for m in ids for ext in ("npz", "csv", "png")])]
+        if simulated:
+            folders.insert(0, ("simulate", self.simulated, [f"{self.simulated}/{name}" for name in
+                                                            ("campaign.yaml", "star_tracker.csv", "gyro.csv")]))
+        return [(path, rule) for rule, folder, files in folders if Path(folder).is_dir()
+                for path in files if not Path(path).is_file()]
 
     def mkdirs(self, models=()):
         """Create the campaign's folder and its models' (outside Snakemake, which creates its own)."""
