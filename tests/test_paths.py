@@ -32,7 +32,7 @@ def test_a_campaigns_outputs_are_every_file_its_rules_declare_in_the_order_of_th
         "out/mom/report.html", "out/mom/verdict.json"]
 
 
-def test_a_file_missing_from_an_existing_step_folder_is_named_with_the_rule_that_writes_it(tmp_path):
+def test_a_file_missing_from_an_existing_step_folder_is_named_with_its_folder(tmp_path):
     paths = CampaignPaths.under(tmp_path)
     assert paths.missing_in_folders(["yaw_pos"], simulated=True) == []  # no folder yet: nothing is missing
     Path(paths.preprocess).mkdir()
@@ -41,9 +41,9 @@ def test_a_file_missing_from_an_existing_step_folder_is_named_with_the_rule_that
     assert paths.missing_in_folders(["yaw_pos"], simulated=True) == []
     Path(paths.preprocess, "yaw_pos.npz").unlink()
     Path(paths.simulated).mkdir(parents=True)
-    assert paths.missing_in_folders(["yaw_pos"], simulated=False) == [(f"{tmp_path}/preprocess/yaw_pos.npz", "preprocess")]
+    assert paths.missing_in_folders(["yaw_pos"], simulated=False) == [(f"{tmp_path}/preprocess/yaw_pos.npz", paths.preprocess)]
     assert paths.missing_in_folders(["yaw_pos"], simulated=True)[0] == (f"{tmp_path}/simulated/campaign/campaign.yaml",
-                                                                       "simulate")
+                                                                       paths.simulated)
 
 
 def test_each_step_takes_only_the_config_sections_it_reads(config):

@@ -112,6 +112,65 @@ def test_an_unchanged_config_schedules_nothing(tiny, workflow_run, tmp_path):
     assert jobs == {}, said[-3000:]
 
 
+GYROCAL = [sys.executable, "-m", "gyrocal.pipeline.cli"]
+
+
+def test_gyrocal_run_sets_a_nested_setting_that_reaches_the_workflow(tiny, workflow_run):
+    # report.physical_bound_ppm, nested: Snakemake's --config cannot set it; the report's params change
+    run = subprocess.run(GYROCAL + ["run", "-n", "-d", str(workflow_run), "--set", "report.physical_bound_ppm=500",
+                                    *[a for c in CONFIGS for a in ("--configfile", c)],
+                                    "--config", f"telemetry={tiny[0]}"],
+                         capture_output=True, text=True, check=False, cwd=ROOT)
+    said = run.stdout + run.stderr
+    assert run.returncode == 0, said[-3000:]
+    assert "rule report:" in said and "Params have changed since last execution" in said
+    assert "rule posterior:" not in said and "rule point_estimate:" not in said
+
+
+@pytest.mark.parametrize("setting, message", [
+    ("sampler.walkers=1", "setting sampler.walkers (from --set): 1 is less than the minimum of 8"),
+    ("report.physical_bound_ppm=big", "setting report.physical_bound_ppm (from --set): 'big' is not of type 'number'"),
+    ("sampler.walker=16", "setting sampler.walker (from --set): no such setting; sampler takes ['block_s',"),
+])
+def test_gyrocal_run_refuses_a_bad_setting_naming_its_key_before_any_job(setting, message, tmp_path):
+    run = subprocess.run(GYROCAL + ["run", "--cores", "1", "-d", str(tmp_path), "--set", setting],
+                         capture_output=True, text=True, check=False, cwd=ROOT)
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+    assert run.stderr.startswith(f"gyrocal run: error: {message}"), run.stderr
+    assert not (tmp_path / ".snakemake").exists()  # Snakemake never started
+
+
+def test_a_deleted_intermediate_file_is_redone_by_the_plain_rerun(tiny, workflow_run, tmp_path):
+    work = tmp_path / "work"
+    shutil.copytree(workflow_run, work, symlinks=True)  # copy2: the same times, so the copy is as complete
+    results = work / "results" / "tiny" / "baseline"
+    (results / "posterior.nc").unlink()
+    run = subprocess.run(SNAKEMAKE + ["--cores", "2", "-d", str(work), "--configfile", *CONFIGS,
+                                      "--config", f"telemetry={tiny[0]}"], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr[-3000:]
+    for rule in ("posterior", "diagnostics", "report"):
+        assert f"rule {rule}:" in run.stderr, run.stderr[-3000:]
+    assert "rule point_estimate:" not in run.stderr
+    original = workflow_run / "results" / "tiny"
+    for name in ("baseline/posterior.nc", "baseline/calibration.csv", "baseline/diagnostics.json", "verdict.json"):
+        assert (work / "results" / "tiny" / name).read_bytes() == (original / name).read_bytes(), name
+
+
+def test_a_file_deleted_from_the_preprocess_folder_stops_the_rerun_saying_what_to_do(tiny, workflow_run, tmp_path):
+    work = tmp_path / "work"
+    shutil.copytree(workflow_run, work, symlinks=True)
+    (work / "results" / "tiny" / "preprocess" / "yaw_pos.npz").unlink()
+    dry = SNAKEMAKE + ["-n", "-d", str(work), "--configfile", *CONFIGS, "--config", f"telemetry={tiny[0]}"]
+    run = subprocess.run(dry, capture_output=True, text=True, check=False)
+    assert run.returncode != 0 and "Traceback" not in run.stderr
+    assert ("gyrocal: results/tiny/preprocess/yaw_pos.npz is missing, and Snakemake takes the folder that held it "
+            "for complete: delete the folder results/tiny/preprocess and run again") in run.stderr
+    shutil.rmtree(work / "results" / "tiny" / "preprocess")  # as it says: every step from preprocess on is redone
+    again = subprocess.run(dry, capture_output=True, text=True, check=False)
+    jobs = again.stdout + again.stderr
+    assert all(f"rule {r}:" in jobs for r in ("preprocess", "point_estimate", "posterior", "diagnostics", "report")), jobs
+
+
 def test_bad_config_value_is_refused_with_a_clear_message(tmp_path):
     run = subprocess.run(SNAKEMAKE + ["--cores", "1", "-n", "-d", str(tmp_path), "--config", "seed=-3"],
                          capture_output=True, text=True, check=False)

@@ -65,9 +65,9 @@ else:
 for _name, _entry in CAMPAIGNS.items():
     _missing = _CampaignPaths(results_of(_name)).missing_in_folders(_entry["maneuvers"], _entry["simulated"])
     if _missing:
-        _path, _rule = _missing[0]
-        sys.exit(f"gyrocal: {_path} is missing, and Snakemake takes the folder that held it for complete: run "
-                 f"again with --forcerun {_rule}, which redoes that step and every step after it")
+        _path, _folder = _missing[0]
+        sys.exit(f"gyrocal: {_path} is missing, and Snakemake takes the folder that held it for complete: delete "
+                 f"the folder {_folder} and run again, which redoes the step that writes it and every step after it")
 
 PATHS = _CampaignPaths(results_of("{campaign}"))
 """Every file of a campaign's run (`gyrocal.pipeline.paths`), with the campaign a wildcard."""

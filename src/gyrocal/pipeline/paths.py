@@ -95,14 +95,14 @@ class CampaignPaths:
 
     def missing_in_folders(self, ids, simulated: bool) -> list:
         """The files missing from a step's output folder that exists (the preprocessed maneuvers
-        ``ids``; the simulated campaign, where ``simulated``), each with the rule that writes it:
-        Snakemake takes a folder that exists for complete, and would not redo the step."""
-        folders = [("preprocess", self.preprocess, [f"{self.preprocess}/{m}.{ext}"
+        ``ids``; the simulated campaign, where ``simulated``), each with its folder: Snakemake takes a
+        folder that exists for complete, and redoes the step that writes it only once it is gone."""
+        folders = [(self.preprocess, [f"{self.preprocess}/{m}.{ext}"
                                                     for m in ids for ext in ("npz", "csv", "png")])]
         if simulated:
-            folders.insert(0, ("simulate", self.simulated, [f"{self.simulated}/{name}" for name in
+            folders.insert(0, (self.simulated, [f"{self.simulated}/{name}" for name in
                                                             ("campaign.yaml", "star_tracker.csv", "gyro.csv")]))
-        return [(path, rule) for rule, folder, files in folders if Path(folder).is_dir()
+        return [(path, folder) for folder, files in folders if Path(folder).is_dir()
                 for path in files if not Path(path).is_file()]
 
     def mkdirs(self, models=()):
