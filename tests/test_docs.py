@@ -8,11 +8,13 @@ import re
 import pytest
 import yaml
 
+from gyrocal.errors import InputError
 from gyrocal.pipeline import cli
 
 from conftest import ROOT
 
-PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md")), *sorted((ROOT / "examples").rglob("*.md"))]
+PAGES = [ROOT / "README.md", ROOT / "config" / "README.md", *sorted((ROOT / "docs").rglob("*.md")),
+         *sorted((ROOT / "examples").rglob("*.md"))]
 
 NOT_SETTINGS = {"noise.group_sd"}
 """Names written like a setting (`section.key`) that are something else: a row of posterior_summary.csv."""
@@ -78,6 +80,17 @@ def test_every_documented_config_override_is_a_setting():
             known = study if "workflow/study/Snakefile" in s else config if "snakemake" in s else config | study
             wrong += [(str(page), k) for k in keys if k not in known]
     assert not wrong
+
+
+def test_every_documented_gyrocal_run_setting_is_one_the_schema_accepts():
+    from gyrocal.pipeline.workflow_run import SCHEMA, check_config, merged_config, overlay
+    runs = [s for _, s in SNIPPETS if re.match(r"gyrocal run .*--set ", s)]
+    assert len(runs) >= 2, "no documented gyrocal run --set command"
+    for line in runs:
+        sets = overlay(re.findall(r"--set (\S+)", line.split("#")[0]))
+        check_config(merged_config(ROOT, [], sets), ROOT / SCHEMA, sets)  # refuses an unknown key or a bad value
+    with pytest.raises(InputError, match="setting sampler.walker: no such setting"):  # the check can fail
+        check_config(merged_config(ROOT, [], overlay(["sampler.walker=32"])), ROOT / SCHEMA, {})
 
 
 def test_every_documented_setting_section_key_exists():

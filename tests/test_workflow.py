@@ -1,9 +1,11 @@
 """The Snakemake workflow end to end, on a user's campaign directory."""
 
 import json
+import os
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pandas as pd
@@ -210,6 +212,24 @@ def test_snakemake_ends_with_the_validators_message_and_no_traceback(case, tiny,
     assert "Traceback" not in run.stderr + run.stdout
     assert "gyrocal: the campaign was refused:" in run.stderr
     assert EXPECTED[case] in "\n".join(run.stderr.strip().splitlines()[-25:])
+
+
+def test_a_refusal_shown_is_the_campaign_runs_own_not_a_newer_log_of_another(tiny, tmp_path):
+    # the run shows its failed job's log (show-failed-logs), not the newest log under logs/: a refusal
+    # left there by another campaign, written after this run's, is not shown
+    broken, work = tmp_path / "broken", tmp_path / "work"
+    mutations.corrupted_copy(tiny[0], broken, mutations.REFUSED["gyro increments in degrees"])
+    stale = work / "logs" / "other" / "preprocess.log"
+    stale.parent.mkdir(parents=True)
+    stale.write_text("gyrocal: the campaign was refused:\nSTALE: campaign other's refusal\n")
+    os.utime(stale, (time.time() + 3600, time.time() + 3600))
+    run = subprocess.run(SNAKEMAKE + ["--cores", "1", "-d", str(work), "--config", f"telemetry={broken}"],
+                         capture_output=True, text=True, check=False)
+    said = run.stdout + run.stderr
+    assert run.returncode != 0 and "Traceback" not in said
+    assert "STALE" not in said and "logs/other" not in said
+    from test_robustness import EXPECTED
+    assert EXPECTED["gyro increments in degrees"] in said
 
 
 def test_a_fleet_with_two_campaigns_of_one_name_is_refused(tiny, tmp_path):
