@@ -89,7 +89,7 @@ def test_every_documented_gyrocal_run_setting_is_one_the_schema_accepts():
     for line in runs:
         sets = overlay(re.findall(r"--set (\S+)", line.split("#")[0]))
         check_config(merged_config(ROOT, [], sets), ROOT / SCHEMA, sets)  # refuses an unknown key or a bad value
-    with pytest.raises(InputError, match="setting sampler.walker: no such setting"):  # the check can fail
+    with pytest.raises(InputError, match=r"setting sampler\.walker: no such setting"):  # the check can fail
         check_config(merged_config(ROOT, [], overlay(["sampler.walker=32"])), ROOT / SCHEMA, {})
 
 
