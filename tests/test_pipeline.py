@@ -14,7 +14,7 @@ from gyrocal.inference.fit import estimate
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.fit.likelihood import campaign_stats
 from gyrocal.inference.noise import covariance
-from gyrocal.inference.sampling.posterior import model_priors
+from gyrocal.inference.sampling.priors import model_priors
 from gyrocal.io import calibration, telemetry
 from gyrocal.model import channels as ch
 from gyrocal.model import combinations, correction, effects

@@ -6,6 +6,7 @@ from gyrocal.checks import fit as checks
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.sampling import inferencedata, posterior
 from gyrocal.inference.sampling.budget import SamplingStopped
+from gyrocal.inference.sampling.priors import model_priors
 from gyrocal.io.outputs import atomic, write_csv, write_json
 from gyrocal.model import effects
 from gyrocal.pipeline.paths import ModelPaths
@@ -26,7 +27,7 @@ def run(maneuver_files, point_estimate_npz, out: ModelPaths, settings: Posterior
     s = settings
     maneuvers = load_maneuvers(maneuver_files)
     est = PointEstimate.load(point_estimate_npz, effects.known(s.plugins))
-    priors = posterior.model_priors(est, s.priors, s.prior_from)
+    priors = model_priors(est, s.priors, s.prior_from)
     checks.check_blocks(maneuvers, s.sampler["block_s"])
     checks.check_noise(maneuvers, est)
     checks.check_physical(maneuvers, est, priors.bound)

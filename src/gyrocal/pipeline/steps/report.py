@@ -9,7 +9,7 @@ import xarray as xr
 
 from gyrocal.criticism import extension, modelchoice, priorconflict, verdict
 from gyrocal.inference.fit.estimate import PointEstimate
-from gyrocal.inference.sampling.posterior import posterior_spec
+from gyrocal.inference.sampling.priors import posterior_spec
 from gyrocal.io.outputs import write_json, write_text
 from gyrocal.pipeline.paths import REFERENCE_INTERVAL, maneuver_files
 from gyrocal.pipeline.settings import ReportSettings
