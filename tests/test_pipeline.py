@@ -27,6 +27,20 @@ from gyrocal.pipeline.steps import posterior as posterior_step
 from conftest import rerun_from, truth_vector
 
 
+@pytest.fixture(scope="module")
+def mom_estimate(mom, tmp_path_factory, config):
+    """The default campaign validated, preprocessed (no figures), its classic table and its baseline
+    point estimate: what the tests of the WLS, the classic method and the linearisation read. The
+    posterior and the review of the same campaign are test_report's (`mom_run`)."""
+    from gyrocal.pipeline import run
+    out = tmp_path_factory.mktemp("mom_estimate")
+    paths = CampaignPaths.under(out)
+    cfg = copy.deepcopy(config)
+    cfg["models"] = {"baseline": ["scale_factor", "misalignment", "bias"]}
+    ids = run.calibrate_campaign(mom[0], paths, cfg, ["baseline"], figures=False, through="point_estimate")
+    return out, paths.maneuvers(ids)
+
+
 def calibration_with_truth(out, truth):
     table = pd.read_csv(out / "baseline/calibration.csv")
     t = {name: {**values, **combinations.combination_values(values)} for name, values in truth["parameters"].items()}
@@ -177,14 +191,15 @@ def test_sequential_campaign_takes_priors_from_an_earlier_posterior(tiny_run, co
         model_priors(est, config["priors"], tmp_path / "wrong_unit.csv")
 
 
-def test_wls_is_within_3_sd_of_the_truth_on_the_default_scenario(mom, mom_run):
-    out, _ = mom_run
+def test_wls_is_within_3_sd_of_the_truth_on_the_default_scenario(mom, mom_estimate):
+    out, _ = mom_estimate
     est = PointEstimate.load(out / "baseline/point_estimate.npz")
     truth = est.spec.core_vector(truth_vector(est.spec.channels, mom[1]))
     z = (est.theta - truth) / np.sqrt(np.diag(est.cov))
     assert np.all(np.abs(z) < 3), z
 
 
+@pytest.mark.full
 def test_posterior_95_intervals_cover_the_papers_values(mom, mom_run):
     """At least 22 of the 24 channel parameters inside their central 95 % interval, and 10 of the 12
     combinations (sf_mean, sf_asym)."""
@@ -196,10 +211,10 @@ def test_posterior_95_intervals_cover_the_papers_values(mom, mom_run):
     assert json.loads((out / "baseline/sampler.json").read_text())["converged"]
 
 
-def test_classic_reproduces_the_papers_values_within_its_own_sd(mom, mom_run):
+def test_classic_reproduces_the_papers_values_within_its_own_sd(mom, mom_estimate):
     """Each value's bias from its maneuver's 400 s holds, its sd from the stated noise (the walk,
     the star tracker and the hold bias's own error): every value within 4 sd of the truth."""
-    out, _ = mom_run
+    out, _ = mom_estimate
     classic = pd.read_csv(out / "classic.csv", keep_default_na=False)
     truth = mom[1]["parameters"]
     assert len(classic) == 24 and (classic["bias_source"] == "holds").all()
@@ -209,10 +224,10 @@ def test_classic_reproduces_the_papers_values_within_its_own_sd(mom, mom_run):
         assert abs(row.value - truth[row.channel][row.parameter]) < 4 * row.sd, row
 
 
-def test_linearised_model_agrees_with_the_exact_one_to_1_percent_of_the_sd(mom, mom_run):
+def test_linearised_model_agrees_with_the_exact_one_to_1_percent_of_the_sd(mom, mom_estimate):
     """Posterior draws pushed 3 sd out: the exact model's departure from the linear one
     moves the estimate by under 1 % of each posterior sd."""
-    out, npz = mom_run
+    out, npz = mom_estimate
     maneuvers = common.load_maneuvers(npz)
     est = PointEstimate.load(out / "baseline/point_estimate.npz", effects.LIBRARY)
     lins, noises = estimate.linearize_all(maneuvers, est)
