@@ -36,20 +36,47 @@ def short_chains(config):
     return cfg
 
 
+def once_per_run(tmp_path_factory, name, make):
+    """``make(directory)`` (its result JSON) made once for the whole test run. A session fixture is made
+    once per pytest-xdist worker; here the first worker to ask makes it in the workers' common
+    temporary directory while holding a lock, and the others wait on the lock and take what it made."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER")
+    if worker is None:
+        return make(tmp_path_factory.mktemp(name))
+    import fcntl
+    import shutil
+    root = tmp_path_factory.getbasetemp().parent / "shared"  # .../pytest-N/, above each worker's popen-gwK/
+    root.mkdir(exist_ok=True)
+    done = root / f"{name}.json"
+    with open(root / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)   # released when the file closes, by a worker that fails too
+        if not done.exists():
+            directory = root / name
+            shutil.rmtree(directory, ignore_errors=True)
+            directory.mkdir()
+            done.write_text(json.dumps(make(directory)))
+        return json.loads(done.read_text())
+
+
+def _simulated(tmp_path_factory, name, scenario):
+    def make(out):
+        simulate.run(scenario, out)
+        return str(out / "campaign")
+
+    campaign = Path(once_per_run(tmp_path_factory, name, make))
+    return campaign, json.loads((campaign.parent / "truth.json").read_text())
+
+
 @pytest.fixture(scope="session")
 def tiny(tmp_path_factory):
-    """A small simulated campaign directory and its truth."""
-    out = tmp_path_factory.mktemp("tiny")
-    simulate.run(DATA / "tiny.yaml", out)
-    return out / "campaign", json.loads((out / "truth.json").read_text())
+    """A small simulated campaign directory and its truth (one for the whole run: `once_per_run`)."""
+    return _simulated(tmp_path_factory, "tiny", DATA / "tiny.yaml")
 
 
 @pytest.fixture(scope="session")
 def mom(tmp_path_factory):
-    """The default Mars-Orbiter-like campaign (paper's truth) and its truth."""
-    out = tmp_path_factory.mktemp("mom")
-    simulate.run(ROOT / "config" / "scenarios" / "mom.yaml", out)
-    return out / "campaign", json.loads((out / "truth.json").read_text())
+    """The default Mars-Orbiter-like campaign (paper's truth) and its truth (one for the whole run)."""
+    return _simulated(tmp_path_factory, "mom", ROOT / "config" / "scenarios" / "mom.yaml")
 
 
 def truth_vector(channels, truth):
@@ -94,8 +121,7 @@ def config_with(cfg, models=None, plugins=None):
     return out
 
 
-def _baseline_run(campaign, tmp_path_factory, config, name):
-    out = tmp_path_factory.mktemp(name)
+def _baseline_run(campaign, out, config):
     npz = run_campaign(campaign[0], out, config_with(config, {"baseline": ["scale_factor", "misalignment", "bias"]}),
                        truth_path=campaign[0].parent / "truth.json")
     return out, npz
@@ -103,11 +129,17 @@ def _baseline_run(campaign, tmp_path_factory, config, name):
 
 @pytest.fixture(scope="session")
 def tiny_run(tiny, tmp_path_factory, config):
-    """The tiny campaign through every step with the baseline model."""
-    return _baseline_run(tiny, tmp_path_factory, config, "tiny_run")
+    """The tiny campaign through every step with the baseline model: one run for the whole test run
+    (`once_per_run`), which eight test files read."""
+    def make(out):
+        run = _baseline_run(tiny, out, config)
+        return [str(run[0]), [str(p) for p in run[1]]]
+
+    out, npz = once_per_run(tmp_path_factory, "tiny_run", make)
+    return Path(out), [Path(p) for p in npz]
 
 
 @pytest.fixture(scope="session")
 def mom_run(mom, tmp_path_factory, config):
     """The default campaign through every step with the baseline model."""
-    return _baseline_run(mom, tmp_path_factory, config, "mom_run")
+    return _baseline_run(mom, tmp_path_factory.mktemp("mom_run"), config)
