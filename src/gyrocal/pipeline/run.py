@@ -118,11 +118,12 @@ def review_campaign(paths: CampaignPaths, ids, cfg: dict, models=None, truth_jso
                ReportSettings.of(cfg), truth_json, processes, extensions)
 
 
-def run_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=None, truth_json=None) -> list:
+def run_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=None, truth_json=None, figures=True) -> list:
     """Every step of one campaign's run, as ``snakemake`` runs them: ``models`` None, the config's
     `models_to_run` and the loop after them (`extend_models`); the variants ``models`` alone where
-    given. Returns the maneuver ids."""
-    ids = calibrate_campaign(campaign_dir, paths, cfg, models)
+    given; ``figures`` false: the preprocess step draws no maneuver figure files (the report draws its
+    own). Returns the maneuver ids."""
+    ids = calibrate_campaign(campaign_dir, paths, cfg, models, figures)
     if models is None:
         models = models_to_run(cfg)
         models = list(models) + extend_models(paths, ids, cfg, models)
