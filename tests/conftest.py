@@ -88,13 +88,14 @@ def truth_vector(channels, truth):
     return params
 
 
-def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None):
+def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None, figures=False):
     """Every workflow step in the order the rules run them (`gyrocal.pipeline.run.run_campaign`);
-    the preprocessed maneuvers' files, in the campaign's order."""
+    the preprocessed maneuvers' files, in the campaign's order. No maneuver figure files unless
+    ``figures`` (the preprocess step's figures, most of its time; the report draws its own)."""
     from gyrocal.pipeline import run
     from gyrocal.pipeline.paths import CampaignPaths
     paths = CampaignPaths.under(out)
-    ids = run.run_campaign(campaign_dir, paths, cfg, models, truth_path)
+    ids = run.run_campaign(campaign_dir, paths, cfg, models, truth_path, figures)
     return [Path(p) for p in paths.maneuvers(ids)]
 
 
@@ -121,9 +122,9 @@ def config_with(cfg, models=None, plugins=None):
     return out
 
 
-def _baseline_run(campaign, out, config):
+def _baseline_run(campaign, out, config, figures=False):
     npz = run_campaign(campaign[0], out, config_with(config, {"baseline": ["scale_factor", "misalignment", "bias"]}),
-                       truth_path=campaign[0].parent / "truth.json")
+                       truth_path=campaign[0].parent / "truth.json", figures=figures)
     return out, npz
 
 
@@ -132,7 +133,7 @@ def tiny_run(tiny, tmp_path_factory, config):
     """The tiny campaign through every step with the baseline model: one run for the whole test run
     (`once_per_run`), which eight test files read."""
     def make(out):
-        run = _baseline_run(tiny, out, config)
+        run = _baseline_run(tiny, out, config, figures=True)   # test_pipeline reads a maneuver's figure
         return [str(run[0]), [str(p) for p in run[1]]]
 
     out, npz = once_per_run(tmp_path_factory, "tiny_run", make)
