@@ -28,11 +28,11 @@ def plain(tiny, work):
 
 
 @pytest.fixture(scope="module")
-def uninterrupted(tiny, tmp_path_factory):
-    work = tmp_path_factory.mktemp("uninterrupted")
-    run = subprocess.run(plain(tiny, work), capture_output=True, text=True, check=False)
-    assert run.returncode == 0, run.stderr[-3000:]
-    return work / "results" / "tiny" / "baseline"
+def uninterrupted(tiny_run):
+    """The baseline model's files of an uninterrupted run: `tiny_run`'s, the same steps at the same config
+    and seed run by `gyrocal.pipeline.run` (the rules call the same step functions, and give the same
+    bytes), made once for the whole test run."""
+    return tiny_run[0] / "baseline"
 
 
 def _default_sigint():
