@@ -33,5 +33,6 @@ if [ "${1:-}" = "--full" ]; then
     shift
     set -- -m "not slow and not slurm" "$@"
 fi
-# Two workers, one a core; a file's tests stay on one worker, so its module fixtures run once.
-python -m pytest -n 2 --dist loadfile "$@"
+# Two workers, one a core; a file's tests stay on one worker, so its module fixtures run once. The files in
+# the order tests/conftest.py gives them (the longest first), not xdist's (the most tests first).
+python -m pytest -n 2 --dist loadfile --no-loadscope-reorder "$@"
