@@ -157,6 +157,18 @@ def tiny_run(tiny, tmp_path_factory, config):
 
 
 @pytest.fixture(scope="session")
+def tiny_short_run(tiny, short_chains, tmp_path_factory):
+    """The tiny campaign through every step with the baseline model at short chains (the review's
+    tables and the outputs' rows and columns, not convergence): one run for the whole test run."""
+    def make(out):
+        run = _baseline_run(tiny, out, short_chains)
+        return [str(run[0]), [str(p) for p in run[1]]]
+
+    out, npz = once_per_run(tmp_path_factory, "tiny_short_run", make)
+    return Path(out), [Path(p) for p in npz]
+
+
+@pytest.fixture(scope="session")
 def mom_run(mom, tmp_path_factory, config):
     """The default campaign through every step with the baseline model."""
     return _baseline_run(mom, tmp_path_factory.mktemp("mom_run"), config)
