@@ -19,8 +19,6 @@ from gyrocal.model.spec import ModelSpec, baseline
 from gyrocal.pipeline import cli
 from gyrocal.report import fleet, resolution, review
 
-from conftest import run_campaign
-
 TRIAD = [ch.Channel("gyro_x", None, "roll"), ch.Channel("gyro_y", None, "pitch"), ch.Channel("gyro_z", None, "yaw")]
 
 
@@ -140,11 +138,8 @@ def test_prior_directions_name_the_direction_left_to_the_prior():
 
 
 @pytest.fixture(scope="module")
-def short_run(tiny, short_chains, tmp_path_factory):
-    out = tmp_path_factory.mktemp("combinations")
-    cfg = dict(short_chains, models={"baseline": ["scale_factor", "misalignment", "bias"]})
-    npz = run_campaign(tiny[0], out, cfg, truth_path=tiny[0].parent / "truth.json")
-    return out, npz, cfg
+def short_run(tiny_short_run, short_chains):
+    return (*tiny_short_run, dict(short_chains, models={"baseline": ["scale_factor", "misalignment", "bias"]}))
 
 
 def test_on_a_simulated_campaign_sf_mean_is_narrower_than_each_direction_and_covers_the_truth(tiny, short_run):
