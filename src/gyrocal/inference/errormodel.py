@@ -165,26 +165,39 @@ def effect_regressors(data: ManeuverData, spec: ModelSpec):
     return gyro, star
 
 
-def _channel_derivatives(sub: ch.ChannelParams, u, phi, dt):
+def _inverse_responses(positive: np.ndarray, scale: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """(K, 3, 3) inverses of the response matrices ``scale[k, :, None] * rows``: one per pattern of
+    the channels' signs (at most eight), the same numbers as inverting each sample's matrix (the same
+    LAPACK solve on the same matrix), gathered per sample."""
+    pattern = positive @ (1 << np.arange(positive.shape[1]))
+    codes, first, which = np.unique(pattern, return_index=True, return_inverse=True)
+    return np.linalg.inv(scale[first, :, None] * rows[None])[which.ravel()]
+
+
+def _channel_derivatives(sub: ch.ChannelParams, u, phi, dt, wanted):
     """d(body increment)/d(parameter) of one channel set (eq. 3 inverted), (K, 3) each.
 
-    Returns the channel-model terms keyed by ``(channel, name)`` (a symmetric ``sf``: the sum of
-    the two branches' columns), the set's three bias
+    Returns the channel-model terms keyed by ``(channel, name)`` for the keys in ``wanted`` (a
+    symmetric ``sf``: the sum of the two branches' columns), the set's three bias
     columns (K, 3, 3) and the inverse response matrices (K, 3, 3).
     """
     positive = (u - np.outer(dt, sub.bias_rad_s)) > 0
     scale = 1.0 + np.where(positive, sub.sf_pos, sub.sf_neg)
     rows = ch.response_rows(sub)
-    m_inv = np.linalg.inv(scale[:, :, None] * rows[None])
+    m_inv = _inverse_responses(positive, scale, rows)
     sensed = phi @ rows.T
     terms = {}
     for i, c in enumerate(sub.channels):
         w = -m_inv[:, :, i]
-        terms[c.name, "sf_pos"] = w * (sensed[:, i] * positive[:, i])[:, None]
-        terms[c.name, "sf_neg"] = w * (sensed[:, i] * ~positive[:, i])[:, None]
-        terms[c.name, "sf"] = terms[c.name, "sf_pos"] + terms[c.name, "sf_neg"]  # symmetric: both branches
+        if {(c.name, "sf_pos"), (c.name, "sf"), (c.name, "sf_neg")} & wanted:
+            pos = w * (sensed[:, i] * positive[:, i])[:, None]
+            neg = w * (sensed[:, i] * ~positive[:, i])[:, None]
+            terms[c.name, "sf_pos"], terms[c.name, "sf_neg"] = pos, neg
+            if (c.name, "sf") in wanted:
+                terms[c.name, "sf"] = pos + neg  # symmetric: both branches
         for b in c.other_axes:
-            terms[c.name, f"mis_{b}"] = w * (scale[:, i] * phi[:, ch.AXIS_INDEX[b]])[:, None]
+            if (c.name, f"mis_{b}") in wanted:
+                terms[c.name, f"mis_{b}"] = w * (scale[:, i] * phi[:, ch.AXIS_INDEX[b]])[:, None]
     return terms, -m_inv * dt[:, None, None], m_inv
 
 
@@ -211,11 +224,16 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
         u = data.set_increments(channel_set) - regressors @ extra_values
         phi = ch.solve_body(u, sub, dt_s=data.dt)
         attitudes = kinematics.propagate(Rotation.from_quat(data.attitude0_quat), phi)
-        terms, bias_columns, m_inv = _channel_derivatives(sub, u, phi, data.dt)
         core = [i for i, p in enumerate(spec.parameters[:spec.n_core]) if p.owner in channel_set]
-        columns = [terms[spec.parameters[i].owner, spec.parameters[i].name] for i in core]
-        columns += [bias_columns[:, :, i] for i in range(3)]
-        body_columns = np.concatenate([np.stack(columns, axis=2), -(m_inv @ regressors)], axis=2)
+        keys = [(spec.parameters[i].owner, spec.parameters[i].name) for i in core]
+        terms, bias_columns, m_inv = _channel_derivatives(sub, u, phi, data.dt, set(keys))
+        n = len(core)
+        body_columns = np.empty((len(phi), 3, n + 3 + regressors.shape[2]))
+        for j, key in enumerate(keys):
+            body_columns[:, :, j] = terms[key]
+        del terms
+        body_columns[:, :, n:n + 3] = bias_columns
+        body_columns[:, :, n + 3:] = -(m_inv @ regressors)
         mid = kinematics.compose(attitudes[:-1], Rotation.from_rotvec(0.5 * phi))
         inertial = mid.as_matrix() @ body_columns
         inertial = smoothed_columns(inertial, data.dt, data.st_time)
@@ -225,7 +243,6 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
         st_columns = at_st.as_matrix() @ star_reg
         body[:, s] = e - star_reg @ extra_values
         z[:, s] = at_st.apply(e) - st_columns @ extra_values
-        n = len(core)
         design[:, s][:, :, core] = at_st_jac[:, :, :n]
         bias_design[:, s][:, :, slots] = at_st_jac[:, :, n:n + 3]
         design[:, s, :, spec.extra] = at_st_jac[:, :, n + 3:] + st_columns
@@ -256,7 +273,9 @@ def smoothed_columns(per_interval: np.ndarray, dt_s: np.ndarray, st_time_s: np.n
 def cumulative_at_st(per_interval: np.ndarray, k: np.ndarray, frac: np.ndarray) -> np.ndarray:
     """Running sum of per-gyro-interval terms, evaluated at the star-tracker samples
     (a sample inside interval k has the sum of the intervals before it plus its share)."""
-    cumulative = np.concatenate([np.zeros((1,) + per_interval.shape[1:]), np.cumsum(per_interval, axis=0)])
+    cumulative = np.empty((len(per_interval) + 1,) + per_interval.shape[1:])
+    cumulative[0] = 0.0
+    np.cumsum(per_interval, axis=0, out=cumulative[1:])
     return cumulative[k] + frac.reshape((-1,) + (1,) * (per_interval.ndim - 1)) * per_interval[k]
 
 
