@@ -170,7 +170,7 @@ def _inverse_responses(positive: np.ndarray, scale: np.ndarray, rows: np.ndarray
     the channels' signs (at most eight), the same numbers as inverting each sample's matrix (the same
     LAPACK solve on the same matrix), gathered per sample."""
     pattern = positive @ (1 << np.arange(positive.shape[1]))
-    codes, first, which = np.unique(pattern, return_index=True, return_inverse=True)
+    _, first, which = np.unique(pattern, return_index=True, return_inverse=True)
     return np.linalg.inv(scale[first, :, None] * rows[None])[which.ravel()]
 
 

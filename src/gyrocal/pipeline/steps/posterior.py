@@ -29,12 +29,14 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSetti
     checks.check_noise(maneuvers, est)
     checks.check_physical(maneuvers, est, priors.bound)
     checks.check_representable(maneuvers, est)
-    ready = posterior.prepare(maneuvers, est, priors, s.grid)
-    weakest = checks.check_identified(est, priors.sd, ready.stats, ready.ratio_sd, priors.log_ratio_sd)
     try:
+        ready = posterior.prepare(maneuvers, est, priors, s.grid)
+        weakest = checks.check_identified(est, priors.sd, ready.stats, ready.ratio_sd, priors.log_ratio_sd)
         post = posterior.run(ready, s.sampler, s.seed)
     except SamplingStopped as stopped:
         raise checks.sampling_stopped(stopped, est, weakest, ready.labels) from None
+    except posterior.SamplingError as failed:
+        raise checks.sampling_failed(failed, maneuvers, est) from None
     idata, summary, fit, record = inferencedata.assemble(post, maneuvers, s.sampler, s.convergence, s.seed)
     blocks = inferencedata.loo_blocks(idata, est.spec.model)
     elpd = posterior.leave_one_maneuver_out(post, priors)
