@@ -43,6 +43,7 @@ __all__ = [
     "effect_derivatives",
     "effect_regressors",
     "linearize",
+    "residuals",
     "smoothed_columns",
     "view",
     "walk_steps"
@@ -221,9 +222,8 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
         slots = [names.index(n) for n in channel_set]
         sub = params.subset(channel_set)
         regressors = gyro_reg[:, slots, :]
-        u = data.set_increments(channel_set) - regressors @ extra_values
-        phi = ch.solve_body(u, sub, dt_s=data.dt)
-        attitudes = kinematics.propagate(Rotation.from_quat(data.attitude0_quat), phi)
+        u, phi, attitudes, at_st, e, st_columns = _set_error(data, channel_set, sub, regressors, extra_values,
+                                                             star_reg, st_rot)
         core = [i for i, p in enumerate(spec.parameters[:spec.n_core]) if p.owner in channel_set]
         keys = [(spec.parameters[i].owner, spec.parameters[i].name) for i in core]
         terms, bias_columns, m_inv = _channel_derivatives(sub, u, phi, data.dt, set(keys))
@@ -238,9 +238,6 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
         inertial = mid.as_matrix() @ body_columns
         inertial = smoothed_columns(inertial, data.dt, data.st_time)
         at_st_jac = cumulative_at_st(inertial, k, frac)
-        at_st = kinematics.attitude_at(data.gyro_time, attitudes, phi, data.st_time)
-        e = kinematics.error_angles_rad(at_st, st_rot)
-        st_columns = at_st.as_matrix() @ star_reg
         body[:, s] = e - star_reg @ extra_values
         z[:, s] = at_st.apply(e) - st_columns @ extra_values
         design[:, s][:, :, core] = at_st_jac[:, :, :n]
@@ -254,6 +251,35 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
     walk_var, shared = walk_steps(data.gyro_time, data.st_time)
     return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, None, body, walk_var,
                          np.concatenate([[0.0], shared]), st_rate)
+
+
+def _set_error(data: ManeuverData, channel_set, sub: ch.ChannelParams, regressors, extra_values, star_reg, st_rot):
+    """One channel set's body increments ``u`` and ``phi`` (eq. 3 inverted), its propagated attitudes, those
+    at the star-tracker samples, the error angles there (eq. 4) and the star tracker's effect columns:
+    what `linearize` and `residuals` share, computed alike (the same bits)."""
+    u = data.set_increments(channel_set) - regressors @ extra_values
+    phi = ch.solve_body(u, sub, dt_s=data.dt)
+    attitudes = kinematics.propagate(Rotation.from_quat(data.attitude0_quat), phi)
+    at_st = kinematics.attitude_at(data.gyro_time, attitudes, phi, data.st_time)
+    e = kinematics.error_angles_rad(at_st, st_rot)
+    return u, phi, attitudes, at_st, e, at_st.as_matrix() @ star_reg
+
+
+def residuals(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> np.ndarray:
+    """`linearize`'s ``z`` alone, (M, S, 3), the same to the bit, without the Jacobian: what a trial
+    step of the WLS needs (most of a linearisation's time is its derivative columns)."""
+    params = spec.channel_params(theta, bias_rad_s)
+    extra_values = np.asarray(theta, dtype=float)[spec.extra]
+    names = [c.name for c in spec.channels]
+    gyro_reg, star_reg = effect_regressors(data, spec)
+    st_rot = Rotation.from_quat(data.st_quat)
+    z = np.empty((len(data.st_time), len(data.sets), 3))
+    for s, channel_set in enumerate(data.sets):
+        regressors = gyro_reg[:, [names.index(n) for n in channel_set], :]
+        *_, at_st, e, st_columns = _set_error(data, channel_set, params.subset(channel_set), regressors, extra_values,
+                                             star_reg, st_rot)
+        z[:, s] = at_st.apply(e) - st_columns @ extra_values
+    return z
 
 
 def smoothed_columns(per_interval: np.ndarray, dt_s: np.ndarray, st_time_s: np.ndarray) -> np.ndarray:

@@ -179,12 +179,20 @@ class _Whitened:
             self.point = x.tobytes()
         return self.lins
 
+    def _z(self, x) -> list:
+        """Each maneuver's ``z`` at ``x``: the kept linearisation's where it is at ``x``, else `errormodel.residuals`
+        (the same bits, without the Jacobian: a trial step that is not taken never needs one)."""
+        if x.tobytes() == self.point:
+            return [lin.z for lin in self.lins]
+        theta, _, biases = _unpack(x, self.theta0, self.free, self.n_man, self.n_ch)
+        return [errormodel.residuals(d, self.spec, theta, biases[m]) for m, d in enumerate(self.maneuvers)]
+
     def residual(self, x) -> np.ndarray:
         _, chi0, _ = _unpack(x, self.theta0, self.free, self.n_man, self.n_ch)
         out, row = np.empty(self.n_rows), 0
-        for m, (lin, chol) in enumerate(zip(self.linearizations(x), self.chols)):
+        for m, (z, chol) in enumerate(zip(self._z(x), self.chols)):
             n = chol.shape[1]
-            r = covariance.transformed(lin.z - chi0[m], self.filters[m]).reshape(n, 1)
+            r = covariance.transformed(z - chi0[m], self.filters[m]).reshape(n, 1)
             out[row:row + n] = covariance.whiten(chol, np.asfortranarray(r))[:, 0]
             row += n
         return out
