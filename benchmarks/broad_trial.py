@@ -9,9 +9,9 @@ every row; the mapping keeps the reference every 0.1 s (``--reference-interval 0
 command is its own process, as a user runs it (`gyrocal import broad`, `gyrocal validate`,
 ``snakemake --cores 2 --config telemetry=...`` in an empty results directory); its wall time, CPU
 (user + system, its child processes included) and peak resident memory (its largest process) come from
-``wait4``. Per rule: Snakemake's benchmark files (wall, CPU, sampled peak memory) and each job's
-exact peak from ``peak_rss.json``. The load average is printed before and after: the machine is
-shared, so compare ratios measured in one run.
+``wait4``. Per job: Snakemake's benchmark file (wall; its CPU and peak memory sampled every few
+seconds) and the job's exact CPU and peak memory from ``peak_rss.json`` (`common.finish`). The load
+average is printed before and after: the machine is shared, so compare ratios measured in one run.
 """
 
 import argparse
@@ -45,7 +45,7 @@ def timed(command, cwd=None) -> dict:
 
 
 def per_rule(workdir: Path):
-    """Per job: Snakemake's benchmark file (wall, CPU, sampled max RSS) and the job's exact peak."""
+    """Per job: Snakemake's benchmark file (wall, sampled CPU and max RSS) and the job's exact CPU and peak."""
     import pandas as pd
 
     rows = []
@@ -54,8 +54,8 @@ def per_rule(workdir: Path):
         peak = f.with_name(f.name.replace(".benchmark.tsv", ".peak_rss.json"))
         exact = json.loads(peak.read_text()) if peak.is_file() else {}
         rows.append({"job": str(f.relative_to(workdir / "logs")).replace(".benchmark.tsv", ""),
-                     "wall_s": b["s"], "cpu_s": b["cpu_time"], "max_rss_mb": b["max_rss"],
-                     "peak_mb": exact.get("self_mb"), "children_mb": exact.get("children_mb")})
+                     "wall_s": b["s"], "cpu_s": exact.get("cpu_s"), "sampled_cpu_s": b["cpu_time"],
+                     "max_rss_mb": b["max_rss"], "peak_mb": exact.get("self_mb"), "children_mb": exact.get("children_mb")})
     return pd.DataFrame(rows).set_index("job").sort_values("wall_s", ascending=False)
 
 
@@ -92,7 +92,8 @@ def main():
     for name, f in figures.items():
         print(f"{name:22s} {f['wall_s']:7.1f} s wall {f['cpu_s']:7.1f} s CPU {f['peak_mb']:7.0f} MB peak RSS")
     print(f"verdict: {verdict.get('verdict')}")
-    print("per job (wall and CPU from Snakemake's benchmark files; peak_mb: the job's own exact peak):")
+    print("per job (wall_s, sampled_cpu_s, max_rss_mb: Snakemake's benchmark files; "
+          "cpu_s, peak_mb: exact, the job's own):")
     print(rules.round(2).to_string())
 
 
