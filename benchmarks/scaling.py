@@ -47,7 +47,7 @@ def stage_times(scenario: dict, cfg: dict) -> dict:
     from gyrocal.inference.fit.estimate import point_estimate
     from gyrocal.inference.noise.covariance import noise_knowledge
     from gyrocal.inference.sampling import inferencedata, posterior
-    from gyrocal.inference.sampling.posterior import model_priors
+    from gyrocal.inference.sampling.priors import model_priors
     from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline
     from gyrocal.simulation import simulate

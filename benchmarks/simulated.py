@@ -20,7 +20,7 @@ def baseline_fit(scenario_path, cfg: dict) -> Fitted:
     REML noise, WLS) as the pipeline would."""
     from gyrocal.inference.fit import classic, estimate
     from gyrocal.inference.noise.covariance import noise_knowledge
-    from gyrocal.inference.sampling.posterior import model_priors
+    from gyrocal.inference.sampling.priors import model_priors
     from gyrocal.io import telemetry
     from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline

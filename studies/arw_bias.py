@@ -79,7 +79,7 @@ def fit(scenario, seed, cfg, posterior_draws: bool) -> dict:
     from gyrocal.inference.fit import classic, estimate
     from gyrocal.inference.noise import covariance
     from gyrocal.inference.sampling import posterior
-    from gyrocal.inference.sampling.posterior import model_priors
+    from gyrocal.inference.sampling.priors import model_priors
     from gyrocal.maneuvers import preprocess
     from gyrocal.model.spec import baseline
     from gyrocal.model.units import deg_h_to_rad_s

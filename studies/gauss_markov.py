@@ -91,7 +91,7 @@ def one(tau_s: float, index: int, cfg: dict, sampled: bool, baseline_every: int 
     from gyrocal.inference.fit.likelihood import campaign_stats, conditional_posterior
     from gyrocal.inference.noise import segments
     from gyrocal.inference.noise.covariance import noise_knowledge, scales_in_units, variances
-    from gyrocal.inference.sampling.posterior import Priors
+    from gyrocal.inference.sampling.priors import Priors
     from gyrocal.io.telemetry import write_campaign
     from gyrocal.maneuvers import preprocess
     from gyrocal.model import effects

@@ -33,7 +33,7 @@ from gyrocal.inference.fit.estimate import PointEstimate, linearize_all
 from gyrocal.inference.fit.likelihood import Stats, leave_one_out_log_evidence, log_evidence, maneuver_stats, total
 from gyrocal.inference.noise import covariance
 from gyrocal.inference.sampling import inferencedata, predictive
-from gyrocal.inference.sampling.posterior import model_priors
+from gyrocal.inference.sampling.priors import model_priors
 from gyrocal.model import effects
 from gyrocal.pipeline.steps import common
 from gyrocal.simulation import simulate

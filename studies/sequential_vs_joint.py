@@ -45,8 +45,10 @@ def run_pair(i: int, scenario_path: str, out: Path, cfg: dict) -> pd.DataFrame:
     sequential["prior_from"] = pa.model("baseline").calibration
     for paths, ids, settings in ((pa, ids_a, cfg), (pb, ids_b, sequential)):
         if not Path(paths.model("baseline").calibration).is_file():
-            posterior.run(paths, ids, "baseline", PosteriorSettings.of(settings))
-            calibrate.run(paths, ids, "baseline")
+            posterior.run(paths.maneuvers(ids), paths.model("baseline").point_estimate,
+                    paths.model("baseline"), PosteriorSettings.of(settings))
+            calibrate.run(paths.maneuvers(ids), *(getattr(paths.model("baseline"), f)
+                                                  for f in ("point_estimate", "summary", "calibration", "correction")))
     joint([pa.root, pb.root], out / f"{i:02d}_joint", "baseline", cfg["priors"])
     keys = ["channel", "parameter"]
     seq = pd.read_csv(pb.model("baseline").calibration)[keys + ["unit", "mean", "sd"]]

@@ -10,7 +10,8 @@ from test_numerics import BORESIGHT, P, tiny_linearization
 
 from gyrocal.inference.noise import covariance
 from gyrocal.inference.sampling.noisegrid import RatioGrid
-from gyrocal.inference.sampling.posterior import LogPosterior, Priors
+from gyrocal.inference.sampling.posterior import LogPosterior
+from gyrocal.inference.sampling.priors import Priors
 from gyrocal.inference.sampling.proposal import CollapsedProposal, ConditionalCache, StudentProposal
 
 LOG_SIGMA = np.log([1e-4, 3e-4, 2e-6])

@@ -11,7 +11,7 @@ from scipy.spatial.transform import Rotation
 
 from gyrocal.criticism import agreement, verdict
 from gyrocal.inference.fit.estimate import PointEstimate
-from gyrocal.inference.sampling.posterior import posterior_spec
+from gyrocal.inference.sampling.priors import posterior_spec
 from gyrocal.io import calibration
 from gyrocal.model import channels as ch
 from gyrocal.model import combinations

@@ -125,10 +125,11 @@ def _sampled(campaign, truth, names):
     """The posterior (a short run) of a model on the campaign: its draws of the timing jitter (ms, None
     without it) and each channel parameter's z-score against the truth."""
     from gyrocal.inference.sampling import posterior
+    from gyrocal.inference.sampling.priors import model_priors
 
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     maneuvers, est = _fitted(campaign, names)
-    ready = posterior.prepare(maneuvers, est, posterior.model_priors(est, cfg["priors"]), cfg["grid"])
+    ready = posterior.prepare(maneuvers, est, model_priors(est, cfg["priors"]), cfg["grid"])
     sampler = {**cfg["sampler"], "walkers": 32, "ensembles": 2, "burn_steps": 100, "initial_steps": 100,
                "min_tau_multiple": 20}
     draws = posterior.run(ready, sampler, 1).result.chains

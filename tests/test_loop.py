@@ -133,9 +133,9 @@ def test_where_the_reviewed_model_fits_the_loop_skips_its_variant_with_the_reaso
     assert run.extend_models(paths, ids, cfg, ["baseline"]) == ["extended"]
     step = json.loads(Path(paths.model("extended").extension).read_text())
     assert not step["fitted"] and step["why"] == "model baseline has no misfit: nothing to extend"
-    assert common.read_refusal(paths, "extended")["status"] == "skipped"
-    assert common.compared(paths, ["baseline", "extended"]) == ["baseline"]
-    assert not (tmp_path / "run" / "extended" / "point_estimate.npz").exists()
+    assert common.read_refusal(paths.model("extended").refusal)["status"] == "skipped"
+    assert common.compared(["baseline", "extended"], paths.per_model(["baseline", "extended"]).diagnostics) == ["baseline"]
+    assert common.read_refusal(paths.model("extended").point_estimate)["reason"].startswith("not fitted")
 
 
 @pytest.fixture(scope="module")

@@ -22,7 +22,8 @@ from gyrocal.inference.noise import covariance, selectedinverse
 from gyrocal.inference.noise.covariance import variances
 from gyrocal.inference.sampling import predictive
 from gyrocal.inference.sampling.noisegrid import RatioGrid
-from gyrocal.inference.sampling.posterior import StudentProposal, start_covariance
+from gyrocal.inference.sampling.posterior import start_covariance
+from gyrocal.inference.sampling.proposal import StudentProposal
 
 M, SETS, P, CHANNELS = 30, 2, 4, 3
 BORESIGHT = [0.3, 0.0, 0.954]
@@ -357,7 +358,7 @@ def test_chi2_log_sf_stays_finite_and_exact_where_scipy_underflows(x, df):
 def test_autocorrelation_times_equal_emcee_integrated_time_one_series_at_a_time():
     import emcee
 
-    from gyrocal.inference.sampling.posterior import _autocorr_times, _sokal_window
+    from gyrocal.inference.sampling.ensemble import _autocorr_times, _sokal_window
 
     rng = np.random.default_rng(3)
     noise_draws = rng.standard_normal((200, 6, 3))

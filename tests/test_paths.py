@@ -1,6 +1,7 @@
 """The paths of a run and the settings of each step, written once (gyrocal.pipeline.paths, .settings)."""
 
 import copy
+from pathlib import Path
 
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import (
@@ -20,14 +21,29 @@ def test_snakemake_wildcards_pass_through_the_paths_unchanged():
     assert paths.maneuvers(["{maneuver}"], "png") == ["results/{campaign}/preprocess/{maneuver}.png"]
 
 
-def test_a_campaigns_outputs_are_the_contracts_files_in_the_order_of_the_models():
+def test_a_campaigns_outputs_are_every_file_its_rules_declare_in_the_order_of_the_models():
     paths = CampaignPaths.under("out/mom")
+    each = ["point_estimate.npz", "posterior.nc", "posterior_summary.csv", "fit.csv", "sampler.json",
+            "elpd_maneuvers.csv", "elpd_blocks.csv", "calibration.csv", "correction.json", "diagnostics.json"]
     assert paths.outputs(["baseline", "bias_drift"]) == [
         "out/mom/input.json", "out/mom/preprocess",
-        "out/mom/baseline/calibration.csv", "out/mom/baseline/correction.json", "out/mom/baseline/diagnostics.json",
-        "out/mom/bias_drift/calibration.csv", "out/mom/bias_drift/correction.json",
-        "out/mom/bias_drift/diagnostics.json",
-        "out/mom/classic.csv", "out/mom/model_comparison.csv", "out/mom/report.html", "out/mom/verdict.json"]
+        *[f"out/mom/baseline/{f}" for f in each], *[f"out/mom/bias_drift/{f}" for f in each],
+        "out/mom/classic.csv", "out/mom/model_comparison.csv", "out/mom/model_comparison.png",
+        "out/mom/report.html", "out/mom/verdict.json"]
+
+
+def test_a_file_missing_from_an_existing_step_folder_is_named_with_its_folder(tmp_path):
+    paths = CampaignPaths.under(tmp_path)
+    assert paths.missing_in_folders(["yaw_pos"], simulated=True) == []  # no folder yet: nothing is missing
+    Path(paths.preprocess).mkdir()
+    for ext in ("npz", "csv", "png"):
+        Path(paths.preprocess, f"yaw_pos.{ext}").write_text("x")
+    assert paths.missing_in_folders(["yaw_pos"], simulated=True) == []
+    Path(paths.preprocess, "yaw_pos.npz").unlink()
+    Path(paths.simulated).mkdir(parents=True)
+    assert paths.missing_in_folders(["yaw_pos"], simulated=False) == [(f"{tmp_path}/preprocess/yaw_pos.npz", paths.preprocess)]
+    assert paths.missing_in_folders(["yaw_pos"], simulated=True)[0] == (f"{tmp_path}/simulated/campaign/campaign.yaml",
+                                                                       paths.simulated)
 
 
 def test_each_step_takes_only_the_config_sections_it_reads(config):

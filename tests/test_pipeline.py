@@ -14,7 +14,7 @@ from gyrocal.inference.fit import estimate
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.fit.likelihood import campaign_stats
 from gyrocal.inference.noise import covariance
-from gyrocal.inference.sampling.posterior import model_priors
+from gyrocal.inference.sampling.priors import model_priors
 from gyrocal.io import calibration, telemetry
 from gyrocal.model import channels as ch
 from gyrocal.model import combinations, correction, effects
@@ -38,7 +38,8 @@ def calibration_with_truth(out, truth):
 def posterior_again(out, npz, cfg, tmp_path):
     """The posterior step once more on a finished run's point estimate, with ``cfg``, under ``tmp_path``."""
     paths, ids = rerun_from(out, tmp_path)
-    posterior_step.run(paths, ids, "baseline", PosteriorSettings.of(cfg))
+    posterior_step.run(paths.maneuvers(ids), paths.model("baseline").point_estimate,
+                    paths.model("baseline"), PosteriorSettings.of(cfg))
 
 
 def test_validate_step_records_rows_and_checksums(tiny_run):
@@ -69,7 +70,7 @@ def test_preprocess_step_writes_every_maneuver_whole_or_leaves_the_directory_as_
     paths = CampaignPaths.under(tmp_path)
     shutil.copy(tiny_run[0] / "input.json", paths.input_json)
     ids = [m.id for m in telemetry.read_meta(tiny[0])["maneuvers"]]
-    assert preprocess_step.run(tiny[0], paths, figures=False) == ids
+    assert preprocess_step.run(tiny[0], paths.input_json, paths.preprocess, figures=False) == ids
     assert sorted(p.name for p in out.iterdir()) == sorted([f"{i}.{e}" for i in ids for e in ("npz", "csv")]
                                                            + ["reference_interval.json"])
     for i in ids:
@@ -89,7 +90,7 @@ def test_preprocess_step_writes_every_maneuver_whole_or_leaves_the_directory_as_
         earlier.write_bytes(b"earlier run")
     before = {p.name: p.read_bytes() for p in out.iterdir()}
     with pytest.raises(RuntimeError, match="disk full"):
-        preprocess_step.run(tiny[0], paths, figures=False)
+        preprocess_step.run(tiny[0], paths.input_json, paths.preprocess, figures=False)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["input.json", "preprocess"]
 

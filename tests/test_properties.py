@@ -21,7 +21,7 @@ from gyrocal import checks
 from gyrocal.checks.fit import EstimateError, check_physical
 from gyrocal.inference.fit import classic
 from gyrocal.inference.fit.estimate import point_estimate
-from gyrocal.inference.sampling.posterior import Priors
+from gyrocal.inference.sampling.priors import Priors
 from gyrocal.io.telemetry import TelemetryError
 from gyrocal.maneuvers import preprocess
 from gyrocal.model.spec import baseline

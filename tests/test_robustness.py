@@ -274,7 +274,8 @@ def test_a_point_estimate_beyond_the_bounds_stops_before_sampling_naming_paramet
     with pytest.raises(EstimateError) as err:
         paths, ids = rerun_from(out, tmp_path)
         settings = PosteriorSettings.of({**config, "priors": {**config["priors"], "sf_bound_ppm": 100.0}})
-        posterior_step.run(paths, ids, "baseline", settings)
+        posterior_step.run(paths.maneuvers(ids), paths.model("baseline").point_estimate,
+                    paths.model("baseline"), settings)
     message = str(err.value)
     assert "dtg1_roll.sf_pos = 14" in message and "(bound 100," in message
     assert "fits maneuver" in message

@@ -80,10 +80,11 @@ def yaw_only(tmp_path_factory, short_chains):
     cfg["models"] = {"baseline": ["scale_factor", "misalignment", "bias"]}
     paths = CampaignPaths.under(out / "run")
     paths.mkdirs(["baseline"])
-    validate.run(out / "sim" / "campaign", paths, None, cfg["sampler"]["block_s"])
-    ids = preprocess.run(out / "sim" / "campaign", paths, False)
-    classic.run(paths, ids, cfg["noise"])
-    point_estimate.run(paths, ids, "baseline", PointEstimateSettings.of(cfg, "baseline"))
+    validate.run(out / "sim" / "campaign", paths.input_json, None, cfg["sampler"]["block_s"])
+    ids = preprocess.run(out / "sim" / "campaign", paths.input_json, paths.preprocess, False)
+    classic.run(paths.maneuvers(ids), paths.input_json, paths.classic, cfg["noise"])
+    point_estimate.run(paths.maneuvers(ids), paths.input_json, paths.model("baseline").point_estimate, "baseline",
+                       PointEstimateSettings.of(cfg, "baseline"))
     return paths, ids, cfg
 
 
@@ -96,7 +97,8 @@ def test_a_single_axis_posterior_that_cannot_converge_in_budget_stops_at_once_wi
     cfg["sampler"].update(min_tau_multiple=1000, max_steps=100)  # 1000 tau cannot fit in 100 steps
     start = time.monotonic()
     with pytest.raises(EstimateError) as refused:
-        posterior.run(paths, ids, "baseline", PosteriorSettings.of(cfg))
+        posterior.run(paths.maneuvers(ids), paths.model("baseline").point_estimate,
+                    paths.model("baseline"), PosteriorSettings.of(cfg))
     assert time.monotonic() - start < 60
     message = str(refused.value)
     assert "stopped without converging" in message and "beyond sampler.max_steps = 100" in message
@@ -115,12 +117,14 @@ def run_posterior(campaign_dir, out, cfg):
 
     paths = CampaignPaths.under(out)
     paths.mkdirs(["baseline"])
-    validate.run(campaign_dir, paths, None, cfg["sampler"]["block_s"])
-    ids = preprocess.run(campaign_dir, paths, False)
-    classic.run(paths, ids, cfg["noise"])
-    point_estimate.run(paths, ids, "baseline", PointEstimateSettings.of(cfg, "baseline"))
+    validate.run(campaign_dir, paths.input_json, None, cfg["sampler"]["block_s"])
+    ids = preprocess.run(campaign_dir, paths.input_json, paths.preprocess, False)
+    classic.run(paths.maneuvers(ids), paths.input_json, paths.classic, cfg["noise"])
+    point_estimate.run(paths.maneuvers(ids), paths.input_json, paths.model("baseline").point_estimate, "baseline",
+                       PointEstimateSettings.of(cfg, "baseline"))
     try:
-        posterior.run(paths, ids, "baseline", PosteriorSettings.of(cfg))
+        posterior.run(paths.maneuvers(ids), paths.model("baseline").point_estimate,
+                    paths.model("baseline"), PosteriorSettings.of(cfg))
     except EstimateError as refused:
         return str(refused)
     return json.loads(Path(paths.model("baseline").sampler).read_text())

@@ -100,7 +100,8 @@ def test_a_model_with_an_arcsec_plugin_parameter_runs_end_to_end(tiny, tmp_path,
 
 
 def test_start_points_with_zero_density_are_redrawn_a_bounded_number_of_times_then_refused():
-    from gyrocal.inference.sampling.posterior import START_REDRAWS, SamplingError, run_ensembles
+    from gyrocal.inference.sampling.ensemble import START_REDRAWS, run_ensembles
+    from gyrocal.inference.sampling.proposal import SamplingError
     calls = []
 
     def nowhere(x):

@@ -8,7 +8,7 @@ from scipy.optimize import least_squares
 
 from gyrocal.inference import errormodel
 from gyrocal.inference.noise.covariance import noise_knowledge
-from gyrocal.inference.sampling import posterior
+from gyrocal.inference.sampling.priors import Priors
 from gyrocal.io import telemetry
 from gyrocal.maneuvers import preprocess
 from gyrocal.model.spec import baseline
@@ -32,7 +32,7 @@ def test_straightforward_errors_follow_gyrocal_linearisation(tiny, config):
     spec = baseline(campaign.channels)
     truth = truth_vector(campaign.channels, tiny[1])
     theta = spec.core_vector(truth)
-    priors = posterior.Priors.from_spec(spec, stated, 1.0)
+    priors = Priors.from_spec(spec, stated, 1.0)
     model = Straightforward(maneuvers, spec, priors, stated)
     nuisance = np.tile(np.concatenate([np.zeros(3), rad_s_to_deg_h(truth.bias_rad_s)]), len(maneuvers))
     x0 = np.concatenate([spec.to_unit(theta), nuisance])

@@ -1,9 +1,11 @@
 """The Snakemake workflow end to end, on a user's campaign directory."""
 
 import json
+import os
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pandas as pd
@@ -142,6 +144,37 @@ def test_gyrocal_run_refuses_a_bad_setting_naming_its_key_before_any_job(setting
     assert not (tmp_path / ".snakemake").exists()  # Snakemake never started
 
 
+def test_a_deleted_intermediate_file_is_redone_by_the_plain_rerun(tiny, workflow_run, tmp_path):
+    work = tmp_path / "work"
+    shutil.copytree(workflow_run, work, symlinks=True)  # copy2: the same times, so the copy is as complete
+    results = work / "results" / "tiny" / "baseline"
+    (results / "posterior.nc").unlink()
+    run = subprocess.run(SNAKEMAKE + ["--cores", "2", "-d", str(work), "--configfile", *CONFIGS,
+                                      "--config", f"telemetry={tiny[0]}"], capture_output=True, text=True, check=False)
+    assert run.returncode == 0, run.stderr[-3000:]
+    for rule in ("posterior", "diagnostics", "report"):
+        assert f"rule {rule}:" in run.stderr, run.stderr[-3000:]
+    assert "rule point_estimate:" not in run.stderr
+    original = workflow_run / "results" / "tiny"
+    for name in ("baseline/posterior.nc", "baseline/calibration.csv", "baseline/diagnostics.json", "verdict.json"):
+        assert (work / "results" / "tiny" / name).read_bytes() == (original / name).read_bytes(), name
+
+
+def test_a_file_deleted_from_the_preprocess_folder_stops_the_rerun_saying_what_to_do(tiny, workflow_run, tmp_path):
+    work = tmp_path / "work"
+    shutil.copytree(workflow_run, work, symlinks=True)
+    (work / "results" / "tiny" / "preprocess" / "yaw_pos.npz").unlink()
+    dry = SNAKEMAKE + ["-n", "-d", str(work), "--configfile", *CONFIGS, "--config", f"telemetry={tiny[0]}"]
+    run = subprocess.run(dry, capture_output=True, text=True, check=False)
+    assert run.returncode != 0 and "Traceback" not in run.stderr
+    assert ("gyrocal: results/tiny/preprocess/yaw_pos.npz is missing, and Snakemake takes the folder that held it "
+            "for complete: delete the folder results/tiny/preprocess and run again") in run.stderr
+    shutil.rmtree(work / "results" / "tiny" / "preprocess")  # as it says: every step from preprocess on is redone
+    again = subprocess.run(dry, capture_output=True, text=True, check=False)
+    jobs = again.stdout + again.stderr
+    assert all(f"rule {r}:" in jobs for r in ("preprocess", "point_estimate", "posterior", "diagnostics", "report")), jobs
+
+
 def test_bad_config_value_is_refused_with_a_clear_message(tmp_path):
     run = subprocess.run(SNAKEMAKE + ["--cores", "1", "-n", "-d", str(tmp_path), "--config", "seed=-3"],
                          capture_output=True, text=True, check=False)
@@ -181,6 +214,24 @@ def test_snakemake_ends_with_the_validators_message_and_no_traceback(case, tiny,
     assert "Traceback" not in run.stderr + run.stdout
     assert "gyrocal: the campaign was refused:" in run.stderr
     assert EXPECTED[case] in "\n".join(run.stderr.strip().splitlines()[-25:])
+
+
+def test_a_refusal_shown_is_the_campaign_runs_own_not_a_newer_log_of_another(tiny, tmp_path):
+    # the run shows its failed job's log (show-failed-logs), not the newest log under logs/: a refusal
+    # left there by another campaign, written after this run's, is not shown
+    broken, work = tmp_path / "broken", tmp_path / "work"
+    mutations.corrupted_copy(tiny[0], broken, mutations.REFUSED["gyro increments in degrees"])
+    stale = work / "logs" / "other" / "preprocess.log"
+    stale.parent.mkdir(parents=True)
+    stale.write_text("gyrocal: the campaign was refused:\nSTALE: campaign other's refusal\n")
+    os.utime(stale, (time.time() + 3600, time.time() + 3600))
+    run = subprocess.run(SNAKEMAKE + ["--cores", "1", "-d", str(work), "--config", f"telemetry={broken}"],
+                         capture_output=True, text=True, check=False)
+    said = run.stdout + run.stderr
+    assert run.returncode != 0 and "Traceback" not in said
+    assert "STALE" not in said and "logs/other" not in said
+    from test_robustness import EXPECTED
+    assert EXPECTED["gyro increments in degrees"] in said
 
 
 def test_a_fleet_with_two_campaigns_of_one_name_is_refused(tiny, tmp_path):

@@ -7,14 +7,12 @@ independent jobs under ``results/<campaign>/``; a fleet adds ``results/fleet/``.
 
 import re
 import sys
-import threading
-import time
 from pathlib import Path
 
 from gyrocal.errors import InputError as _InputError
 from gyrocal.criticism.extension import extension_names as _extension_names
 from gyrocal.io import scenario as _scenario
-from gyrocal.pipeline.steps import REFUSED as _REFUSED
+from gyrocal.pipeline.paths import MODEL_FILES
 from gyrocal.pipeline.paths import CampaignPaths as _CampaignPaths
 from gyrocal.pipeline.settings import ExtendSettings as _ExtendSettings
 from gyrocal.pipeline.settings import canonical as _canonical
@@ -67,6 +65,13 @@ else:
     CAMPAIGNS[_meta["name"]] = {"dir": _CampaignPaths(results_of(_meta["name"])).simulated,
                                 "maneuvers": _meta["maneuvers"], "simulated": True}
 
+for _name, _entry in CAMPAIGNS.items():
+    _missing = _CampaignPaths(results_of(_name)).missing_in_folders(_entry["maneuvers"], _entry["simulated"])
+    if _missing:
+        _path, _folder = _missing[0]
+        sys.exit(f"gyrocal: {_path} is missing, and Snakemake takes the folder that held it for complete: delete "
+                 f"the folder {_folder} and run again, which redoes the step that writes it and every step after it")
+
 PATHS = _CampaignPaths(results_of("{campaign}"))
 """Every file of a campaign's run (`gyrocal.pipeline.paths`), with the campaign a wildcard."""
 MODEL = PATHS.model("{model}")
@@ -91,29 +96,8 @@ wildcard_constraints:
     extension="|".join(EXTENDED) or "(?!)",
 
 
-_STARTED = time.time()
-
-
-def refusal_messages():
-    """What the steps of this run refused (their logs from `gyrocal.pipeline.steps.REFUSED` on), to repeat
-    when a run fails."""
-    found = []
-    for path in sorted(Path("logs").rglob("*.log")):
-        if path.stat().st_mtime < _STARTED:
-            continue
-        text = path.read_text()
-        if _REFUSED in text:
-            found.append(text[text.index(_REFUSED):].rstrip())
-    return found
-
-
 def campaign_dir(wildcards):
     return CAMPAIGNS[wildcards.campaign]["dir"]
-
-
-def campaign_results(wildcards):
-    """The campaign's results folder: the root of its `CampaignPaths`, which each step rebuilds."""
-    return results_of(wildcards.campaign)
 
 
 def maneuver_ids(wildcards):
@@ -141,13 +125,18 @@ def model_files(name):
     return [getattr(PATHS.model(m), name) for m in MODELS + EXTENDED]
 
 
-def extension_input(wildcards):
-    """What a step of the loop reads: the first, every variant's comparison files (it extends the
-    reviewed one); a later one, the step before it."""
-    paths = _CampaignPaths(results_of(wildcards.campaign))
+def extension_bases(wildcards):
+    """The variants a step of the loop reads: the first, every variant (it extends the reviewed one);
+    a later one, the step before it."""
     k = EXTENDED.index(wildcards.extension)
-    bases = MODELS if k == 0 else [EXTENDED[k - 1]]
-    return {f"{m}_{f}": getattr(paths.model(m), f) for m in bases
+    return MODELS if k == 0 else [EXTENDED[k - 1]]
+
+
+def extension_input(wildcards):
+    """The files of the variants a step of the loop reads (`extension_bases`), by their `ModelPaths`
+    name, a list in the order of the variants each: what the comparison reads."""
+    paths = _CampaignPaths(results_of(wildcards.campaign))
+    return {f: [getattr(paths.model(m), f) for m in extension_bases(wildcards)]
             for f in ("diagnostics", "summary", "elpd_blocks", "elpd_maneuvers")}
 
 
@@ -177,13 +166,3 @@ def all_outputs():
     if FLEET:
         out += [f"{results_of('fleet')}/summary.csv", f"{results_of('fleet')}/summary.png"]
     return out
-
-
-def cancel_rescheduling_timers():
-    """Snakemake's job rate limiter arms a non-daemon one-second `threading.Timer` at each job
-    selection (`JobScheduler._schedule_reevalutation`), and the interpreter waits for the last one,
-    armed when the final job started, before it exits: about a second after every run. Once the
-    workflow has succeeded nothing is left to schedule, so they are cancelled."""
-    for thread in threading.enumerate():
-        if isinstance(thread, threading.Timer):
-            thread.cancel()

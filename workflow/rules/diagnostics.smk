@@ -7,10 +7,10 @@ rule diagnostics:
         fit=MODEL.fit,
         plugins=PLUGINS,
     output:
-        MODEL.diagnostics,
+        diagnostics=MODEL.diagnostics,
     params:
-        results=campaign_results,
         maneuvers=maneuver_ids,
+        refusal=MODEL.refusal,
         settings=settings("diagnostics"),
     conda:
         "../envs/gyrocal.yaml"

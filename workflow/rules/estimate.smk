@@ -6,10 +6,10 @@ rule point_estimate:
         checked=PATHS.input_json,
         plugins=PLUGINS,
     output:
-        MODEL.point_estimate,
+        point_estimate=MODEL.point_estimate,
     params:
-        results=campaign_results,
         maneuvers=maneuver_ids,
+        refusal=MODEL.refusal,  # the variant's refusal record, where a step refuses it (not always written)
         settings=point_estimate_settings,
     conda:
         "../envs/gyrocal.yaml"

@@ -11,20 +11,11 @@ rule extended:
         plugins=PLUGINS,
     output:
         extension=EXTENDED_MODEL.extension,
-        point=EXTENDED_MODEL.point_estimate,
-        posterior=EXTENDED_MODEL.posterior,
-        summary=EXTENDED_MODEL.summary,
-        fit=EXTENDED_MODEL.fit,
-        sampler=EXTENDED_MODEL.sampler,
-        elpd=EXTENDED_MODEL.elpd_maneuvers,
-        loo=EXTENDED_MODEL.elpd_blocks,
-        calibration=EXTENDED_MODEL.calibration,
-        correction=EXTENDED_MODEL.correction,
-        diagnostics=EXTENDED_MODEL.diagnostics,
+        **{name: getattr(EXTENDED_MODEL, name) for name in MODEL_FILES},
     params:
-        results=campaign_results,
         maneuvers=maneuver_ids,
-        models=MODELS,
+        bases=extension_bases,
+        refusal=EXTENDED_MODEL.refusal,
         settings=extend_settings(),
     conda:
         "../envs/gyrocal.yaml"

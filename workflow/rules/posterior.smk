@@ -13,8 +13,8 @@ rule posterior:
         summary=MODEL.summary,
         fit=MODEL.fit,
         sampler=MODEL.sampler,
-        elpd=MODEL.elpd_maneuvers,
-        loo=MODEL.elpd_blocks,
+        elpd_maneuvers=MODEL.elpd_maneuvers,
+        elpd_blocks=MODEL.elpd_blocks,
         calibration=report(
             MODEL.calibration,
             caption="../report/calibration.rst",
@@ -23,8 +23,8 @@ rule posterior:
         ),
         correction=MODEL.correction,
     params:
-        results=campaign_results,
         maneuvers=maneuver_ids,
+        refusal=MODEL.refusal,
         settings=settings("posterior"),
     conda:
         "../envs/gyrocal.yaml"

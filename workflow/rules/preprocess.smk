@@ -19,7 +19,6 @@ rule preprocess:
         ),
     params:
         campaign_dir=campaign_dir,
-        results=campaign_results,
         block_s=config["sampler"]["block_s"],  # validation refuses a maneuver too short for the posterior's blocks
         noise=_canonical(config["noise"]),  # the classic values' sd and the pilot fit's weights, where campaign.yaml states no noise
         reference_interval_s=config["reference_interval_s"],  # star-tracker samples kept every this many seconds, or "auto"

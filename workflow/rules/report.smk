@@ -9,6 +9,7 @@ rule report:
         **{name: model_files(name) for name in ("point_estimate", "posterior", "summary", "fit", "sampler",
                                                 "elpd_maneuvers", "elpd_blocks", "calibration", "correction",
                                                 "diagnostics")},
+        extension=[PATHS.model(m).extension for m in EXTENDED],
         preprocessed=PATHS.preprocess,
         checked=PATHS.input_json,
         truth=truth_input,
@@ -18,9 +19,9 @@ rule report:
         html=report(PATHS.report, caption="../report/review.rst", category="Review before uplink"),
         verdict=PATHS.verdict,
     params:
-        results=campaign_results,
         maneuvers=maneuver_ids,
         models=MODELS + EXTENDED,
+        extended=EXTENDED,
         settings=whole_config(),
     threads: 2
     conda:

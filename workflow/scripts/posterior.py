@@ -1,16 +1,16 @@
-from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.paths import maneuver_files
 from gyrocal.pipeline.settings import PosteriorSettings
 from gyrocal.pipeline.steps import calibrate, common, posterior
 
-p, model = snakemake.params, snakemake.wildcards.model
-paths = CampaignPaths(p.results)
+i, o, p, model = snakemake.input, snakemake.output, snakemake.params, snakemake.wildcards.model
 common.start(snakemake.log[0])
+npz = maneuver_files(i.preprocessed, p.maneuvers)
 
 
 def run():
-    posterior.run(paths, p.maneuvers, model, PosteriorSettings(**p.settings))
-    calibrate.run(paths, p.maneuvers, model)
+    posterior.run(npz, i.point, o, PosteriorSettings(**p.settings))
+    calibrate.run(npz, i.point, o.summary, o.calibration, o.correction)
 
 
-common.variant_step(paths, model, "posterior", run, snakemake.output)
+common.variant_step(p.refusal, model, "posterior", run, o)
 common.finish()

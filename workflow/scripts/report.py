@@ -1,11 +1,10 @@
-from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import ModelChoiceSettings, ReportSettings
 from gyrocal.pipeline.steps import common, compare_models, report
 
-p, i = snakemake.params, snakemake.input
-paths = CampaignPaths(p.results)
+i, o, p = snakemake.input, snakemake.output, snakemake.params
 common.start(snakemake.log[0])
 with common.refusal():
-    compare_models.run(paths, p.models, ModelChoiceSettings.of(p.settings))
-    report.run(paths, p.maneuvers, p.models, ReportSettings(p.settings), i.truth[0] if i.truth else None, snakemake.threads)
+    compare_models.run(p.models, i, o.table, o.figure, ModelChoiceSettings.of(p.settings))
+    report.run(p.models, i, i.preprocessed, p.maneuvers, i.checked, o.table, o.html, o.verdict, ReportSettings(p.settings),
+               i.truth[0] if i.truth else None, snakemake.threads, dict(zip(p.extended, i.extension)))
 common.finish()

@@ -235,7 +235,7 @@ def read_meta(directory) -> dict:
         fail(cpath, f"{len(name)} characters, over the {NAME_MAX} a campaign name may have (it names the run's "
                     f"folders): {name[:20]}...", where, "give the campaign a shorter name: name: ...")
     if repeated := PERIODIC_TAIL.search(name):
-        fail(cpath, f"{name!r} ends in {repeated.group(1)!r} repeated {len(repeated.group(0)) // len(repeated.group(1))} "
+        fail(cpath, f"{excerpt(name)} ends in {repeated.group(1)!r} repeated {len(repeated.group(0)) // len(repeated.group(1))} "
                     "times, which Snakemake refuses in a run's paths (it takes it for an endless recursion)", where,
              "give the campaign a name without such a repetition: name: ...")
     if name in RESERVED_NAMES:

@@ -4,8 +4,18 @@ Snakemake wildcards (``results/{campaign}``), which pass through unchanged."""
 
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
-__all__ = ["CampaignPaths", "ModelPaths"]
+__all__ = ["MODEL_FILES", "REFERENCE_INTERVAL", "CampaignPaths", "ModelPaths", "maneuver_files"]
+
+REFERENCE_INTERVAL = "reference_interval.json"
+"""The preprocess step's record of the reference interval it used and why, in its folder."""
+
+
+def maneuver_files(folder, ids, ext: str = "npz") -> list:
+    """The preprocess step's files of one kind (``npz``, ``csv``, ``png``) of the maneuvers ``ids``, in
+    that order, in its folder ``folder`` (a rule's input ``preprocessed``)."""
+    return [f"{folder}/{m}.{ext}" for m in ids]
 
 
 def _under_root(name: str, doc: str = "") -> property:
@@ -35,6 +45,11 @@ class ModelPaths:
                                           "(`gyrocal.pipeline.steps.common.variant_step`).")
 
 
+MODEL_FILES = ("point_estimate", "posterior", "summary", "fit", "sampler", "elpd_maneuvers", "elpd_blocks",
+               "calibration", "correction", "diagnostics")
+"""A model variant's result files, by their `ModelPaths` name, in the order its steps write them."""
+
+
 @dataclass(frozen=True)
 class CampaignPaths:
     """One campaign's files, under ``results/<campaign>/``."""
@@ -44,7 +59,7 @@ class CampaignPaths:
     input_json = _under_root("input.json", "What validation read and found (``input.json``).")
     classic = _under_root("classic.csv")
     preprocess = _under_root("preprocess", "The preprocess step's folder: ``<maneuver>.{npz,csv,png}`` each.")
-    reference_interval = _under_root("preprocess/reference_interval.json",
+    reference_interval = _under_root(f"preprocess/{REFERENCE_INTERVAL}",
                                      "The reference interval the preprocess step used, and why.")
     comparison = _under_root("model_comparison.csv")
     comparison_figure = _under_root("model_comparison.png")
@@ -63,15 +78,34 @@ class CampaignPaths:
 
     def maneuvers(self, ids, ext: str = "npz") -> list:
         """The preprocessed files of one kind of the maneuvers ``ids``, in that order."""
-        return [f"{self.preprocess}/{m}.{ext}" for m in ids]
+        return maneuver_files(self.preprocess, ids, ext)
+
+    def per_model(self, models) -> SimpleNamespace:
+        """Every model file of the variants ``models``, by its `ModelPaths` name, a list in their order
+        each: what the report rule's ``snakemake.input`` gives the comparison and the report."""
+        return SimpleNamespace(**{name: [getattr(self.model(m), name) for m in models] for name in MODEL_FILES})
 
     def outputs(self, models) -> list:
-        """Everything a campaign's run leaves, as the workflow's targets."""
+        """Everything a campaign's run leaves, as the workflow's targets: every file a rule declares, the
+        intermediate ones too, so that a plain rerun redoes the step whose file went missing, and every
+        step after it (Snakemake redoes no job for a missing file that nothing it must build needs)."""
         out = [self.input_json, self.preprocess]
         for name in models:
             m = self.model(name)
-            out += [m.calibration, m.correction, m.diagnostics]
-        return out + [self.classic, self.comparison, self.report, self.verdict]
+            out += [getattr(m, f) for f in MODEL_FILES]
+        return out + [self.classic, self.comparison, self.comparison_figure, self.report, self.verdict]
+
+    def missing_in_folders(self, ids, simulated: bool) -> list:
+        """The files missing from a step's output folder that exists (the preprocessed maneuvers
+        ``ids``; the simulated campaign, where ``simulated``), each with its folder: Snakemake takes a
+        folder that exists for complete, and redoes the step that writes it only once it is gone."""
+        folders = [(self.preprocess, [f"{self.preprocess}/{m}.{ext}"
+                                                    for m in ids for ext in ("npz", "csv", "png")])]
+        if simulated:
+            folders.insert(0, (self.simulated, [f"{self.simulated}/{name}" for name in
+                                                            ("campaign.yaml", "star_tracker.csv", "gyro.csv")]))
+        return [(path, folder) for folder, files in folders if Path(folder).is_dir()
+                for path in files if not Path(path).is_file()]
 
     def mkdirs(self, models=()):
         """Create the campaign's folder and its models' (outside Snakemake, which creates its own)."""

@@ -2,6 +2,8 @@
 what its rule gives it: what the validation study and the tests call where Snakemake is not used.
 The rules call the same step functions, one job each."""
 
+from pathlib import Path
+
 from gyrocal.criticism.extension import extension_names
 from gyrocal.inference import interval
 from gyrocal.io import telemetry
@@ -29,7 +31,7 @@ from gyrocal.pipeline.steps import (
     validate,
 )
 
-__all__ = ["calibrate_campaign", "calibrate_models", "extend_models", "review_campaign", "run_campaign"]
+__all__ = ["STEP_OUTPUTS", "calibrate_campaign", "calibrate_models", "extend_models", "review_campaign", "run_campaign"]
 
 
 def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=None, figures=True,
@@ -41,12 +43,20 @@ def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=Non
     models = models_to_run(cfg) if models is None else models
     paths.mkdirs(models)
     campaign = telemetry.read_campaign(campaign_dir)
-    validate.run(campaign_dir, paths, campaign, cfg["sampler"]["block_s"])
-    ids = preprocess.run(campaign_dir, paths, figures, campaign=campaign,
+    validate.run(campaign_dir, paths.input_json, campaign, cfg["sampler"]["block_s"])
+    ids = preprocess.run(campaign_dir, paths.input_json, paths.preprocess, figures, campaign=campaign,
                          reference_interval_s=cfg.get("reference_interval_s", interval.AUTO), noise=cfg["noise"])
-    classic.run(paths, ids, cfg["noise"])
+    classic.run(paths.maneuvers(ids), paths.input_json, paths.classic, cfg["noise"])
     calibrate_models(paths, ids, cfg, models, through, strict)
     return ids
+
+
+STEP_OUTPUTS = {"point_estimate": ("point_estimate",),
+                "posterior": ("posterior", "summary", "fit", "sampler", "elpd_maneuvers", "elpd_blocks", "calibration",
+                              "correction"),
+                "diagnostics": ("diagnostics",)}
+"""A model step's files (`ModelPaths` names), as its rule declares them: a refused variant's hold its
+refusal record, here as in the workflow."""
 
 
 def calibrate_models(paths: CampaignPaths, ids, cfg: dict, models, through="diagnostics", strict=False):
@@ -55,25 +65,31 @@ def calibrate_models(paths: CampaignPaths, ids, cfg: dict, models, through="diag
     already preprocessed. A refused variant gets its refusal record and the others go on, as in the
     workflow (`common.variant_step`); ``strict``: its refusal is raised (the study's runs)."""
     paths.mkdirs(models)
-
-    def variant_step(model, step, run):
-        return run() if strict else common.variant_step(paths, model, step, run)
+    npz = paths.maneuvers(ids)
 
     for model in models:
-        variant_step(model, "point_estimate",
-                     lambda model=model: point_estimate.run(paths, ids, model, PointEstimateSettings.of(cfg, model)))
+        out = paths.model(model)
+
+        def variant_step(step, run, model=model, out=out):
+            if strict:
+                return run()
+            written = STEP_OUTPUTS[step] if step != "posterior" or through != "posterior" else STEP_OUTPUTS[step][:-2]
+            return common.variant_step(out.refusal, model, step, run, [getattr(out, f) for f in written])
+
+        variant_step("point_estimate", lambda model=model, out=out: point_estimate.run(
+            npz, paths.input_json, out.point_estimate, model, PointEstimateSettings.of(cfg, model)))
         if through == "point_estimate":
             continue
 
-        def sample(model=model):
-            posterior.run(paths, ids, model, PosteriorSettings.of(cfg))
+        def sample(out=out):
+            posterior.run(npz, out.point_estimate, out, PosteriorSettings.of(cfg))
             if through != "posterior":
-                calibrate.run(paths, ids, model)
+                calibrate.run(npz, out.point_estimate, out.summary, out.calibration, out.correction)
 
-        variant_step(model, "posterior", sample)
+        variant_step("posterior", sample)
         if through != "posterior":
-            variant_step(model, "diagnostics",
-                         lambda model=model: diagnostics.run(paths, ids, model, DiagnosticsSettings.of(cfg)))
+            variant_step("diagnostics", lambda out=out: diagnostics.run(
+                npz, out.point_estimate, out.fit, out.summary, out.diagnostics, DiagnosticsSettings.of(cfg)))
 
 
 def extend_models(paths: CampaignPaths, ids, cfg: dict, models) -> list:
@@ -81,17 +97,25 @@ def extend_models(paths: CampaignPaths, ids, cfg: dict, models) -> list:
     step per name up to the config's ``loop.depth``), as the workflow's rule ``extended`` runs it:
     each fitted where the model before misfits and a library effect explains it, else skipped with
     the reason. Returns the loop's variant names, to compare after ``models``."""
-    names = extension_names(ExtendSettings.of(cfg).loop["depth"])
-    for name in names:
-        extend.run(paths, ids, list(models), name, ExtendSettings.of(cfg))
+    settings = ExtendSettings.of(cfg)
+    names = extension_names(settings.loop["depth"])
+    paths.mkdirs(names)
+    for k, name in enumerate(names):
+        bases = list(models) if k == 0 else [names[k - 1]]
+        out = paths.model(name)
+        extend.run(name, bases, paths.per_model(bases), paths.maneuvers(ids), paths.input_json, out, out.refusal,
+                   settings)
     return names
 
 
 def review_campaign(paths: CampaignPaths, ids, cfg: dict, models=None, truth_json=None, processes: int = 1):
     """Compare the models and write the pre-uplink review and its verdict."""
-    models = models_to_run(cfg) if models is None else models
-    compare_models.run(paths, models, ModelChoiceSettings.of(cfg))
-    report.run(paths, ids, list(models), ReportSettings.of(cfg), truth_json, processes)
+    models = list(models_to_run(cfg) if models is None else models)
+    files = paths.per_model(models)
+    extensions = {m: paths.model(m).extension for m in models if Path(paths.model(m).extension).is_file()}
+    compare_models.run(models, files, paths.comparison, paths.comparison_figure, ModelChoiceSettings.of(cfg))
+    report.run(models, files, paths.preprocess, ids, paths.input_json, paths.comparison, paths.report, paths.verdict,
+               ReportSettings.of(cfg), truth_json, processes, extensions)
 
 
 def run_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=None, truth_json=None) -> list:

@@ -10,16 +10,13 @@ spanning many posterior standard deviations, and interpolated (cubic Lagrange). 
 noise the posterior is Gaussian in ``dtheta``, so each move draws the noise and then
 ``dtheta`` from that conditional exactly (`CollapsedProposal`): only the noise is explored.
 
-The priors are built here (`model_priors`), and sampling comes in two calls: `prepare` (the
-linearisation, the grid and the data's information, which a check can read) and `run`.
+The priors come from `priors` (`model_priors`), the ensembles from `ensemble`; sampling comes in two
+calls: `prepare` (the linearisation, the grid and the data's information, which a check can read) and `run`.
 """
 
 from dataclasses import dataclass
 
-import arviz as az
-import emcee
 import numpy as np
-import pandas as pd
 
 from gyrocal.inference.fit.estimate import linearize_all
 from gyrocal.inference.fit.likelihood import (
@@ -30,113 +27,15 @@ from gyrocal.inference.fit.likelihood import (
     total,
 )
 from gyrocal.inference.noise import segments
-from gyrocal.inference.noise.covariance import JITTER_SCALE, log_sigma_of, noise_labels, ratios_of, variances
-from gyrocal.inference.sampling.budget import SamplingBudget
+from gyrocal.inference.noise.covariance import noise_labels, ratios_of, variances
+from gyrocal.inference.sampling.ensemble import SamplerResult, run_ensembles
 from gyrocal.inference.sampling.noisegrid import NoiseShapes, RatioGrid, ratio_curvature
-from gyrocal.inference.sampling.proposal import (
-    CollapsedProposal,
-    ConditionalCache,
-    SamplingError,
-    StudentProposal,
-    fitted_noise_proposal,
-)
-from gyrocal.io.calibration import parameter_rows
+from gyrocal.inference.sampling.priors import GROUP_SD_PRIOR_LOG_SD, GROUP_SD_PRIOR_MEDIAN, Priors
 from gyrocal.maneuvers.preprocess import noise_groups
-from gyrocal.model import priorfamily
 
-__all__ = [
-    "AUTOCORR_WINDOW_C", "DE_SHARE", "GM_FRACTION_LOGIT_SD", "GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDIAN",
-    "GROUP_SD_START_VARIANCE", "LOCAL_SCALE", "LOCAL_SHARE", "START_REDRAWS", "TAU_PRIOR_CENTER_S",
-    "TAU_PRIOR_LOG_SD", "LogPosterior", "Posterior", "Prepared", "Priors", "SamplerResult", "SamplingError",
-    "StudentProposal", "absolute", "leave_one_maneuver_out", "model_priors", "posterior_spec", "prepare", "run",
-    "run_ensembles", "start_covariance"
-]
+__all__ = ["GROUP_SD_START_VARIANCE", "LogPosterior", "Posterior", "Prepared", "absolute", "leave_one_maneuver_out",
+           "prepare", "run", "start_covariance"]
 
-
-GM_FRACTION_LOGIT_SD = 2.0
-"""Correlated star-tracker noise: sd of the logit of its Gauss-Markov share (12 % to 88 % within one sd)."""
-
-TAU_PRIOR_CENTER_S = 30.0
-"""Correlated star-tracker noise: the prior's median correlation time (s)."""
-
-TAU_PRIOR_LOG_SD = 2.0
-"""... and its log-normal sd: 4 s to 220 s within one sd, 0.5 s to 1 600 s within two."""
-
-
-@dataclass
-class Priors:
-    """The parameters' priors, normal or Student-t (``dof``, `gyrocal.model.priorfamily`; ``sd`` their
-    scale), with bounds that say what is physical (SI), and log-normal noise priors."""
-
-    mean: np.ndarray
-    sd: np.ndarray
-    bound: np.ndarray
-    log_sigma_center: np.ndarray
-    log_sigma_sd: np.ndarray
-    dof: np.ndarray | None = None
-    """Each parameter's prior degrees of freedom; None or ``inf``: normal."""
-
-    @property
-    def heavy(self) -> bool:
-        """Whether any parameter's prior is Student-t."""
-        return self.dof is not None and bool(priorfamily.heavy(self.dof).any())
-
-    def log_density(self, theta) -> np.ndarray:
-        """The parameters' log prior (W,) at ``theta`` (W, P), up to a constant."""
-        if not self.heavy:
-            return -0.5 * np.sum(((theta - self.mean) / self.sd) ** 2, axis=1)
-        return priorfamily.log_density((theta - self.mean) / self.sd, self.dof)
-
-    def gaussian_sd(self, theta_hat) -> np.ndarray:
-        """The sd of the normal prior that stands in for each where a Gaussian one is needed, about the
-        data's estimate ``theta_hat`` (`priorfamily.proposal_sd`): ``sd`` itself where all are normal."""
-        if not self.heavy:
-            return self.sd
-        return priorfamily.proposal_sd(self.sd, (np.asarray(theta_hat) - self.mean) / self.sd, self.dof)
-
-    @classmethod
-    def from_spec(cls, spec, stated_noise: dict, noise_log_sd: float) -> "Priors":
-        """The spec's priors (as declared, or overridden by `ModelSpec.with_priors`); the noise
-        scales' priors are centred on the stated noise. With correlated noise, the star tracker's
-        Gauss-Markov share has a logit-normal prior about one half (`GM_FRACTION_LOGIT_SD`), its
-        correlation time a log-normal one about `TAU_PRIOR_CENTER_S`."""
-        center, sd = log_sigma_of(stated_noise), np.full(3, float(noise_log_sd))  # the jitter's below
-        if spec.correlated_noise:
-            center = np.concatenate([center, [0.0, np.log(TAU_PRIOR_CENTER_S)]])
-            sd = np.concatenate([sd, [GM_FRACTION_LOGIT_SD, TAU_PRIOR_LOG_SD]])
-        if spec.jitter_noise:  # log-normal about the stated jitter, or the scale's own median (`JITTER_SCALE`)
-            center = log_sigma_of(stated_noise, jitter=True)
-            sd = np.append(sd, JITTER_SCALE.prior_log_sd)
-        return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, center, sd, spec.prior_dof)
-
-    @property
-    def log_ratio_sd(self) -> float:
-        """The prior sd of a white noise scale's log ratio to ``sigma_cross`` (two log scales'
-        difference): where the data do not tell a ratio, its spread is this."""
-        return np.sqrt(2.0) * self.log_sigma_sd[0]
-
-
-def posterior_spec(spec, priors_cfg: dict, prior_from=None):
-    """A point estimate's specification with the priors its posterior samples under: the declared
-    ones, overridden by the config and by an earlier campaign's ``calibration.csv``
-    (``prior_from``): its parameters' rows, never its derived combinations (a combination is no
-    parameter's prior: ``sf_mean`` is correlated with both scale factors)."""
-    earlier = parameter_rows(pd.read_csv(prior_from)) if prior_from else None
-    return spec.with_priors(priors_cfg, earlier, str(prior_from))
-
-
-def model_priors(estimate, priors_cfg: dict, prior_from=None) -> Priors:
-    """The priors of a point estimate's posterior (`posterior_spec`), its noise scales' centred on
-    its stated noise with the config's ``noise_log_sd``."""
-    spec = posterior_spec(estimate.spec, priors_cfg, prior_from)
-    return Priors.from_spec(spec, estimate.stated_noise, priors_cfg["noise_log_sd"])
-
-
-GROUP_SD_PRIOR_MEDIAN = 0.5
-"""Noise groups: the prior's median of the sd of the groups' log levels about the campaign's..."""
-
-GROUP_SD_PRIOR_LOG_SD = 1.0
-"""... and its log-normal sd (a spread of a factor 1.07 to 3.6 in noise within two sd)."""
 
 GROUP_SD_START_VARIANCE = 0.25
 """The start's variance of the log of that sd (few groups tell it to about half a unit)."""
@@ -231,124 +130,6 @@ def absolute(x):
     out = np.array(x, dtype=float, copy=True)
     out[..., 1:3] += out[..., :1]
     return out
-
-
-@dataclass
-class SamplerResult:
-    chains: np.ndarray
-    """(ensembles, steps, walkers, dim) production samples."""
-    tau: np.ndarray
-    """(ensembles, dim) integrated autocorrelation times, in steps."""
-    steps: int
-    burn: int
-    acceptance: np.ndarray
-    converged_length: bool
-    walkers: int
-
-
-AUTOCORR_WINDOW_C = 5.0
-"""Sokal's window constant, emcee's default for `emcee.autocorr.integrated_time`."""
-
-
-def _autocorr_times(chain) -> np.ndarray:
-    """emcee's integrated autocorrelation time per parameter of a (steps, walkers, dim) chain
-    (`emcee.autocorr.integrated_time`): the walkers' mean autocorrelation and Sokal's window, with
-    every walker and parameter in one FFT (`arviz.autocorr`) where emcee takes one at a time
-    (eight times as fast, the same times to 1e-15). A walker that never moves leaves its
-    parameter's time undefined (NaN), as in emcee. The caller compares the length with them."""
-    rho = az.autocorr(np.moveaxis(chain, 0, -1), axis=-1).mean(axis=0)
-    taus = 2.0 * np.cumsum(rho, axis=-1) - 1.0
-    tau = taus[np.arange(len(taus)), _sokal_window(taus, AUTOCORR_WINDOW_C)]
-    tau[np.any(np.ptp(chain, axis=0) == 0, axis=0)] = np.nan
-    return tau
-
-
-def _sokal_window(taus, c: float) -> np.ndarray:
-    """Each row's window: the first lag M with ``M >= c * tau(M)`` (lag 0 where no lag reaches it, as emcee's
-    argmin gives). emcee's ``auto_window`` (emcee 3.1, MIT licence, D. Foreman-Mackey and contributors)
-    over every row at once: it is not in ``emcee.autocorr.__all__``; tests/test_numerics.py pins the
-    times against `emcee.autocorr.integrated_time`."""
-    below = np.arange(taus.shape[-1]) < c * taus
-    return np.where(below.any(axis=-1), np.argmin(below, axis=-1), taus.shape[-1] - 1)
-
-
-DE_SHARE = 0.1
-LOCAL_SHARE = 0.2
-LOCAL_SCALE = 2.38
-"""Shares of differential-evolution moves and of the collapsed move's local steps (a random walk in the
-noise, ``LOCAL_SCALE / sqrt(k)`` times the fitted proposal's scale in k slots): they keep a walker moving
-where the independence proposal falls short (a misfit model, a ratio at its grid's edge, GM share and tau)."""
-
-
-def _sampler(logpost, walkers, dim, noise, seed):
-    """An emcee sampler with its own random state, seeded: numpy's global state is untouched. Moves: the
-    collapsed move about ``noise`` (`CollapsedProposal`), independent and local (`LOCAL_SHARE`), and DE."""
-    p = logpost.n_params
-    shared = ConditionalCache(logpost.conditional)
-    local = CollapsedProposal(shared, p, noise, LOCAL_SCALE / np.sqrt(dim - p))
-    moves = [(emcee.moves.MHMove(CollapsedProposal(shared, p, noise)), 1.0 - DE_SHARE - LOCAL_SHARE),
-             (emcee.moves.MHMove(local), LOCAL_SHARE), (emcee.moves.DEMove(), DE_SHARE)]
-    sampler = emcee.EnsembleSampler(walkers, dim, logpost, vectorize=True, moves=moves)
-    sampler.random_state = np.random.RandomState(seed).get_state()
-    return sampler
-
-
-START_REDRAWS = 100
-"""Start points with zero posterior density are redrawn at most this often, then sampling stops."""
-
-
-def run_ensembles(logpost: LogPosterior, proposal_mean, proposal_cov, cfg: dict, seed: int) -> SamplerResult:
-    """Independent emcee ensembles, run until every chain is k autocorrelation times long, or stopped
-    (`budget.SamplingStopped`: the reason, the times) once the budget cannot get there (`SamplingBudget`). Moves:
-    the collapsed move (`CollapsedProposal`: the noise from an independence proposal, the channel offsets from
-    their exact conditional) and differential evolution (`DE_SHARE`). Each ensemble burns in from the Laplace
-    approximation's noise block, fits its own noise proposal (`fitted_noise_proposal`) twice and keeps it for
-    production, so the ensembles stay independent; ensemble e's samplers and start points have seeds of their own."""
-    dim, budget = len(proposal_mean), SamplingBudget(cfg)  # its clock counts the burn-in
-    walkers = max(int(cfg["walkers"]), 2 * dim + 2)
-    walkers += walkers % 2
-    n_ens, burn = int(cfg["ensembles"]), int(cfg["burn_steps"])
-    chunk, multiple, max_steps = int(cfg["chunk_steps"]), float(cfg["min_tau_multiple"]), int(cfg["max_steps"])
-    laplace = StudentProposal(proposal_mean, proposal_cov)
-    start = StudentProposal(proposal_mean, proposal_cov, dof=5.0, inflate=2.0)
-    samplers = []
-    for e in range(n_ens):
-        sampler_seed = (seed * 7919 + e) % 2**32
-        rng = np.random.default_rng([seed, e])
-        p0 = start.draw(rng.standard_normal((walkers, dim)), rng.chisquare(start.dof, walkers))
-        bad = ~np.isfinite(logpost(p0))
-        for _ in range(START_REDRAWS):
-            if not bad.any():
-                break
-            p0[bad] = laplace.draw(rng.standard_normal((bad.sum(), dim)), rng.chisquare(laplace.dof, bad.sum()))
-            bad = ~np.isfinite(logpost(p0))
-        if bad.any():
-            valid = logpost.grid.valid
-            unfactored = ("" if valid.all() else f"; the noise's covariance is not positive definite at "
-                          f"{(~valid).sum()} of {valid.size} of the grid's nodes, which leaves little of it")
-            raise SamplingError(f"posterior: after {START_REDRAWS} redraws, {bad.sum()} of {walkers} start points of "
-                                f"ensemble {e} still have zero posterior density (outside the physical bounds or the "
-                                f"noise-ratio grid{unfactored}): the point estimate is not a usable start")
-        p = logpost.n_params
-        noise, state = StudentProposal(proposal_mean[p:], proposal_cov[p:, p:]), p0
-        for _ in range(2):
-            warm = _sampler(logpost, walkers, dim, noise, sampler_seed)
-            state = warm.run_mcmc(state, burn // 2)
-            noise = fitted_noise_proposal(warm.get_chain(discard=burn // 4, flat=True)[:, p:])
-        samplers.append([_sampler(logpost, walkers, dim, noise, sampler_seed), state])
-    steps = 0
-    while True:
-        n_new = int(cfg["initial_steps"]) if steps == 0 else chunk
-        for pair in samplers:
-            pair[1] = pair[0].run_mcmc(pair[1], n_new)
-        steps += n_new
-        tau = np.array([_autocorr_times(s.get_chain()) for s, _ in samplers])
-        if steps >= multiple * tau.max() or steps + chunk > max_steps:
-            break
-        budget.check(steps, tau)
-    chains = np.stack([s.get_chain() for s, _ in samplers])
-    acceptance = np.array([s.acceptance_fraction.mean() for s, _ in samplers])
-    return SamplerResult(chains, tau, steps, burn, acceptance, bool(steps >= multiple * tau.max()), walkers)
 
 
 def start_covariance(cond_cov, n_obs, ratio_sd):

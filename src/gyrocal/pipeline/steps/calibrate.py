@@ -8,19 +8,19 @@ from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.io.calibration import calibration_table, posterior_mean_params
 from gyrocal.io.outputs import write_csv, write_json
 from gyrocal.model.correction import campaign_correction
-from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.steps.common import load_maneuvers
 
 __all__ = ["run"]
 
 
-def run(paths: CampaignPaths, maneuver_ids, model: str):
-    """``calibration.csv`` per the contract and the correction file for every channel set."""
-    out = paths.model(model)
-    maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
-    est = PointEstimate.load(out.point_estimate, linearizations=False)
-    table = calibration_table(est.spec, est.theta, pd.read_csv(out.summary).set_index("label"))
-    write_csv(table, out.calibration)
+def run(maneuver_files, point_estimate_npz, summary_csv, calibration_csv, correction_json):
+    """``calibration_csv`` per the contract, from the point estimate's specification and the posterior's
+    ``summary_csv``, and the correction file ``correction_json`` for every channel set of the maneuvers
+    (``maneuver_files``, the preprocessed ``.npz``)."""
+    maneuvers = load_maneuvers(maneuver_files)
+    est = PointEstimate.load(point_estimate_npz, linearizations=False)
+    table = calibration_table(est.spec, est.theta, pd.read_csv(summary_csv).set_index("label"))
+    write_csv(table, calibration_csv)
     doc = campaign_correction(posterior_mean_params(est.spec, table), maneuvers, "posterior mean")
     doc["gyrocal_version"] = __version__
-    write_json(doc, out.correction)
+    write_json(doc, correction_json)

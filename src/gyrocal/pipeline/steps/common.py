@@ -14,8 +14,8 @@ from gyrocal.io.outputs import write_json, write_text
 from gyrocal.maneuvers import preprocess
 from gyrocal.pipeline.steps import REFUSED
 
-__all__ = ["VARIANT_STEPS", "compared", "finish", "load_maneuvers", "peak_rss", "read_json", "read_refusal", "refusal",
-           "refusals", "skip", "start", "variant_step"]
+__all__ = ["REFUSAL_KEYS", "VARIANT_STEPS", "compared", "finish", "load_maneuvers", "peak_rss", "read_json", "read_refusal",
+           "refusal", "refusals", "skip", "start", "variant_step"]
 
 log = logging.getLogger("gyrocal")
 
@@ -43,10 +43,15 @@ def start(log_path):
 def finish():
     """End a workflow step's process once its outputs are written: flush the logs and exit at once.
 
-    The interpreter's teardown, which frees every module and object one by one, took 0.2-0.6 s
-    per job (more than some steps' own work, and 2 s on the default run's critical path) with
-    nothing left to do: every output is already written whole and closed (`gyrocal.io.outputs`).
-    A step that fails never gets here, and exits as Python does.
+    ``os._exit`` stays on purpose: it is no workaround for a hang. At this point only the main thread
+    is alive (no pool, timer or writer thread is left), and a normal exit does end; but the
+    interpreter's teardown, which frees every module and object one by one, costs a job its
+    imports' worth of time with nothing left to do: 5.5 s against 0.2 s for a process holding the
+    posterior and report steps' imports (arviz, xarray, h5netcdf, matplotlib) on the loaded 2-core
+    machine, 0.2-0.6 s per job on an idle one (more than some steps' own work, and 2 s on the
+    default run's critical path). Every output is already written whole and closed
+    (`gyrocal.io.outputs`), and the logs are flushed here first. A step that fails never gets here,
+    and exits as Python does.
 
     First it records the job's peak resident memory (`peak_rss`) in its log and in
     ``<log without .log>.peak_rss.json`` beside it (and beside the rule's benchmark file):
@@ -95,21 +100,37 @@ VARIANT_STEPS = ("point_estimate", "posterior", "diagnostics")
 """A model variant's steps, in order; the first starts the variant afresh."""
 
 
-def read_refusal(paths, model) -> dict | None:
-    """A variant's refusal record (``<model>/refused.json``), or None where it was not refused."""
-    path = Path(paths.model(model).refusal)
-    return read_json(path) if path.is_file() else None
+REFUSAL_KEYS = ("model", "status", "step", "reason")
+"""A variant's refusal record (``refused.json``, and every later file of the variant in place of its
+results; ``gyrocal/io/schemas/refusal.schema.json``)."""
 
 
-def refusals(paths, models) -> dict:
-    """The refusal records of the variants ``models`` that have one, by model, in their order."""
-    return {m: r for m in models if (r := read_refusal(paths, m)) is not None}
+def read_refusal(path) -> dict | None:
+    """The refusal record in ``path`` (a variant's ``refused.json``, or any file of a refused variant,
+    which holds the record in place of its results), or None where there is none: the file is missing
+    or holds results."""
+    path = Path(path)
+    if not path.is_file():
+        return None
+    with open(path, "rb") as handle:
+        head = handle.read(1)
+    if head != b"{":  # a result: a .npz, .nc or .csv, or a JSON result other than a record
+        return None
+    doc = read_json(path)
+    return doc if isinstance(doc, dict) and sorted(doc) == sorted(REFUSAL_KEYS) else None
 
 
-def compared(paths, models) -> list:
-    """The variants ``models`` that were not refused, in their order (the first the comparison's
-    reference); refused with every variant's reason where none is left."""
-    records = refusals(paths, models)
+def refusals(models, files) -> dict:
+    """The refusal records of the variants ``models`` whose file in ``files`` (one per model, in their
+    order: any file every variant's run writes, as the report's rule gives its diagnostics) holds one,
+    by model, in their order."""
+    return {m: r for m, f in zip(models, files, strict=True) if (r := read_refusal(f)) is not None}
+
+
+def compared(models, files) -> list:
+    """The variants ``models`` that were not refused (`refusals` of their ``files``), in their order
+    (the first the comparison's reference); refused with every variant's reason where none is left."""
+    records = refusals(models, files)
     kept = [m for m in models if m not in records]
     if not kept:
         raise InputError("every model variant was refused or skipped, so there is nothing to review: "
@@ -124,18 +145,17 @@ def skip(reason: str):
     raise VariantSkipped(reason)
 
 
-def variant_step(paths, model: str, step: str, run, outputs=()) -> dict | None:
+def variant_step(record_path, model: str, step: str, run, outputs=()) -> dict | None:
     """Run one step of a model variant (``run()``, a `VARIANT_STEPS` step) so that a refused variant
     does not stop the others: refused input (`gyrocal.errors.InputError`; a variant skipped because
     the data cannot inform what it adds, `gyrocal.checks.fit.VariantSkipped`) is written to the
-    variant's ``refused.json`` (model, status refused or skipped, step, reason) and logged; a later
-    step of a variant refused earlier does not run. Either way each of ``outputs`` (the files the
-    workflow's rule declares) is written with that record in place of its results. Returns the
-    record, or None where the step ran."""
-    record_path = paths.model(model).refusal
+    variant's refusal record ``record_path`` (its ``refused.json``: model, status refused or skipped,
+    step, reason) and logged; a later step of a variant refused earlier does not run. Either way each
+    of ``outputs`` (the files the workflow's rule declares) is written with that record in place of
+    its results. Returns the record, or None where the step ran."""
     if step == VARIANT_STEPS[0]:
         Path(record_path).unlink(missing_ok=True)  # a new point estimate: an earlier refusal no longer holds
-    record = read_refusal(paths, model)
+    record = read_refusal(record_path)
     if record is None:
         try:
             run()

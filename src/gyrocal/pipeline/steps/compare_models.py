@@ -4,32 +4,33 @@ import pandas as pd
 
 from gyrocal.criticism import comparison
 from gyrocal.io.outputs import write_csv, write_with
-from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import ModelChoiceSettings
 from gyrocal.pipeline.steps.common import compared, read_json
 
 __all__ = ["run", "table"]
 
 
-def table(paths: CampaignPaths, models, reject_se: float) -> pd.DataFrame:
-    """The comparison of the variants ``models`` (`gyrocal.criticism.comparison.compare`) from their
-    files; a variant refused or skipped (its ``refused.json``) is left out, the first one left is the
-    reference."""
-    models = compared(paths, models)
-    each = [paths.model(m) for m in models]
-    return comparison.compare(list(models), [pd.read_csv(m.elpd_blocks) for m in each],
-                              [read_json(m.diagnostics) for m in each],
-                              [pd.read_csv(m.summary).set_index("label") for m in each],
-                              [pd.read_csv(m.elpd_maneuvers)["elpd"].to_numpy() for m in each], reject_se)
+def table(models, files, reject_se: float) -> pd.DataFrame:
+    """The comparison of the variants ``models`` (`gyrocal.criticism.comparison.compare`): residual RMS,
+    PSIS-LOO and exact leave-one-maneuver-out per variant, what moved, which variants are plausible and
+    which one is reviewed. ``files``: each model's files by their `ModelPaths` name, a list in the order
+    of ``models`` each (``elpd_blocks``, ``diagnostics``, ``summary``, ``elpd_maneuvers``: a rule's
+    ``snakemake.input``, or `CampaignPaths.per_model`). A variant refused or skipped (its diagnostics
+    hold its refusal record) is left out; the first one left is the reference."""
+    kept = compared(models, files.diagnostics)
+    each = [list(models).index(m) for m in kept]
+    return comparison.compare(kept, [pd.read_csv(files.elpd_blocks[i]) for i in each],
+                              [read_json(files.diagnostics[i]) for i in each],
+                              [pd.read_csv(files.summary[i]).set_index("label") for i in each],
+                              [pd.read_csv(files.elpd_maneuvers[i])["elpd"].to_numpy() for i in each], reject_se)
 
 
-def run(paths: CampaignPaths, models, settings: ModelChoiceSettings):
-    """``model_comparison.csv``: residual RMS, PSIS-LOO (each model's ``elpd_blocks.csv``) and exact
-    leave-one-maneuver-out per variant, what moved, which variants are plausible and which one is
-    reviewed (`table`); and its figure."""
+def run(models, files, out_csv, out_png, settings: ModelChoiceSettings):
+    """``out_csv`` (``model_comparison.csv``): the comparison of the variants ``models`` from their
+    ``files`` (`table`); and its figure, ``out_png``."""
     from gyrocal.report import figures as plots  # matplotlib: not for the loop's step, which reads `table` alone
 
-    table_ = table(paths, models, settings.reject_se)
-    write_csv(table_, paths.comparison)
+    table_ = table(models, files, settings.reject_se)
+    write_csv(table_, out_csv)
     fig = plots.comparison_figure(table_)
-    write_with(lambda handle: plots.save(fig, handle), paths.comparison_figure)
+    write_with(lambda handle: plots.save(fig, handle), out_png)

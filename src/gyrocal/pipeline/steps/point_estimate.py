@@ -9,7 +9,6 @@ from gyrocal.inference.noise.covariance import noise_knowledge, stated_scales
 from gyrocal.io.outputs import write_with
 from gyrocal.model import effects
 from gyrocal.model.spec import ModelSpec
-from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import PointEstimateSettings
 from gyrocal.pipeline.steps.common import load_maneuvers, read_json
 
@@ -18,15 +17,16 @@ __all__ = ["run"]
 log = logging.getLogger("gyrocal")
 
 
-def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PointEstimateSettings):
+def run(maneuver_files, input_json, out_npz, model: str, settings: PointEstimateSettings):
     """The full-trajectory WLS of one model, started from the classic estimate, with the default
     priors of the campaign's gyro sensor class (``campaign.yaml``'s ``gyro.sensor_class``); saved
     with the model's specification, the noise knowledge it used and its linearisation. The classic
     start is computed here, for the model's own specification (a tenth of a second). A variant whose
-    added parameters are all prior-only is skipped (`check_variant_informed`) before it is saved."""
-    maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
+    added parameters are all prior-only is skipped (`check_variant_informed`) before it is saved.
+    ``maneuver_files``: the preprocessed ``.npz``, in the campaign's order; saved to ``out_npz``."""
+    maneuvers = load_maneuvers(maneuver_files)
     fx = effects.resolve(model, settings.effects, effects.load_plugins(settings.plugins or []))
-    info = read_json(paths.input_json)
+    info = read_json(input_json)
     model_spec = ModelSpec.build(model, fx, maneuvers[0].channels).with_sensor_class(info["gyro"].get("sensor_class"))
     stated = noise_knowledge(info, settings.noise)
     est = point_estimate(maneuvers, model_spec, stated, classic.classic_start(maneuvers, model_spec),
@@ -39,4 +39,4 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PointEstimateS
         log.info("star-tracker noise correlation time: %.2f s", est.correlation_time_s)
     log.info("WLS: %s (%d evaluations); noise %s", est.message, est.nfev,
              stated_scales(est.log_sigma))
-    write_with(est.save, paths.model(model).point_estimate)
+    write_with(est.save, out_npz)

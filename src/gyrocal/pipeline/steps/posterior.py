@@ -6,25 +6,29 @@ from gyrocal.checks import fit as checks
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.sampling import inferencedata, posterior
 from gyrocal.inference.sampling.budget import SamplingStopped
+from gyrocal.inference.sampling.priors import model_priors
+from gyrocal.inference.sampling.proposal import SamplingError
 from gyrocal.io.outputs import atomic, write_csv, write_json
 from gyrocal.model import effects
-from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.paths import ModelPaths
 from gyrocal.pipeline.settings import PosteriorSettings
 from gyrocal.pipeline.steps.common import load_maneuvers
 
 __all__ = ["run"]
 
 
-def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSettings):
+def run(maneuver_files, point_estimate_npz, out: ModelPaths, settings: PosteriorSettings):
     """Sample the posterior (refused where the data do not identify a parameter at the fitted noise, or
     stopped with the reason where the sampler's budget cannot converge: `gyrocal.checks.fit`), check
     convergence, save InferenceData, summary, model fit, the exact leave-one-maneuver-out predictive
     densities and PSIS-LOO per block (here, where arviz and the InferenceData already are, so that the
-    comparison of the models needs neither)."""
-    out, s = paths.model(model), settings
-    maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
-    est = PointEstimate.load(out.point_estimate, effects.known(s.plugins))
-    priors = posterior.model_priors(est, s.priors, s.prior_from)
+    comparison of the models needs neither). ``maneuver_files``: the preprocessed ``.npz``, in the
+    campaign's order; ``out``: where each output goes, by its `ModelPaths` name (a `ModelPaths`, or the
+    rule's ``snakemake.output``, whose names are those)."""
+    s = settings
+    maneuvers = load_maneuvers(maneuver_files)
+    est = PointEstimate.load(point_estimate_npz, effects.known(s.plugins))
+    priors = model_priors(est, s.priors, s.prior_from)
     checks.check_blocks(maneuvers, s.sampler["block_s"])
     checks.check_noise(maneuvers, est)
     checks.check_physical(maneuvers, est, priors.bound)
@@ -35,7 +39,7 @@ def run(paths: CampaignPaths, maneuver_ids, model: str, settings: PosteriorSetti
         post = posterior.run(ready, s.sampler, s.seed)
     except SamplingStopped as stopped:
         raise checks.sampling_stopped(stopped, est, weakest, ready.labels) from None
-    except posterior.SamplingError as failed:
+    except SamplingError as failed:
         raise checks.sampling_failed(failed, maneuvers, est) from None
     idata, summary, fit, record = inferencedata.assemble(post, maneuvers, s.sampler, s.convergence, s.seed)
     blocks = inferencedata.loo_blocks(idata, est.spec.model)

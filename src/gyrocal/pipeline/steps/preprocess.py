@@ -5,7 +5,6 @@ process per maneuver spent most of its time starting up and reading the whole ca
 
 import json
 import logging
-from pathlib import Path
 
 from scipy.spatial.transform import Rotation
 
@@ -15,7 +14,7 @@ from gyrocal.inference.noise.covariance import noise_knowledge
 from gyrocal.io import telemetry
 from gyrocal.io.outputs import atomic_dir, write_csv
 from gyrocal.maneuvers import preprocess
-from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.paths import REFERENCE_INTERVAL
 from gyrocal.pipeline.steps.common import read_json
 from gyrocal.report import figures as plots
 
@@ -24,18 +23,18 @@ __all__ = ["run"]
 log = logging.getLogger("gyrocal")
 
 
-def run(campaign_dir, paths: CampaignPaths, figures=True, processes: int = 1, campaign=None,
+def run(campaign_dir, input_json, out_dir, figures=True, processes: int = 1, campaign=None,
         reference_interval_s=0.0, noise=None) -> list:
     """Slice every maneuver of the campaign (in its order), leaving out the star-tracker outliers
-    that validation listed and the samples between those kept every ``reference_interval_s``
+    that validation listed (in ``input_json``) and the samples between those kept every ``reference_interval_s``
     seconds (0: every one; ``"auto"``: as `interval.sliced` chooses from the data, with the config's
     ``noise`` where campaign.yaml states none); propagate every channel set nominally; write
     ``<id>.npz``, ``<id>.csv``, ``reference_interval.json`` and (unless ``figures`` is false: the
-    validation study reads none) ``<id>.png`` into ``paths.preprocess``, whole or not at all. The
+    validation study reads none) ``<id>.png`` into the folder ``out_dir``, whole or not at all. The
     figures, most of the step's time, are drawn by ``processes`` processes (`plots.render_all`).
     ``campaign``: the directory's campaign as `telemetry.read_campaign` read it, where the caller has
     it. Returns the maneuver ids, in the campaign's order."""
-    info = read_json(paths.input_json)
+    info = read_json(input_json)
     if campaign is None:
         campaign = telemetry.read_campaign(campaign_dir)
     if info["mounting"]:
@@ -46,7 +45,7 @@ def run(campaign_dir, paths: CampaignPaths, figures=True, processes: int = 1, ca
     maneuvers, record = interval.sliced(campaign, outliers, seconds, stated, info["gyro"].get("sensor_class"))
     capped = [m for m, r in record.get("maneuvers", {}).items() if r["interval_s"] != record["interval_s"]]
     log.log(logging.WARNING if capped else logging.INFO, "reference interval: %s", record["reason"])
-    with atomic_dir(paths.preprocess) as tmp:
+    with atomic_dir(out_dir) as tmp:
         drawings = []
         for m, data in zip(campaign.maneuvers, maneuvers):
             table = preprocess.error_table(data)
@@ -54,7 +53,7 @@ def run(campaign_dir, paths: CampaignPaths, figures=True, processes: int = 1, ca
             write_csv(table, tmp / f"{m.id}.csv")
             if figures:
                 drawings.append(("maneuver_figure", (table, f"{campaign.name}: {m.id} ({m.turn}), nominal parameters")))
-        (tmp / Path(paths.reference_interval).name).write_text(json.dumps(record, indent=1))
+        (tmp / REFERENCE_INTERVAL).write_text(json.dumps(record, indent=1))
         for m, image in zip(campaign.maneuvers, plots.render_all(drawings, processes, dpi=plots.SAVE_DPI)):
             (tmp / f"{m.id}.png").write_bytes(image)
     return [m.id for m in campaign.maneuvers]

@@ -1,6 +1,7 @@
 """Rule ``report``: the pre-uplink review of a campaign and its verdict."""
 
 from pathlib import Path
+from types import SimpleNamespace
 
 import arviz as az
 import pandas as pd
@@ -8,9 +9,9 @@ import xarray as xr
 
 from gyrocal.criticism import extension, modelchoice, priorconflict, verdict
 from gyrocal.inference.fit.estimate import PointEstimate
-from gyrocal.inference.sampling.posterior import posterior_spec
+from gyrocal.inference.sampling.priors import posterior_spec
 from gyrocal.io.outputs import write_json, write_text
-from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.paths import REFERENCE_INTERVAL, maneuver_files
 from gyrocal.pipeline.settings import ReportSettings
 from gyrocal.pipeline.steps.common import compared, load_maneuvers, read_json, refusals
 from gyrocal.report import review
@@ -18,9 +19,15 @@ from gyrocal.report import review
 __all__ = ["run"]
 
 
-def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, truth_json=None, processes: int = 1):
-    """``report.html``: the pre-uplink review of a campaign (see `gyrocal.report.review`), and its verdict
-    with the checks behind it in ``verdict.json``, for scripts and fleets.
+def run(models, files, preprocessed, maneuver_ids, input_json, comparison_csv, out_html, out_verdict,
+        settings: ReportSettings, truth_json=None, processes: int = 1, extensions=None):
+    """``out_html`` (``report.html``): the pre-uplink review of a campaign (see `gyrocal.report.review`), and
+    its verdict with the checks behind it in ``out_verdict`` (``verdict.json``), for scripts and fleets.
+
+    ``files``: each model's files by their `ModelPaths` name, a list in the order of ``models`` each (the
+    report rule's ``snakemake.input``, or `CampaignPaths.per_model`); ``preprocessed``: the preprocess
+    step's folder, with the maneuvers ``maneuver_ids``; ``comparison_csv``: `compare_models`'s table;
+    ``extensions``: each loop step's ``extension.json`` by its variant name (the rule ``extended``'s).
 
     The checks are `gyrocal.criticism.verdict`'s findings on the reviewed model (the one
     ``model_comparison.csv`` names); the report renders them. Every model's ``calibration.csv``
@@ -28,39 +35,41 @@ def run(paths: CampaignPaths, maneuver_ids, models, settings: ReportSettings, tr
     reasons. Its figures are drawn by ``processes`` processes.
     """
     cfg = settings.config
-    refused = list(refusals(paths, models).values())
-    steps = [(m, read_json(paths.model(m).extension)) for m in models if Path(paths.model(m).extension).is_file()]
-    models = compared(paths, models)
-    fitted = [(m, s) for m, s in steps if m in models]
-    table = pd.read_csv(paths.comparison)
+    models = list(models)
+    refused = list(refusals(models, files.diagnostics).values())
+    kept = compared(models, files.diagnostics)
+    steps = [(m, read_json(path)) for m, path in (extensions or {}).items()]
+    fitted = [(m, s) for m, s in steps if m in kept]
+    table = pd.read_csv(comparison_csv)
     model = str(table.loc[table["reviewed"], "model"].iloc[0])
-    files = paths.model(model)
-    calibrations = {m: pd.read_csv(paths.model(m).calibration) for m in models}
-    maneuvers = load_maneuvers(paths.maneuvers(maneuver_ids))
-    est = PointEstimate.load(files.point_estimate, linearizations=False)
-    info, diagnostics, sampler = read_json(paths.input_json), read_json(files.diagnostics), read_json(files.sampler)
+    reviewed = SimpleNamespace(**{name: getattr(files, name)[models.index(model)]
+                                  for name in ("point_estimate", "posterior", "fit", "sampler", "correction", "diagnostics")})
+    calibrations = {m: pd.read_csv(files.calibration[models.index(m)]) for m in kept}
+    maneuvers = load_maneuvers(maneuver_files(preprocessed, maneuver_ids))
+    est = PointEstimate.load(reviewed.point_estimate, linearizations=False)
+    info, diagnostics, sampler = read_json(input_json), read_json(reviewed.diagnostics), read_json(reviewed.sampler)
     effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases)
     used = posterior_spec(est.spec, cfg["priors"], cfg.get("prior_from"))
     conflict = priorconflict.conflict_check(priorconflict.conflict_table(used, est.theta, est.cov, calibrations[model]))
     findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg, conflict,
                               info["gyro"].get("sensor_class"))
     # its posterior group alone (the predictive draws are 100 MB at 10x), in memory: forked processes draw
-    with xr.open_dataset(files.posterior, group="posterior", engine="h5netcdf") as group:
+    with xr.open_dataset(reviewed.posterior, group="posterior", engine="h5netcdf") as group:
         posterior = az.InferenceData(posterior=group.load())
     shown = {m for name, step in fitted for m in (step["base"], name)}  # each fitted step's model before and after
-    loop = extension.before_after(fitted, {m: read_json(paths.model(m).diagnostics) for m in shown},
-                                  {m: pd.read_csv(paths.model(m).fit) for m in shown}, table)
+    loop = extension.before_after(fitted, {m: read_json(files.diagnostics[models.index(m)]) for m in shown},
+                                  {m: pd.read_csv(files.fit[models.index(m)]) for m in shown}, table)
     disagreement = modelchoice.disagreement_table(modelchoice.typed(table), calibrations, verdict.informed_core(est.spec),
                                                   cfg["model_choice"]["agree_sd"],
                                                   verdict.width_limits(cfg["report"], est.spec))
     inputs = review.ReviewInputs(
         model=model, spec=used, maneuvers=maneuvers,
-        tables=[pd.read_csv(p) for p in paths.maneuvers(maneuver_ids, "csv")],
-        calibration=calibrations[model], fit=pd.read_csv(files.fit), posterior=posterior, diagnostics=diagnostics,
-        sampler=sampler, correction=read_json(files.correction), correction_path=files.correction,
+        tables=[pd.read_csv(p) for p in maneuver_files(preprocessed, maneuver_ids, "csv")],
+        calibration=calibrations[model], fit=pd.read_csv(reviewed.fit), posterior=posterior, diagnostics=diagnostics,
+        sampler=sampler, correction=read_json(reviewed.correction), correction_path=reviewed.correction,
         comparison=table, info=info, config=cfg, findings=findings, effect_table=effect,
         truth=read_json(truth_json)["parameters"] if truth_json else None, refused=refused,
-        reference_interval=read_json(paths.reference_interval) if Path(paths.reference_interval).exists() else None,
+        reference_interval=read_json(interval) if (interval := Path(preprocessed, REFERENCE_INTERVAL)).exists() else None,
         loop=loop, loop_steps=[step for _, step in steps], disagreement=disagreement)
-    write_text(review.render(review.build_context(inputs, processes)), paths.report)
-    write_json(verdict.verdict(info["campaign"], model, findings), paths.verdict)
+    write_text(review.render(review.build_context(inputs, processes)), out_html)
+    write_json(verdict.verdict(info["campaign"], model, findings), out_verdict)

@@ -7,18 +7,18 @@ from dataclasses import asdict
 from gyrocal import __version__, checks
 from gyrocal.io import telemetry
 from gyrocal.io.outputs import write_json
-from gyrocal.pipeline.paths import CampaignPaths
 
 __all__ = ["run"]
 
 log = logging.getLogger("gyrocal")
 
 
-def run(campaign_dir, paths: CampaignPaths, campaign=None, block_s: float | None = None):
+def run(campaign_dir, input_json, campaign=None, block_s: float | None = None):
     """Read the campaign (unless given ``campaign``, as `telemetry.read_campaign` read it) and
     check its format and physics (`gyrocal.checks`; with the sampler's ``block_s``, also that every
     maneuver is long enough for the leave-one-block-out predictive); record what was read, the
-    warnings, the star-tracker outliers to leave out, its noise knowledge and the files' checksums."""
+    warnings, the star-tracker outliers to leave out, its noise knowledge and the files' checksums in
+    ``input_json``."""
     campaign, findings = checks.read_checked(campaign_dir, campaign, block_s)
     log.info("%s", checks.summary(campaign, findings))
     write_json({
@@ -38,4 +38,4 @@ def run(campaign_dir, paths: CampaignPaths, campaign=None, block_s: float | None
         "star_tracker": campaign.star_tracker,
         "gyro": campaign.gyro,
         "checksums_sha256": telemetry.checksums(campaign_dir),
-    }, paths.input_json)
+    }, input_json)

@@ -1,0 +1,139 @@
+"""The ensemble sampler: independent emcee ensembles with the collapsed move, run until every chain is
+long against its autocorrelation time, or stopped with the reason once the budget cannot get there."""
+
+from dataclasses import dataclass
+
+import arviz as az
+import emcee
+import numpy as np
+
+from gyrocal.inference.sampling.budget import SamplingBudget
+from gyrocal.inference.sampling.proposal import (
+    CollapsedProposal,
+    ConditionalCache,
+    SamplingError,
+    StudentProposal,
+    fitted_noise_proposal,
+)
+
+__all__ = ["AUTOCORR_WINDOW_C", "DE_SHARE", "LOCAL_SCALE", "LOCAL_SHARE", "START_REDRAWS", "SamplerResult",
+           "run_ensembles"]
+
+
+@dataclass
+class SamplerResult:
+    chains: np.ndarray
+    """(ensembles, steps, walkers, dim) production samples."""
+    tau: np.ndarray
+    """(ensembles, dim) integrated autocorrelation times, in steps."""
+    steps: int
+    burn: int
+    acceptance: np.ndarray
+    converged_length: bool
+    walkers: int
+
+
+AUTOCORR_WINDOW_C = 5.0
+"""Sokal's window constant, emcee's default for `emcee.autocorr.integrated_time`."""
+
+
+def _autocorr_times(chain) -> np.ndarray:
+    """emcee's integrated autocorrelation time per parameter of a (steps, walkers, dim) chain
+    (`emcee.autocorr.integrated_time`): the walkers' mean autocorrelation and Sokal's window, with
+    every walker and parameter in one FFT (`arviz.autocorr`) where emcee takes one at a time
+    (eight times as fast, the same times to 1e-15). A walker that never moves leaves its
+    parameter's time undefined (NaN), as in emcee. The caller compares the length with them."""
+    rho = az.autocorr(np.moveaxis(chain, 0, -1), axis=-1).mean(axis=0)
+    taus = 2.0 * np.cumsum(rho, axis=-1) - 1.0
+    tau = taus[np.arange(len(taus)), _sokal_window(taus, AUTOCORR_WINDOW_C)]
+    tau[np.any(np.ptp(chain, axis=0) == 0, axis=0)] = np.nan
+    return tau
+
+
+def _sokal_window(taus, c: float) -> np.ndarray:
+    """Each row's window: the first lag M with ``M >= c * tau(M)`` (lag 0 where no lag reaches it, as emcee's
+    argmin gives). emcee's ``auto_window`` (emcee 3.1, MIT licence, D. Foreman-Mackey and contributors)
+    over every row at once: it is not in ``emcee.autocorr.__all__``; tests/test_numerics.py pins the
+    times against `emcee.autocorr.integrated_time`."""
+    below = np.arange(taus.shape[-1]) < c * taus
+    return np.where(below.any(axis=-1), np.argmin(below, axis=-1), taus.shape[-1] - 1)
+
+
+DE_SHARE = 0.1
+LOCAL_SHARE = 0.2
+LOCAL_SCALE = 2.38
+"""Shares of differential-evolution moves and of the collapsed move's local steps (a random walk in the
+noise, ``LOCAL_SCALE / sqrt(k)`` times the fitted proposal's scale in k slots): they keep a walker moving
+where the independence proposal falls short (a misfit model, a ratio at its grid's edge, GM share and tau)."""
+
+
+def _sampler(logpost, walkers, dim, noise, seed):
+    """An emcee sampler with its own random state, seeded: numpy's global state is untouched. Moves: the
+    collapsed move about ``noise`` (`CollapsedProposal`), independent and local (`LOCAL_SHARE`), and DE."""
+    p = logpost.n_params
+    shared = ConditionalCache(logpost.conditional)
+    local = CollapsedProposal(shared, p, noise, LOCAL_SCALE / np.sqrt(dim - p))
+    moves = [(emcee.moves.MHMove(CollapsedProposal(shared, p, noise)), 1.0 - DE_SHARE - LOCAL_SHARE),
+             (emcee.moves.MHMove(local), LOCAL_SHARE), (emcee.moves.DEMove(), DE_SHARE)]
+    sampler = emcee.EnsembleSampler(walkers, dim, logpost, vectorize=True, moves=moves)
+    sampler.random_state = np.random.RandomState(seed).get_state()
+    return sampler
+
+
+START_REDRAWS = 100
+"""Start points with zero posterior density are redrawn at most this often, then sampling stops."""
+
+
+def run_ensembles(logpost, proposal_mean, proposal_cov, cfg: dict, seed: int) -> SamplerResult:
+    """Independent emcee ensembles of the log posterior ``logpost`` (`posterior.LogPosterior`), run until
+    every chain is k autocorrelation times long, or stopped (`budget.SamplingStopped`: the reason, the
+    times) once the budget cannot get there (`SamplingBudget`). Moves:
+    the collapsed move (`CollapsedProposal`: the noise from an independence proposal, the channel offsets from
+    their exact conditional) and differential evolution (`DE_SHARE`). Each ensemble burns in from the Laplace
+    approximation's noise block, fits its own noise proposal (`fitted_noise_proposal`) twice and keeps it for
+    production, so the ensembles stay independent; ensemble e's samplers and start points have seeds of their own."""
+    dim, budget = len(proposal_mean), SamplingBudget(cfg)  # its clock counts the burn-in
+    walkers = max(int(cfg["walkers"]), 2 * dim + 2)
+    walkers += walkers % 2
+    n_ens, burn = int(cfg["ensembles"]), int(cfg["burn_steps"])
+    chunk, multiple, max_steps = int(cfg["chunk_steps"]), float(cfg["min_tau_multiple"]), int(cfg["max_steps"])
+    laplace = StudentProposal(proposal_mean, proposal_cov)
+    start = StudentProposal(proposal_mean, proposal_cov, dof=5.0, inflate=2.0)
+    samplers = []
+    for e in range(n_ens):
+        sampler_seed = (seed * 7919 + e) % 2**32
+        rng = np.random.default_rng([seed, e])
+        p0 = start.draw(rng.standard_normal((walkers, dim)), rng.chisquare(start.dof, walkers))
+        bad = ~np.isfinite(logpost(p0))
+        for _ in range(START_REDRAWS):
+            if not bad.any():
+                break
+            p0[bad] = laplace.draw(rng.standard_normal((bad.sum(), dim)), rng.chisquare(laplace.dof, bad.sum()))
+            bad = ~np.isfinite(logpost(p0))
+        if bad.any():
+            valid = logpost.grid.valid
+            unfactored = ("" if valid.all() else f"; the noise's covariance is not positive definite at "
+                          f"{(~valid).sum()} of {valid.size} of the grid's nodes, which leaves little of it")
+            raise SamplingError(f"posterior: after {START_REDRAWS} redraws, {bad.sum()} of {walkers} start points of "
+                                f"ensemble {e} still have zero posterior density (outside the physical bounds or the "
+                                f"noise-ratio grid{unfactored}): the point estimate is not a usable start")
+        p = logpost.n_params
+        noise, state = StudentProposal(proposal_mean[p:], proposal_cov[p:, p:]), p0
+        for _ in range(2):
+            warm = _sampler(logpost, walkers, dim, noise, sampler_seed)
+            state = warm.run_mcmc(state, burn // 2)
+            noise = fitted_noise_proposal(warm.get_chain(discard=burn // 4, flat=True)[:, p:])
+        samplers.append([_sampler(logpost, walkers, dim, noise, sampler_seed), state])
+    steps = 0
+    while True:
+        n_new = int(cfg["initial_steps"]) if steps == 0 else chunk
+        for pair in samplers:
+            pair[1] = pair[0].run_mcmc(pair[1], n_new)
+        steps += n_new
+        tau = np.array([_autocorr_times(s.get_chain()) for s, _ in samplers])
+        if steps >= multiple * tau.max() or steps + chunk > max_steps:
+            break
+        budget.check(steps, tau)
+    chains = np.stack([s.get_chain() for s, _ in samplers])
+    acceptance = np.array([s.acceptance_fraction.mean() for s, _ in samplers])
+    return SamplerResult(chains, tau, steps, burn, acceptance, bool(steps >= multiple * tau.max()), walkers)

@@ -1,0 +1,101 @@
+"""The posterior's priors: each parameter's, normal or Student-t at the scale its `gyrocal.model.spec`
+declares (or the config, or an earlier campaign's calibration, overrides), and the noise scales'
+log-normal ones about the stated noise."""
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from gyrocal.inference.noise.covariance import JITTER_SCALE, log_sigma_of
+from gyrocal.io.calibration import parameter_rows
+from gyrocal.model import priorfamily
+
+__all__ = ["GM_FRACTION_LOGIT_SD", "GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDIAN", "TAU_PRIOR_CENTER_S",
+           "TAU_PRIOR_LOG_SD", "Priors", "model_priors", "posterior_spec"]
+
+
+GM_FRACTION_LOGIT_SD = 2.0
+"""Correlated star-tracker noise: sd of the logit of its Gauss-Markov share (12 % to 88 % within one sd)."""
+
+TAU_PRIOR_CENTER_S = 30.0
+"""Correlated star-tracker noise: the prior's median correlation time (s)."""
+
+TAU_PRIOR_LOG_SD = 2.0
+"""... and its log-normal sd: 4 s to 220 s within one sd, 0.5 s to 1 600 s within two."""
+
+
+@dataclass
+class Priors:
+    """The parameters' priors, normal or Student-t (``dof``, `gyrocal.model.priorfamily`; ``sd`` their
+    scale), with bounds that say what is physical (SI), and log-normal noise priors."""
+
+    mean: np.ndarray
+    sd: np.ndarray
+    bound: np.ndarray
+    log_sigma_center: np.ndarray
+    log_sigma_sd: np.ndarray
+    dof: np.ndarray | None = None
+    """Each parameter's prior degrees of freedom; None or ``inf``: normal."""
+
+    @property
+    def heavy(self) -> bool:
+        """Whether any parameter's prior is Student-t."""
+        return self.dof is not None and bool(priorfamily.heavy(self.dof).any())
+
+    def log_density(self, theta) -> np.ndarray:
+        """The parameters' log prior (W,) at ``theta`` (W, P), up to a constant."""
+        if not self.heavy:
+            return -0.5 * np.sum(((theta - self.mean) / self.sd) ** 2, axis=1)
+        return priorfamily.log_density((theta - self.mean) / self.sd, self.dof)
+
+    def gaussian_sd(self, theta_hat) -> np.ndarray:
+        """The sd of the normal prior that stands in for each where a Gaussian one is needed, about the
+        data's estimate ``theta_hat`` (`priorfamily.proposal_sd`): ``sd`` itself where all are normal."""
+        if not self.heavy:
+            return self.sd
+        return priorfamily.proposal_sd(self.sd, (np.asarray(theta_hat) - self.mean) / self.sd, self.dof)
+
+    @classmethod
+    def from_spec(cls, spec, stated_noise: dict, noise_log_sd: float) -> "Priors":
+        """The spec's priors (as declared, or overridden by `ModelSpec.with_priors`); the noise
+        scales' priors are centred on the stated noise. With correlated noise, the star tracker's
+        Gauss-Markov share has a logit-normal prior about one half (`GM_FRACTION_LOGIT_SD`), its
+        correlation time a log-normal one about `TAU_PRIOR_CENTER_S`."""
+        center, sd = log_sigma_of(stated_noise), np.full(3, float(noise_log_sd))  # the jitter's below
+        if spec.correlated_noise:
+            center = np.concatenate([center, [0.0, np.log(TAU_PRIOR_CENTER_S)]])
+            sd = np.concatenate([sd, [GM_FRACTION_LOGIT_SD, TAU_PRIOR_LOG_SD]])
+        if spec.jitter_noise:  # log-normal about the stated jitter, or the scale's own median (`JITTER_SCALE`)
+            center = log_sigma_of(stated_noise, jitter=True)
+            sd = np.append(sd, JITTER_SCALE.prior_log_sd)
+        return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, center, sd, spec.prior_dof)
+
+    @property
+    def log_ratio_sd(self) -> float:
+        """The prior sd of a white noise scale's log ratio to ``sigma_cross`` (two log scales'
+        difference): where the data do not tell a ratio, its spread is this."""
+        return np.sqrt(2.0) * self.log_sigma_sd[0]
+
+
+def posterior_spec(spec, priors_cfg: dict, prior_from=None):
+    """A point estimate's specification with the priors its posterior samples under: the declared
+    ones, overridden by the config and by an earlier campaign's ``calibration.csv``
+    (``prior_from``): its parameters' rows, never its derived combinations (a combination is no
+    parameter's prior: ``sf_mean`` is correlated with both scale factors)."""
+    earlier = parameter_rows(pd.read_csv(prior_from)) if prior_from else None
+    return spec.with_priors(priors_cfg, earlier, str(prior_from))
+
+
+def model_priors(estimate, priors_cfg: dict, prior_from=None) -> Priors:
+    """The priors of a point estimate's posterior (`posterior_spec`), its noise scales' centred on
+    its stated noise with the config's ``noise_log_sd``."""
+    spec = posterior_spec(estimate.spec, priors_cfg, prior_from)
+    return Priors.from_spec(spec, estimate.stated_noise, priors_cfg["noise_log_sd"])
+
+
+GROUP_SD_PRIOR_MEDIAN = 0.5
+"""Noise groups: the prior's median of the sd of the groups' log levels about the campaign's..."""
+
+GROUP_SD_PRIOR_LOG_SD = 1.0
+"""... and its log-normal sd (a spread of a factor 1.07 to 3.6 in noise within two sd)."""
