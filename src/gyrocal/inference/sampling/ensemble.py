@@ -112,7 +112,7 @@ def run_ensembles(logpost, proposal_mean, proposal_cov, cfg: dict, seed: int) ->
             bad = ~np.isfinite(logpost(p0))
         if bad.any():
             valid = logpost.grid.valid
-            unfactored = ("" if valid.all() else f"; the noise's covariance is not positive definite at "
+            unfactored = ("" if valid is None or valid.all() else f"; the noise's covariance is not positive definite at "
                           f"{(~valid).sum()} of {valid.size} of the grid's nodes, which leaves little of it")
             raise SamplingError(f"posterior: after {START_REDRAWS} redraws, {bad.sum()} of {walkers} start points of "
                                 f"ensemble {e} still have zero posterior density (outside the physical bounds or the "

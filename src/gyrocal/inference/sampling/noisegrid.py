@@ -84,6 +84,10 @@ class RatioGrid:
     and the log says where; `SamplingError` where no node can be.
     """
 
+    valid = None
+    """Per node (flat index): whether its covariance could be factored and its statistics are finite
+    (None: every node)."""
+
     def __init__(self, noises, center, sd, nodes: int, half_width_sd: float, groups=None):
         shapes = noises if isinstance(noises, NoiseShapes) else NoiseShapes(noises, groups=groups)
         center = np.asarray(center, dtype=float)
@@ -98,7 +102,6 @@ class RatioGrid:
         self.step = 2 * half_width / (nodes - 1)
         self.values = None
         self.valid = np.ones(nodes**self.dims, dtype=bool)
-        """Per node (flat index): whether its covariance could be factored and its statistics are finite."""
         self._last = None
         """The last `stats` call's ratios, interpolated rows and inside mask (`_interpolated`)."""
         inner = (nodes,) * (self.dims - 1) if shapes.correlated else (nodes,) * self.dims
@@ -164,7 +167,7 @@ class RatioGrid:
                 product = product * w1[:, d, offsets[d]]
         weights = np.zeros((len(ratios), self.nodes**self.dims))
         np.put_along_axis(weights, flat, product, axis=1)
-        if not self.valid.all():  # a node left out may only have no weight
+        if self.valid is not None and not self.valid.all():  # a node left out may only have no weight
             inside &= np.all(self.valid[flat] | (product == 0), axis=1)
         return weights, inside
 
