@@ -1,13 +1,14 @@
 """The posterior, sampled with emcee: its priors, the noise grid, the proposals, the ensembles, the
 budget that stops a chain that will not converge, the posterior predictive and the InferenceData written from it.
 
-The names below are imported when first asked for, not with the package: a step that needs one
-module of it (the diagnostics' `predictive`, the point estimate's nothing) does not import arviz and
-emcee (1.5-2 s of CPU per job)."""
+The package imports none of its modules itself: a step that needs one of them (the diagnostics'
+`predictive`) does not import arviz and emcee with it (1.5-2 s of CPU per job). The names it used to
+take from them (`assemble`, `Posterior`, `Prepared`, `Priors`, `model_priors`, `prepare`, `run`) are
+still there, imported when first asked for."""
 
 import importlib
 
-__all__ = ["Posterior", "Prepared", "Priors", "assemble", "model_priors", "prepare", "run"]
+__all__ = ["budget", "ensemble", "inferencedata", "noisegrid", "posterior", "predictive", "priors", "proposal"]
 
 _FROM = {"assemble": "inferencedata", "Posterior": "posterior", "Prepared": "posterior", "prepare": "posterior",
          "run": "posterior", "Priors": "priors", "model_priors": "priors"}

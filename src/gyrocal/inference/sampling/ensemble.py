@@ -111,7 +111,7 @@ def run_ensembles(logpost, proposal_mean, proposal_cov, cfg: dict, seed: int) ->
             p0[bad] = laplace.draw(rng.standard_normal((bad.sum(), dim)), rng.chisquare(laplace.dof, bad.sum()))
             bad = ~np.isfinite(logpost(p0))
         if bad.any():
-            valid = logpost.grid.valid
+            valid = getattr(getattr(logpost, "grid", None), "valid", None)
             unfactored = ("" if valid is None or valid.all() else f"; the noise's covariance is not positive definite at "
                           f"{(~valid).sum()} of {valid.size} of the grid's nodes, which leaves little of it")
             raise SamplingError(f"posterior: after {START_REDRAWS} redraws, {bad.sum()} of {walkers} start points of "
