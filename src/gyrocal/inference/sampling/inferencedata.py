@@ -25,20 +25,17 @@ from gyrocal.inference.noise.covariance import (
     stated_scales,
 )
 from gyrocal.inference.sampling import predictive
+from gyrocal.inference.sampling.predictive import PARETO_K_MAX
 from gyrocal.maneuvers import preprocess
 from gyrocal.model import channels as ch
 from gyrocal.model import combinations, orthogonality
 from gyrocal.model.correction import flown_sets
 from gyrocal.model.units import AXES, rad_to_arcsec
 
-__all__ = ["CI_PROB", "PARETO_K_MAX", "assemble", "combination_summary", "loo", "loo_blocks", "orthogonality_summary",
+__all__ = ["CI_PROB", "assemble", "combination_summary", "loo", "loo_blocks", "orthogonality_summary",
            "posterior_dataset", "sampler_record", "summarize"]
 
 log = logging.getLogger("gyrocal")
-
-PARETO_K_MAX = 0.7
-"""Above this Pareto k a block's PSIS estimate is unreliable (Vehtari et al. 2017)."""
-
 
 def loo(idata, model: str):
     """PSIS-LOO of one model (arviz). arviz warns about blocks with Pareto k > `PARETO_K_MAX` (the
