@@ -167,6 +167,13 @@ def rate_line(name: str, given: pd.Series, verdicts: pd.Series, event: str, targ
     return f"| {name} | {k} / {n} | {k / n if n else np.nan:.3f} | [{lo:.3f}, {hi:.3f}] | {target} |"
 
 
+def rms_z(group: pd.DataFrame) -> str:
+    """The root mean square of every recorded term's z in ``group``'s records (1 where the intervals are
+    calibrated); empty where no record holds them."""
+    z = [t["z"] for terms in group.get("channel_terms", pd.Series(dtype=object)).dropna() for t in terms]
+    return f"{np.sqrt(np.mean(np.square(z))):.2f}" if z else ""
+
+
 def summary(out: Path) -> str:
     frame = pd.DataFrame([json.loads(p.read_text()) for p in sorted(out.glob("*.json"))])
     reviewed = frame[frame["verdict"].isin(["GO", "NO-GO"])].copy()
@@ -188,15 +195,17 @@ def summary(out: Path) -> str:
               rate_line("P(NO-GO \\| every term inside its own 95 % interval) (per term)", reviewed["covered"],
                         verdicts, "NO-GO", "<= 10 %")]
     lines += ["", "| kind | campaigns | right (family-wise) | covered (per term) | GO | GO while wrong | "
-              "NO-GO while right | GO while missed (per term) | NO-GO while covered (per term) |",
-              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
+              "NO-GO while right | GO while missed (per term) | NO-GO while covered (per term) | "
+              "terms outside their 95 % | rms z |",
+              "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"]
     for kind, g in reviewed.groupby("kind"):
         go, no_go = g["verdict"] == "GO", g["verdict"] == "NO-GO"
         right = g["right"] & g["max_abs_z"].notna()
         wrong = ~g["right"] & g["max_abs_z"].notna()
         lines.append(f"| {kind} | {len(g)} | {int(right.sum())} | {int(g['covered'].sum())} | {int(go.sum())} | "
                      f"{int((go & wrong).sum())} | {int((no_go & right).sum())} | "
-                     f"{int((go & ~g['covered']).sum())} | {int((no_go & g['covered']).sum())} |")
+                     f"{int((go & ~g['covered']).sum())} | {int((no_go & g['covered']).sum())} | "
+                     f"{(g['terms'] - g['held']).sum() / g['terms'].sum():.3f} | {rms_z(g)} |")
     for label, given in (("right (family-wise)", reviewed["right"] & has_z), ("covered (per term)", reviewed["covered"])):
         sub = reviewed[(reviewed["verdict"] == "NO-GO") & given]
         reasons = Counter(check for failed in sub["failed"] for check in failed)
