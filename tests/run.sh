@@ -5,7 +5,7 @@
 #   bash tests/run.sh --full     every test but the studies and Slurm: the statistical integration tests
 #                                with the default sampler settings too
 #   bash tests/run.sh -m slow    the long statistical studies
-# Any other arguments go to pytest. Installs gyrocal with its test and docs extras (and Chromium for the
+# Any other arguments go to pytest. Installs gyrocal with its workflow, test and docs extras (and Chromium for the
 # browser test) first.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,7 +19,7 @@ fi
 # One BLAS thread per process, as Snakemake gives each one-thread rule: numpy's and scipy's OpenBLAS
 # otherwise spin two threads each on the posterior's small products (4x the CPU on a 2-core machine).
 export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"
-python -m pip install --quiet -e ".[test,docs]"
+python -m pip install --quiet -e ".[workflow,test,docs]"
 python -m ruff check .
 lint-imports --no-logo --no-cache
 python -m snakemake --lint >/dev/null 2>&1 || python -m snakemake --lint

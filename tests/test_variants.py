@@ -78,7 +78,7 @@ def test_a_single_short_trial_skips_bias_drift_and_with_nothing_left_the_review_
     assert record["status"] == "skipped" and record["step"] == "point_estimate"
     assert record["reason"].startswith("model bias_drift skipped: every parameter its bias_drift adds is prior-only")
     assert "of its prior's information" in record["reason"]
-    assert not (tmp_path / "out" / "bias_drift" / "posterior.nc").exists()
+    assert json.loads((tmp_path / "out" / "bias_drift" / "posterior.nc").read_text()) == record  # sampled nothing
     with pytest.raises(InputError, match=r"every model variant was refused or skipped.*\[bias_drift, skipped at "
                                          r"point_estimate\] model bias_drift skipped"):
         run.review_campaign(paths, ids, cfg, ["bias_drift"])

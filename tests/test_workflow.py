@@ -144,6 +144,16 @@ def test_gyrocal_run_refuses_a_bad_setting_naming_its_key_before_any_job(setting
     assert not (tmp_path / ".snakemake").exists()  # Snakemake never started
 
 
+def test_gyrocal_run_without_snakemake_says_to_install_the_workflow_extra(tmp_path):
+    """The library installs without Snakemake (the ``workflow`` extra); ``gyrocal run`` then says so."""
+    hidden = ("import sys; sys.modules['snakemake'] = None; from gyrocal.pipeline import cli; "
+              "sys.argv = ['gyrocal', 'run', '-n']; sys.exit(cli.entry())")
+    run = subprocess.run([sys.executable, "-c", hidden], capture_output=True, text=True, check=False, cwd=tmp_path)
+    assert run.returncode == 2 and "Traceback" not in run.stderr
+    assert run.stderr.startswith("gyrocal run: error: gyrocal run needs Snakemake"), run.stderr
+    assert 'pip install -e ".[workflow]"' in run.stderr
+
+
 def test_a_deleted_intermediate_file_is_redone_by_the_plain_rerun(tiny, workflow_run, tmp_path):
     work = tmp_path / "work"
     shutil.copytree(workflow_run, work, symlinks=True)  # copy2: the same times, so the copy is as complete

@@ -4,6 +4,7 @@ becomes one key of a small config file given to Snakemake last, over ``config/co
 ``--configfile``; the merged config is checked against the workflow's schema first, so a bad value is
 refused naming its key before any job starts."""
 
+import importlib.util
 import os
 import subprocess
 import sys
@@ -103,7 +104,11 @@ def check_config(config: dict, schema_path: Path, sets: dict):
 def run(sets=(), configfiles=(), snakemake_args=()) -> int:
     """Run the workflow (``snakemake`` with ``snakemake_args``) with ``configfiles`` and the ``--set``
     assignments ``sets`` over the default config, once the merged config passes the schema; Snakemake's
-    exit status."""
+    exit status. Refused, saying how to install it, where Snakemake is not installed (the ``workflow``
+    extra: the library alone does not need it)."""
+    if importlib.util.find_spec("snakemake") is None:
+        raise InputError("gyrocal run needs Snakemake, which the library does not: install the workflow extra, "
+                         "pip install -e \".[workflow]\" (or pip install snakemake)")
     root = workflow_root()
     given = overlay(sets)
     check_config(merged_config(root, configfiles, given), root / SCHEMA, given)
