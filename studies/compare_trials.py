@@ -1,24 +1,32 @@
 """Do two trials of the same IMU agree (issue 42's must-show)? For each channel, ``sf_mean``,
-``sf_pos`` and ``sf_neg`` of two runs' posteriors (``posterior.nc``, the draws of `gyrocal`'s
-posterior step), and the z of their difference, ``(a - b) / sqrt(sd_a^2 + sd_b^2)``; sf_mean's sd
-from the draws of (sf_pos + sf_neg) / 2, so that the two terms' correlation is kept.
+``sf_pos`` and ``sf_neg``, and for each pair of a channel set its non-orthogonality (90 deg less the
+angle between the two sensing axes, `gyrocal.model.orthogonality`, arcsec), from two runs'
+posteriors (``posterior.nc``, the draws of `gyrocal`'s posterior step, with the run's
+``point_estimate.npz`` and ``correction.json`` beside it for the spec and the channel sets), and the
+z of their difference, ``(a - b) / sqrt(sd_a^2 + sd_b^2)``. Each derived quantity is computed draw
+by draw (sf_mean = (sf_pos + sf_neg) / 2; the non-orthogonality from the misalignments), so that the
+terms' correlation is kept. Neither depends on the reference frame, so the two runs' estimated
+mountings need no turning (the misalignments themselves do: ``gyrocal compare-campaigns``).
+``prior_part`` marks a row with a prior-only part in either run (a y-only trial leaves the
+misalignments toward pitch's neighbours' opposite terms to the prior): its z says little.
 
-    python studies/compare_trials.py results/slow/baseline/posterior.nc results/fast/baseline/posterior.nc
+    python studies/compare_trials.py results/slow/baseline results/fast/baseline
 """
 
 import argparse
+import json
 from pathlib import Path
 
 import arviz as az
 import numpy as np
 import pandas as pd
 
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.model import orthogonality
 
-def scale_factors(path: Path) -> pd.DataFrame:
-    """Per channel and term (sf_pos, sf_neg, sf_mean): the posterior mean and sd (ppm)."""
-    draws = az.from_netcdf(path).posterior["channel_param"]
-    names = [str(n) for n in draws.coords["parameter"].values]
-    flat = draws.values.reshape(-1, len(names))
+
+def scale_factors(names, flat) -> list:
+    """Per channel and term (sf_pos, sf_neg, sf_mean): the draws (ppm), with whether a part is prior-only."""
     rows = []
     for channel in dict.fromkeys(n.split(".")[0] for n in names):
         terms = {t: flat[:, names.index(f"{channel}.{t}")] for t in ("sf_pos", "sf_neg") if f"{channel}.{t}" in names}
@@ -26,24 +34,53 @@ def scale_factors(path: Path) -> pd.DataFrame:
             terms = {"sf_mean": flat[:, names.index(f"{channel}.sf")]}
         elif len(terms) == 2:
             terms["sf_mean"] = (terms["sf_pos"] + terms["sf_neg"]) / 2
-        rows += [{"channel": channel, "term": t, "mean_ppm": float(v.mean()), "sd_ppm": float(v.std(ddof=1))}
-                 for t, v in terms.items()]
+        rows += [(channel, t, v) for t, v in terms.items()]
+    return rows
+
+
+def summaries(run: Path) -> pd.DataFrame:
+    """One run's (``<results>/<campaign>/<model>``) sf_pos, sf_neg, sf_mean and non-orthogonality: mean,
+    sd (from the draws) and unit, indexed by channel (or pair) and term."""
+    draws = az.from_netcdf(run / "posterior.nc").posterior["channel_param"]
+    names = [str(n) for n in draws.coords["parameter"].values]
+    flat = draws.values.reshape(-1, len(names))
+    spec = PointEstimate.load(run / "point_estimate.npz", linearizations=False).spec
+    prior_only = {p.label for p in spec.parameters if p.prior_only}
+    rows = [{"channel": c, "term": t, "unit": "ppm", "mean": float(v.mean()), "sd": float(v.std(ddof=1)),
+             "prior_part": any(label in prior_only for label in (f"{c}.sf_pos", f"{c}.sf_neg", f"{c}.sf")
+                               if t == "sf_mean" or label == f"{c}.{t}")}
+            for c, t, v in scale_factors(names, flat)]
+    sets = [tuple(s["channels"]) for s in json.loads((run / "correction.json").read_text())["sets"]]
+    pairs = orthogonality.pairs(spec, sets)
+    if pairs:
+        order = [names.index(label) for label in spec.labels]
+        values = orthogonality.pair_draws(flat[:, order], spec, pairs)
+        for k, p in enumerate(pairs):
+            (a, b), (i, j) = p.axes, p.channels
+            rows.append({"channel": "+".join(p.channels), "term": p.name, "unit": "arcsec",
+                         "mean": float(values[:, k].mean()), "sd": float(values[:, k].std(ddof=1)),
+                         "prior_part": f"{i}.mis_{b}" in prior_only or f"{j}.mis_{a}" in prior_only})
     return pd.DataFrame(rows).set_index(["channel", "term"])
 
 
 def compare(a: pd.DataFrame, b: pd.DataFrame) -> pd.DataFrame:
     """The two runs side by side and the z of their difference."""
-    both = a.merge(b, left_index=True, right_index=True, suffixes=("_a", "_b"))
-    both["z"] = (both.mean_ppm_a - both.mean_ppm_b) / np.hypot(both.sd_ppm_a, both.sd_ppm_b)
+    both = a.merge(b.drop(columns="unit"), left_index=True, right_index=True, suffixes=("_a", "_b"))
+    both["z"] = (both.mean_a - both.mean_b) / np.hypot(both.sd_a, both.sd_b)
+    both["prior_part"] = both.pop("prior_part_a") | both.pop("prior_part_b")
     return both
 
 
 def main():
     p = argparse.ArgumentParser()
-    p.add_argument("a", type=Path)
+    p.add_argument("a", type=Path, help="one run's model folder, results/<campaign>/<model>")
     p.add_argument("b", type=Path)
     a = p.parse_args()
-    print(compare(scale_factors(a.a), scale_factors(a.b)).round(2).to_string())
+    table = compare(summaries(a.a), summaries(a.b))
+    print(table.round(2).to_string())
+    informed = table[~table["prior_part"]]
+    print(f"largest |z| where no part is prior-only: {informed['z'].abs().max():.2f} over {len(informed)} terms; "
+          f"beyond 3: {int((informed['z'].abs() > 3).sum())}")
 
 
 if __name__ == "__main__":

@@ -182,3 +182,22 @@ def test_the_review_shows_the_loop_before_and_after(loop_run):
     assert z[1] < z[0] / 2
     reason = page.paragraphs["reviewed-why"].strip()
     assert reason.count(". ") == 0 and not re.search(r"\d+\.\d", reason)
+
+
+def test_a_latency_the_acceleration_signature_also_explains_is_ranked_first_and_extends_the_model():
+    """tests/data/hidden_st_latency.yaml at 50 ms, seed 7: the latency and the acceleration signature each
+    leave nothing significant given the other (leftover log10 p -0.49 and -0.01, noise), so the latency,
+    the more significant (one parameter against six), leads, and the loop fits it; ordered by the leftover
+    alone the signature would lead and the loop would stop at it."""
+    from gyrocal.study.baseline import baseline_ranking
+
+    scenario = simulate.load_scenario(DATA / "hidden_st_latency.yaml")
+    scenario["effects"]["st_latency_s"] = 0.05
+    cfg = yaml.safe_load((DATA.parents[1] / "config" / "config.yaml").read_text())
+    _, _, _, ranking = baseline_ranking(simulate.simulate(scenario)[0], cfg["noise"])
+    latency, signature = ranking[0], ranking[1]
+    assert (latency["name"], signature["name"]) == ("st_latency", "acceleration")
+    assert latency["log10_p"] < signature["log10_p"] < -1000
+    assert -2 < latency["leftover_log10_p"] < signature["leftover_log10_p"]
+    step = next_effect("baseline", BASE, {"misfit": True, "ranking": ranking}, cfg["diagnostics"]["structure_log10_p_min"])
+    assert step.effect == "st_latency"

@@ -165,23 +165,30 @@ def test_reml_recovers_the_gauss_markov_sd_and_correlation_time(tau_s, gm_arcsec
     assert fitted[4] == pytest.approx(tau_s, rel=0.4)
 
 
-def test_a_correlation_time_the_filter_cannot_hold_in_floating_point_is_out_of_the_remls_domain():
-    """Slewing 3 deg/s about x, then y, then z, a Gauss-Markov part of tau 1e5 s makes the 3x3 filter's
-    coefficients ~rate x tau: the banded Cholesky fails, and the REML's objective is inf there (the
-    scan tries the longest tau it allows), where at tau 30 s it is finite."""
+def _slewing(m=300):
+    """A tiny maneuver slewing 3 deg/s about x, then y, then z, one sample a second."""
     from test_numerics import tiny_linearization
 
     from gyrocal.inference import errormodel
-    from gyrocal.inference.fit import noisefit
 
-    lin = tiny_linearization(seed=1, m=300)
-    turn = [Rotation.from_rotvec(np.deg2rad(3.0) * np.eye(3)[(j // 100) % 3]) for j in range(1, 300)]
+    lin = tiny_linearization(seed=1, m=m)
+    turn = [Rotation.from_rotvec(np.deg2rad(3.0) * np.eye(3)[(j // (m // 3)) % 3]) for j in range(1, m)]
     attitudes = [Rotation.identity()]
     for step in turn:
         attitudes.append(attitudes[-1] * step)
     lin.st_matrix = np.array([r.as_matrix() for r in attitudes])
-    lin.st_dt = np.ones(300)
+    lin.st_dt = np.ones(m)
     lin.shared_walk = errormodel._shared_walk(2, lin.st_dt)
+    return lin
+
+
+def test_a_correlation_time_the_filter_cannot_hold_in_floating_point_is_out_of_the_remls_domain():
+    """Slewing 3 deg/s about x, then y, then z, a Gauss-Markov part of tau 1e5 s makes the 3x3 filter's
+    coefficients ~rate x tau: the banded Cholesky fails, and the REML's objective is inf there (the
+    scan tries the longest tau it allows), where at tau 30 s it is finite."""
+    from gyrocal.inference.fit import noisefit
+
+    lin = _slewing()
     for tau, finite in ((30.0, True), (1e5, False)):
         ratios = np.array([np.log(4.0), np.log(0.03), 0.0, np.log(tau)])
         assert np.isfinite(noisefit.finite_profile([covariance.build(lin, BORESIGHT, tau)], ratios)) == finite
@@ -245,3 +252,28 @@ def test_reml_profile_streams_the_maneuvers_to_the_same_bits():
     grouped = noisefit.profile_reml((covariance.build(lin, [0, 0, 1], 6.0) for lin in lins), ratios, np.array([0, 1, 1]))
     assert np.array_equal(grouped[1], noisefit.profile_reml(
         [covariance.build(lin, [0, 0, 1], 6.0) for lin in lins], ratios, np.array([0, 1, 1]))[1])
+
+
+def test_the_ratio_grid_leaves_out_the_correlation_times_the_filter_cannot_hold():
+    """The BROAD fast trial's extended model (tau 1973 s over 197 s, the grid over the prior) raised a raw
+    LinAlgError from the grid's banded Cholesky. On the tiny slew the grid's top tau node (e^11.4 = 9e4 s)
+    cannot be factored: it is left out, a point whose interpolation needs it is off the grid, the nodes
+    that factor hold the exact statistics, and the profile there is inf, not an exception."""
+    from gyrocal.inference.fit import likelihood
+    from gyrocal.inference.sampling.noisegrid import NoiseShapes, RatioGrid
+
+    lin = _slewing()
+    shapes = NoiseShapes([], [lin], BORESIGHT)
+    center = np.array([np.log(4.0), np.log(0.03), 0.0, np.log(30.0)])
+    grid = RatioGrid(shapes, center, np.array([0.1, 0.1, 0.1, 2.0]), 5, 4.0)
+    by_tau = grid.valid.reshape((5,) * 4)
+    assert by_tau[..., :4].all() and not by_tau[..., 4].all()
+    left_out = np.argwhere(~by_tau[1:4, 1:4, 1:4, 4])[0] + 1  # a node left out, its neighbours on the grid
+    near = grid.start + grid.step * np.append(left_out, 3.5)  # needs it; two tau nodes down, its cubic does not
+    A, b, c, logdet, inside = grid.stats(np.array([center, near, near - [0, 0, 0, 2 * grid.step[3]]]))
+    assert inside.tolist() == [True, False, True]
+    exact = likelihood.maneuver_stats(covariance.build(lin, BORESIGHT, 30.0), covariance.unit_variances(center))
+    np.testing.assert_allclose(logdet[0], exact.logdet, rtol=1e-12)
+    np.testing.assert_allclose(A[0], exact.A, rtol=1e-10)
+    np.testing.assert_allclose([*b[0], c[0]], [*exact.b, exact.c], rtol=1e-10)
+    assert shapes.profile(grid.start + grid.step * np.append(left_out, 4)) == np.inf

@@ -24,7 +24,8 @@ def test_snakemake_wildcards_pass_through_the_paths_unchanged():
 def test_a_campaigns_outputs_are_every_file_its_rules_declare_in_the_order_of_the_models():
     paths = CampaignPaths.under("out/mom")
     each = ["point_estimate.npz", "posterior.nc", "posterior_summary.csv", "fit.csv", "sampler.json",
-            "elpd_maneuvers.csv", "elpd_blocks.csv", "calibration.csv", "correction.json", "diagnostics.json"]
+            "elpd_maneuvers.csv", "elpd_blocks.csv", "orthogonality.csv", "calibration.csv", "correction.json",
+            "diagnostics.json"]
     assert paths.outputs(["baseline", "bias_drift"]) == [
         "out/mom/input.json", "out/mom/preprocess",
         *[f"out/mom/baseline/{f}" for f in each], *[f"out/mom/bias_drift/{f}" for f in each],

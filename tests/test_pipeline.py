@@ -18,6 +18,7 @@ from gyrocal.inference.sampling.priors import model_priors
 from gyrocal.io import calibration, telemetry
 from gyrocal.model import channels as ch
 from gyrocal.model import combinations, correction, effects
+from gyrocal.model.spec import ModelSpec
 from gyrocal.model.units import PPM
 from gyrocal.pipeline.paths import CampaignPaths
 from gyrocal.pipeline.settings import PosteriorSettings
@@ -292,6 +293,20 @@ def test_saved_linearisation_is_the_models_to_the_bit_and_older_files_still_load
     moved = dataclasses.replace(est, theta=est.theta + 1e-6)
     assert moved.linearize(maneuvers, 0) is not est.at_estimate[0]
     assert not np.array_equal(moved.linearize(maneuvers, 0).z, est.at_estimate[0].z)
+
+
+def test_a_trial_steps_residual_is_the_linearisations_z_to_the_bit(tiny_run):
+    """The WLS evaluates a trial step by `errormodel.residuals`, without the Jacobian: the same ``z``
+    as `errormodel.linearize`, with and without extra effects, at parameters away from the estimate."""
+    out, npz = tiny_run
+    maneuvers = common.load_maneuvers(npz)
+    est = PointEstimate.load(out / "baseline/point_estimate.npz", linearizations=False)
+    fx = effects.resolve("latency", ["scale_factor", "misalignment", "bias", "st_latency"], {})
+    for spec in (est.spec, ModelSpec.build("latency", fx, maneuvers[0].channels)):
+        theta = np.random.default_rng(2).normal(0.0, 1e-4, len(spec))
+        for m, data in enumerate(maneuvers):
+            z = errormodel.residuals(data, spec, theta, est.biases[m] + 1e-6)
+            assert z.tobytes() == errormodel.linearize(data, spec, theta, est.biases[m] + 1e-6).z.tobytes()
 
 
 def test_wls_given_its_start_linearisation_finds_the_same_estimate_to_the_bit(tiny_run):

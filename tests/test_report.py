@@ -40,9 +40,11 @@ def browser(report, shot):
 def test_default_campaign_review_says_go_with_the_papers_tables(mom_run):
     text = (mom_run[0] / "report.html").read_text()
     assert "class='verdict go'>GO<" in text
-    for table in ("table1", "table2", "table3", "checks", "ranking", "comparison", "before-after", "accounting"):
+    for table in ("table1", "table2", "table3", "checks", "ranking", "comparison", "before-after", "accounting",
+                  "orthogonality"):
         assert f'id="{table}"' in text or f"id='{table}'" in text
     assert "truth -1712" in text and "mc12" in text and "mis_roll" in text
+    assert "<td>dtg1_roll.mis_pitch + dtg2_pitch.mis_roll</td>" in text  # the selected set's first pair
     assert "<p id='confounded'>None: every pair is told apart.</p>" in text
     assert ("<p id='reference-interval'>Reference interval (reference_interval_s): Every reference sample is used: "
             "the nominal error is not smooth at the sampling interval") in text

@@ -17,7 +17,7 @@ import mutations
 from conftest import DATA, ROOT
 
 MODEL_FILES = ("point_estimate", "posterior", "summary", "fit", "sampler", "elpd_maneuvers", "elpd_blocks",
-               "calibration", "correction", "diagnostics")
+               "orthogonality", "calibration", "correction", "diagnostics")
 SNAKEMAKE = [sys.executable, "-m", "snakemake", "-s", str(ROOT / "workflow" / "Snakefile")]
 SHORT_CHAINS = str(DATA / "short_chains.yaml")
 """The runs here test the workflow's wiring and numbers, not convergence."""

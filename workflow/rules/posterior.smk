@@ -15,6 +15,7 @@ rule posterior:
         sampler=MODEL.sampler,
         elpd_maneuvers=MODEL.elpd_maneuvers,
         elpd_blocks=MODEL.elpd_blocks,
+        orthogonality=MODEL.orthogonality,
         calibration=report(
             MODEL.calibration,
             caption="../report/calibration.rst",

@@ -7,7 +7,7 @@ rule report:
     figures are drawn in parallel: it ends the run, when nothing else is left to use the cores."""
     input:
         **{name: model_files(name) for name in ("point_estimate", "posterior", "summary", "fit", "sampler",
-                                                "elpd_maneuvers", "elpd_blocks", "calibration", "correction",
+                                                "elpd_maneuvers", "elpd_blocks", "orthogonality", "calibration", "correction",
                                                 "diagnostics")},
         extension=[PATHS.model(m).extension for m in EXTENDED],
         preprocessed=PATHS.preprocess,

@@ -19,7 +19,7 @@ from gyrocal.model import units
 
 __all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "NOISE_RATIOS", "SHARE_BOUND_MARGIN", "EstimateError", "VariantSkipped",
            "check_blocks", "check_identified", "check_noise", "check_physical", "check_representable",
-           "check_variant_informed", "noise_beyond", "sampling_stopped", "share_at_bound"]
+           "check_variant_informed", "noise_beyond", "sampling_failed", "sampling_stopped", "share_at_bound"]
 
 
 class EstimateError(InputError):
@@ -266,6 +266,21 @@ def sampling_stopped(stopped, est: PointEstimate, notes: str, labels) -> Estimat
     return EstimateError(
         f"posterior of model {est.spec.model} stopped without converging: {stopped.reason}. Slowest: {slow}. "
         f"What the data leave weak: {notes or 'nothing stands out'}. Fly what is named, or leave this model out")
+
+
+def sampling_failed(failed, maneuvers, est: PointEstimate) -> EstimateError:
+    """The refusal of a posterior that cannot be sampled from its point estimate (`proposal.SamplingError`:
+    no start point on the noise-ratio grid, or no node of it whose covariance can be factored), with the
+    Gauss-Markov correlation time against the maneuvers' length where the model has one: far beyond
+    them, its filtered covariance is not positive definite in floating point (`markov`)."""
+    advice = "Leave this model out, or fly what makes its noise identifiable"
+    if est.spec.correlated_noise:
+        longest = max(float(d.st_time[-1] - d.st_time[0]) for d in maneuvers)
+        advice = (f"Its star-tracker Gauss-Markov correlation time is {est.correlation_time_s:.4g} s, "
+                  f"{est.correlation_time_s / longest:.3g} times the longest maneuver ({longest:.4g} s): a part that "
+                  "slow is an offset and a walk to these data, which the model's bias and the gyro's walk already "
+                  "hold. Leave st_correlated_noise out of this model, or fly maneuvers several correlation times long")
+    return EstimateError(f"posterior of model {est.spec.model} cannot be sampled: {failed}. {advice}")
 
 
 def _noise_words(est: PointEstimate) -> str:

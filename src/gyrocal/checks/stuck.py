@@ -10,7 +10,7 @@ the baseline effects declare; each by `DETECTION_SD` of the noise, so a clean ca
 flagged. Only data inside a maneuver are judged: nothing else is read."""
 
 import numpy as np
-from scipy.stats import norm
+from scipy.special import ndtri
 
 from gyrocal.checks.sensing import interval_rotations
 from gyrocal.finding import Findings
@@ -222,7 +222,7 @@ def _runs_rows(quat):
 def _spikes(campaign, windows, sf_bound, findings):
     lines, time = campaign.lines["gyro.csv"], campaign.gyro_time
     n_tests = sum(w.g_rows.size for w in windows) * len(campaign.channels)
-    z = max(DETECTION_SD, float(norm.isf(SPIKE_FALSE_ALARMS / (2 * max(n_tests, 1)))))
+    z = max(DETECTION_SD, float(-ndtri(SPIKE_FALSE_ALARMS / (2 * max(n_tests, 1)))))
     shown, mild = 0, []
     for w in windows:
         rows = w.g_rows[1:-1]

@@ -11,7 +11,7 @@ import numpy as np
 import pandas as pd
 
 from gyrocal.criticism.modelchoice import classify, paired_se, reviewed_model, stacking_weights
-from gyrocal.inference.sampling.inferencedata import PARETO_K_MAX
+from gyrocal.inference.sampling.predictive import PARETO_K_MAX
 
 __all__ = ["compare", "loo_totals", "moved"]
 

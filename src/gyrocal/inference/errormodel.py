@@ -43,6 +43,7 @@ __all__ = [
     "effect_derivatives",
     "effect_regressors",
     "linearize",
+    "residuals",
     "smoothed_columns",
     "view",
     "walk_steps"
@@ -165,26 +166,39 @@ def effect_regressors(data: ManeuverData, spec: ModelSpec):
     return gyro, star
 
 
-def _channel_derivatives(sub: ch.ChannelParams, u, phi, dt):
+def _inverse_responses(positive: np.ndarray, scale: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """(K, 3, 3) inverses of the response matrices ``scale[k, :, None] * rows``: one per pattern of
+    the channels' signs (at most eight), the same numbers as inverting each sample's matrix (the same
+    LAPACK solve on the same matrix), gathered per sample."""
+    pattern = positive @ (1 << np.arange(positive.shape[1]))
+    _, first, which = np.unique(pattern, return_index=True, return_inverse=True)
+    return np.linalg.inv(scale[first, :, None] * rows[None])[which.ravel()]
+
+
+def _channel_derivatives(sub: ch.ChannelParams, u, phi, dt, wanted):
     """d(body increment)/d(parameter) of one channel set (eq. 3 inverted), (K, 3) each.
 
-    Returns the channel-model terms keyed by ``(channel, name)`` (a symmetric ``sf``: the sum of
-    the two branches' columns), the set's three bias
+    Returns the channel-model terms keyed by ``(channel, name)`` for the keys in ``wanted`` (a
+    symmetric ``sf``: the sum of the two branches' columns), the set's three bias
     columns (K, 3, 3) and the inverse response matrices (K, 3, 3).
     """
     positive = (u - np.outer(dt, sub.bias_rad_s)) > 0
     scale = 1.0 + np.where(positive, sub.sf_pos, sub.sf_neg)
     rows = ch.response_rows(sub)
-    m_inv = np.linalg.inv(scale[:, :, None] * rows[None])
+    m_inv = _inverse_responses(positive, scale, rows)
     sensed = phi @ rows.T
     terms = {}
     for i, c in enumerate(sub.channels):
         w = -m_inv[:, :, i]
-        terms[c.name, "sf_pos"] = w * (sensed[:, i] * positive[:, i])[:, None]
-        terms[c.name, "sf_neg"] = w * (sensed[:, i] * ~positive[:, i])[:, None]
-        terms[c.name, "sf"] = terms[c.name, "sf_pos"] + terms[c.name, "sf_neg"]  # symmetric: both branches
+        if {(c.name, "sf_pos"), (c.name, "sf"), (c.name, "sf_neg")} & wanted:
+            pos = w * (sensed[:, i] * positive[:, i])[:, None]
+            neg = w * (sensed[:, i] * ~positive[:, i])[:, None]
+            terms[c.name, "sf_pos"], terms[c.name, "sf_neg"] = pos, neg
+            if (c.name, "sf") in wanted:
+                terms[c.name, "sf"] = pos + neg  # symmetric: both branches
         for b in c.other_axes:
-            terms[c.name, f"mis_{b}"] = w * (scale[:, i] * phi[:, ch.AXIS_INDEX[b]])[:, None]
+            if (c.name, f"mis_{b}") in wanted:
+                terms[c.name, f"mis_{b}"] = w * (scale[:, i] * phi[:, ch.AXIS_INDEX[b]])[:, None]
     return terms, -m_inv * dt[:, None, None], m_inv
 
 
@@ -208,24 +222,24 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
         slots = [names.index(n) for n in channel_set]
         sub = params.subset(channel_set)
         regressors = gyro_reg[:, slots, :]
-        u = data.set_increments(channel_set) - regressors @ extra_values
-        phi = ch.solve_body(u, sub, dt_s=data.dt)
-        attitudes = kinematics.propagate(Rotation.from_quat(data.attitude0_quat), phi)
-        terms, bias_columns, m_inv = _channel_derivatives(sub, u, phi, data.dt)
+        u, phi, attitudes, at_st, e, st_columns = _set_error(data, channel_set, sub, regressors, extra_values,
+                                                             star_reg, st_rot)
         core = [i for i, p in enumerate(spec.parameters[:spec.n_core]) if p.owner in channel_set]
-        columns = [terms[spec.parameters[i].owner, spec.parameters[i].name] for i in core]
-        columns += [bias_columns[:, :, i] for i in range(3)]
-        body_columns = np.concatenate([np.stack(columns, axis=2), -(m_inv @ regressors)], axis=2)
+        keys = [(spec.parameters[i].owner, spec.parameters[i].name) for i in core]
+        terms, bias_columns, m_inv = _channel_derivatives(sub, u, phi, data.dt, set(keys))
+        n = len(core)
+        body_columns = np.empty((len(phi), 3, n + 3 + regressors.shape[2]))
+        for j, key in enumerate(keys):
+            body_columns[:, :, j] = terms[key]
+        del terms
+        body_columns[:, :, n:n + 3] = bias_columns
+        body_columns[:, :, n + 3:] = -(m_inv @ regressors)
         mid = kinematics.compose(attitudes[:-1], Rotation.from_rotvec(0.5 * phi))
         inertial = mid.as_matrix() @ body_columns
         inertial = smoothed_columns(inertial, data.dt, data.st_time)
         at_st_jac = cumulative_at_st(inertial, k, frac)
-        at_st = kinematics.attitude_at(data.gyro_time, attitudes, phi, data.st_time)
-        e = kinematics.error_angles_rad(at_st, st_rot)
-        st_columns = at_st.as_matrix() @ star_reg
         body[:, s] = e - star_reg @ extra_values
         z[:, s] = at_st.apply(e) - st_columns @ extra_values
-        n = len(core)
         design[:, s][:, :, core] = at_st_jac[:, :, :n]
         bias_design[:, s][:, :, slots] = at_st_jac[:, :, n:n + 3]
         design[:, s, :, spec.extra] = at_st_jac[:, :, n + 3:] + st_columns
@@ -237,6 +251,35 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
     walk_var, shared = walk_steps(data.gyro_time, data.st_time)
     return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, None, body, walk_var,
                          np.concatenate([[0.0], shared]), st_rate)
+
+
+def _set_error(data: ManeuverData, channel_set, sub: ch.ChannelParams, regressors, extra_values, star_reg, st_rot):
+    """One channel set's body increments ``u`` and ``phi`` (eq. 3 inverted), its propagated attitudes, those
+    at the star-tracker samples, the error angles there (eq. 4) and the star tracker's effect columns:
+    what `linearize` and `residuals` share, computed alike (the same bits)."""
+    u = data.set_increments(channel_set) - regressors @ extra_values
+    phi = ch.solve_body(u, sub, dt_s=data.dt)
+    attitudes = kinematics.propagate(Rotation.from_quat(data.attitude0_quat), phi)
+    at_st = kinematics.attitude_at(data.gyro_time, attitudes, phi, data.st_time)
+    e = kinematics.error_angles_rad(at_st, st_rot)
+    return u, phi, attitudes, at_st, e, at_st.as_matrix() @ star_reg
+
+
+def residuals(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> np.ndarray:
+    """`linearize`'s ``z`` alone, (M, S, 3), the same to the bit, without the Jacobian: what a trial
+    step of the WLS needs (most of a linearisation's time is its derivative columns)."""
+    params = spec.channel_params(theta, bias_rad_s)
+    extra_values = np.asarray(theta, dtype=float)[spec.extra]
+    names = [c.name for c in spec.channels]
+    gyro_reg, star_reg = effect_regressors(data, spec)
+    st_rot = Rotation.from_quat(data.st_quat)
+    z = np.empty((len(data.st_time), len(data.sets), 3))
+    for s, channel_set in enumerate(data.sets):
+        regressors = gyro_reg[:, [names.index(n) for n in channel_set], :]
+        *_, at_st, e, st_columns = _set_error(data, channel_set, params.subset(channel_set), regressors, extra_values,
+                                             star_reg, st_rot)
+        z[:, s] = at_st.apply(e) - st_columns @ extra_values
+    return z
 
 
 def smoothed_columns(per_interval: np.ndarray, dt_s: np.ndarray, st_time_s: np.ndarray) -> np.ndarray:
@@ -256,7 +299,9 @@ def smoothed_columns(per_interval: np.ndarray, dt_s: np.ndarray, st_time_s: np.n
 def cumulative_at_st(per_interval: np.ndarray, k: np.ndarray, frac: np.ndarray) -> np.ndarray:
     """Running sum of per-gyro-interval terms, evaluated at the star-tracker samples
     (a sample inside interval k has the sum of the intervals before it plus its share)."""
-    cumulative = np.concatenate([np.zeros((1,) + per_interval.shape[1:]), np.cumsum(per_interval, axis=0)])
+    cumulative = np.empty((len(per_interval) + 1,) + per_interval.shape[1:])
+    cumulative[0] = 0.0
+    np.cumsum(per_interval, axis=0, out=cumulative[1:])
     return cumulative[k] + frac.reshape((-1,) + (1,) * (per_interval.ndim - 1)) * per_interval[k]
 
 

@@ -19,7 +19,7 @@ import numpy as np
 from gyrocal.model import channels as ch
 from gyrocal.model.units import AXES
 
-__all__ = ["CONVENTION", "apply", "campaign_correction", "correction_file", "correction_for_set"]
+__all__ = ["CONVENTION", "apply", "campaign_correction", "correction_file", "correction_for_set", "flown_sets"]
 
 CONVENTION = ("omega_body = misalignment_correction @ diag(scale_correction) @ w, w the bias-free "
               "rates of the set's channels (roll, pitch, yaw order); scale_correction takes "
@@ -62,9 +62,14 @@ def correction_file(params: ch.ChannelParams, sets, in_loop_sets, source: str) -
     return {"convention": CONVENTION, "estimate": source, "sets": entries}
 
 
+def flown_sets(maneuvers) -> list:
+    """Every channel set the campaign's maneuvers use (`channels.channel_sets` of each), each once, in
+    the order they come: the triads the correction and the non-orthogonality are given for."""
+    return list(dict.fromkeys(tuple(s) for d in maneuvers for s in d.sets))
+
+
 def campaign_correction(params: ch.ChannelParams, maneuvers, source: str) -> dict:
-    """`correction_file` for every channel set the campaign's maneuvers use; a set is in
+    """`correction_file` for every channel set the campaign's maneuvers use (`flown_sets`); a set is in
     the loop where some maneuver flew with it selected onboard."""
     in_loop = {tuple(d.sets[0]) for d in maneuvers}
-    sets = list(dict.fromkeys(tuple(s) for d in maneuvers for s in d.sets))
-    return correction_file(params, sets, in_loop, source)
+    return correction_file(params, flown_sets(maneuvers), in_loop, source)

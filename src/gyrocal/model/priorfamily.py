@@ -6,7 +6,6 @@ data that say it is larger (a 2 deg/h/h ramp under a scale of 0.5 is not pulled 
 log-prior, the sampler's proposal, the prior-data conflict and the plan derive from here."""
 
 import numpy as np
-from scipy.stats import norm, t
 
 __all__ = ["EFFECT_PRIOR_DOF", "heavy", "log_density", "proposal_sd", "tail_probability", "variance_factor"]
 
@@ -54,7 +53,11 @@ def proposal_sd(sd, z_hat, dof) -> np.ndarray:
 
 
 def tail_probability(z, dof) -> np.ndarray:
-    """Two-sided tail probability of ``|z|`` scales under the prior's family."""
+    """Two-sided tail probability of ``|z|`` scales under the prior's family. scipy.stats is imported
+    here, not with the module: every step imports the effects, and scipy.stats costs 0.5-1 s of each
+    job that needs nothing else of it (validate, preprocess, the point estimate)."""
+    from scipy.stats import norm, t
+
     z, dof = np.abs(np.asarray(z, dtype=float)), np.asarray(dof, dtype=float)
     return np.where(heavy(dof), 2.0 * t.sf(z, np.where(heavy(dof), dof, 1.0)), 2.0 * norm.sf(z))
 

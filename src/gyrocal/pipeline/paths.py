@@ -36,6 +36,8 @@ class ModelPaths:
     sampler = _under_root("sampler.json")
     elpd_maneuvers = _under_root("elpd_maneuvers.csv")
     elpd_blocks = _under_root("elpd_blocks.csv")
+    orthogonality = _under_root("orthogonality.csv", "The channel sets' non-orthogonality, beside "
+                                                     "``calibration.csv`` (`gyrocal.io.orthogonality`).")
     calibration = _under_root("calibration.csv")
     correction = _under_root("correction.json")
     diagnostics = _under_root("diagnostics.json")
@@ -46,7 +48,7 @@ class ModelPaths:
 
 
 MODEL_FILES = ("point_estimate", "posterior", "summary", "fit", "sampler", "elpd_maneuvers", "elpd_blocks",
-               "calibration", "correction", "diagnostics")
+               "orthogonality", "calibration", "correction", "diagnostics")
 """A model variant's result files, by their `ModelPaths` name, in the order its steps write them."""
 
 

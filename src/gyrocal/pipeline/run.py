@@ -52,8 +52,8 @@ def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=Non
 
 
 STEP_OUTPUTS = {"point_estimate": ("point_estimate",),
-                "posterior": ("posterior", "summary", "fit", "sampler", "elpd_maneuvers", "elpd_blocks", "calibration",
-                              "correction"),
+                "posterior": ("posterior", "summary", "fit", "sampler", "elpd_maneuvers", "elpd_blocks",
+                              "orthogonality", "calibration", "correction"),
                 "diagnostics": ("diagnostics",)}
 """A model step's files (`ModelPaths` names), as its rule declares them: a refused variant's hold its
 refusal record, here as in the workflow."""

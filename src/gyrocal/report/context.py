@@ -55,6 +55,8 @@ class ReviewInputs:
     """Every step of the loop (``extension.json``), fitted or not, with why."""
     disagreement: pd.DataFrame = field(default_factory=pd.DataFrame)
     """The model disagreement behind the sensitivity check (`gyrocal.criticism.modelchoice.disagreement_table`)."""
+    orthogonality: pd.DataFrame = field(default_factory=pd.DataFrame)
+    """The model's ``orthogonality.csv``: each channel set's non-orthogonality (`gyrocal.model.orthogonality`)."""
 
 
 @dataclass(frozen=True)
@@ -116,6 +118,8 @@ class ReviewContext:
     """The directions of the channel parameters left to the prior."""
     mounting_separability: pd.DataFrame
     """With an estimated mounting, which misalignment combinations it takes up; empty otherwise."""
+    orthogonality: pd.DataFrame
+    """Each channel set's non-orthogonality (``orthogonality.csv``), beside the channels' ``sf_mean``."""
     diagnostics: dict
     misfit_checks: pd.DataFrame
     ranking: pd.DataFrame

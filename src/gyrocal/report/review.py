@@ -30,8 +30,8 @@ from gyrocal.report import resolution
 from gyrocal.report.context import CorrectionSet, ReviewContext, ReviewInputs, campaign_words
 
 __all__ = [
-    "COMBINATION_HEADINGS", "EMBED_PNG", "ReviewContext", "ReviewInputs", "build_context", "channel_kind", "draw_all",
-    "embed_png", "entry", "fold", "html_table", "mounting_text", "number", "paper_tables", "render"
+    "COMBINATION_HEADINGS", "EMBED_PNG", "ORTHOGONALITY_SHOWN", "ReviewContext", "ReviewInputs", "build_context",
+    "channel_kind", "draw_all", "embed_png", "entry", "fold", "html_table", "mounting_text", "number", "paper_tables", "render"
 ]
 
 EMBED_PNG = {"dpi": 80, "pil_kwargs": {"compress_level": 3}}  # zlib 3: 28 % faster, 8 % larger
@@ -63,6 +63,9 @@ def entry(row, truth=None) -> str:
         text += f" (truth {truth:.0f}{'' if inside else ' OUTSIDE'})"
     return text
 
+
+ORTHOGONALITY_SHOWN = ("set", "channels", "parameter", "definition", "mean", "sd", "ci95_low", "ci95_high", "prior_only")
+"""The columns of ``orthogonality.csv`` the review shows (arcsec)."""
 
 COMBINATION_HEADINGS = {"sf_mean": "sf_mean = (sf_pos + sf_neg) / 2 (ppm)", "sf_asym": "sf_asym = sf_pos - sf_neg (ppm)"}
 """Table 2's columns of each channel's identifiable combinations (`gyrocal.model.combinations`)."""
@@ -190,6 +193,8 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         resolution_sentences=resolution.channel_sentences(spec, resolved, maneuvers),
         resolved_ratio_max=combinations.RESOLVED_RATIO_MAX, prior_directions=resolution.prior_directions(spec, cov),
         mounting_separability=resolution.mounting_table(spec, cov, info["mounting"]),
+        orthogonality=inputs.orthogonality[[c for c in ORTHOGONALITY_SHOWN if c in inputs.orthogonality]].round(
+            {"mean": 1, "sd": 1, "ci95_low": 1, "ci95_high": 1}),
         correlation_max=identification.CORRELATION_MAX,
         diagnostics=diagnostics, misfit_checks=pd.DataFrame(diagnostics["checks"]),
         ranking=pd.DataFrame(diagnostics["ranking"])[["name", "kind", "score", "chi2_drop", "df", "log10_p",

@@ -179,12 +179,20 @@ class _Whitened:
             self.point = x.tobytes()
         return self.lins
 
+    def _z(self, x) -> list:
+        """Each maneuver's ``z`` at ``x``: the kept linearisation's where it is at ``x``, else `errormodel.residuals`
+        (the same bits, without the Jacobian: a trial step that is not taken never needs one)."""
+        if x.tobytes() == self.point:
+            return [lin.z for lin in self.lins]
+        theta, _, biases = _unpack(x, self.theta0, self.free, self.n_man, self.n_ch)
+        return [errormodel.residuals(d, self.spec, theta, biases[m]) for m, d in enumerate(self.maneuvers)]
+
     def residual(self, x) -> np.ndarray:
         _, chi0, _ = _unpack(x, self.theta0, self.free, self.n_man, self.n_ch)
         out, row = np.empty(self.n_rows), 0
-        for m, (lin, chol) in enumerate(zip(self.linearizations(x), self.chols)):
+        for m, (z, chol) in enumerate(zip(self._z(x), self.chols)):
             n = chol.shape[1]
-            r = covariance.transformed(lin.z - chi0[m], self.filters[m]).reshape(n, 1)
+            r = covariance.transformed(z - chi0[m], self.filters[m]).reshape(n, 1)
             out[row:row + n] = covariance.whiten(chol, np.asfortranarray(r))[:, 0]
             row += n
         return out
@@ -267,7 +275,8 @@ def linearize_all(maneuvers, estimate: PointEstimate):
                   for lin in lins]
 
 
-def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estimate_scales=True) -> PointEstimate:
+def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estimate_scales=True,
+                   check=None) -> PointEstimate:
     """REML noise scales about a starting point (the classic estimate), then WLS from it.
 
     Parameters the maneuvers cannot inform are marked prior-only first and held at their
@@ -276,7 +285,10 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     estimate is within a few tens of ppm of the optimum, so the model is linear enough about
     it for the noise scales; the WLS then needs a few steps. A model with correlated
     star-tracker noise estimates its Gauss-Markov part there too (always: its sd and correlation
-    time are what the model is for), from the residuals' correlation time as a start.
+    time are what the model is for), from the residuals' correlation time as a start. ``check``, where
+    given, is called with the specification once every prior-only parameter is marked, before the
+    noise scales and the WLS: a caller's test of it that may stop there (the pipeline skips a variant
+    whose additions the data cannot inform, without fitting what it would discard).
     """
     spec = spec.with_prior_only(identification.unflown(maneuvers, spec, stated_noise))
     log_sigma = covariance.log_sigma_of(stated_noise, spec.jitter_noise)
@@ -294,6 +306,9 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     weak = identification.uninformed(campaign_stats(noises, variances(log_sigma)), spec)
     if weak:
         start = start_at(spec.with_prior_only(weak))
+    if check is not None:
+        check(start.spec)  # the specification the WLS will have: nothing below marks a parameter prior-only
+    if weak:
         lins, noises = linearize_all(maneuvers, start)
     tau, offsets = 0.0, None
     names, index = noise_groups(maneuvers)

@@ -111,9 +111,12 @@ def run_ensembles(logpost, proposal_mean, proposal_cov, cfg: dict, seed: int) ->
             p0[bad] = laplace.draw(rng.standard_normal((bad.sum(), dim)), rng.chisquare(laplace.dof, bad.sum()))
             bad = ~np.isfinite(logpost(p0))
         if bad.any():
+            valid = getattr(getattr(logpost, "grid", None), "valid", None)
+            unfactored = ("" if valid is None or valid.all() else f"; the noise's covariance is not positive definite at "
+                          f"{(~valid).sum()} of {valid.size} of the grid's nodes, which leaves little of it")
             raise SamplingError(f"posterior: after {START_REDRAWS} redraws, {bad.sum()} of {walkers} start points of "
                                 f"ensemble {e} still have zero posterior density (outside the physical bounds or the "
-                                f"noise-ratio grid): the point estimate is not a usable start")
+                                f"noise-ratio grid{unfactored}): the point estimate is not a usable start")
         p = logpost.n_params
         noise, state = StudentProposal(proposal_mean[p:], proposal_cov[p:, p:]), p0
         for _ in range(2):

@@ -25,19 +25,17 @@ from gyrocal.inference.noise.covariance import (
     stated_scales,
 )
 from gyrocal.inference.sampling import predictive
+from gyrocal.inference.sampling.predictive import PARETO_K_MAX
 from gyrocal.maneuvers import preprocess
 from gyrocal.model import channels as ch
-from gyrocal.model import combinations
+from gyrocal.model import combinations, orthogonality
+from gyrocal.model.correction import flown_sets
 from gyrocal.model.units import AXES, rad_to_arcsec
 
-__all__ = ["CI_PROB", "PARETO_K_MAX", "assemble", "combination_summary", "loo", "loo_blocks", "posterior_dataset",
-           "sampler_record", "summarize"]
+__all__ = ["CI_PROB", "assemble", "combination_summary", "loo", "loo_blocks", "orthogonality_summary",
+           "posterior_dataset", "sampler_record", "summarize"]
 
 log = logging.getLogger("gyrocal")
-
-PARETO_K_MAX = 0.7
-"""Above this Pareto k a block's PSIS estimate is unreliable (Vehtari et al. 2017)."""
-
 
 def loo(idata, model: str):
     """PSIS-LOO of one model (arviz). arviz warns about blocks with Pareto k > `PARETO_K_MAX` (the
@@ -126,17 +124,13 @@ def summarize(idata, per_walker, labels, convergence: dict) -> pd.DataFrame:
     return frame
 
 
-def combination_summary(full, per_walker, spec, convergence: dict) -> pd.DataFrame | None:
-    """`summarize` of the identifiable combinations (`combinations.scale_combinations`: ``sf_mean``,
-    ``sf_asym``), computed draw by draw from the parameters' draws, so their correlation is honoured;
-    None for a model with no scale factor."""
-    combos = combinations.scale_combinations(spec)
-    if not combos:
-        return None
-    labels = [c.label for c in combos]
+def _derived_summary(full, per_walker, labels, draws_of, convergence: dict) -> pd.DataFrame:
+    """`summarize` of quantities derived draw by draw from the parameters' draws (``draws_of``: the
+    parameters' draws (..., P) in their units to the derived ones (..., K)), so that the parameters'
+    correlation is honoured."""
 
     def derived(idata):
-        values = combinations.combination_draws(idata.posterior["channel_param"].to_numpy(), combos)
+        values = draws_of(idata.posterior["channel_param"].to_numpy())
         with warnings.catch_warnings():
             # per walker, every walker is a chain: a short run may have more walkers than steps
             warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
@@ -144,6 +138,26 @@ def combination_summary(full, per_walker, spec, convergence: dict) -> pd.DataFra
                                 dims={"channel_param": ["parameter"]})
 
     return summarize(derived(full), derived(per_walker), labels, convergence)
+
+
+def combination_summary(full, per_walker, spec, convergence: dict) -> pd.DataFrame | None:
+    """`summarize` of the identifiable combinations (`combinations.scale_combinations`: ``sf_mean``,
+    ``sf_asym``), computed draw by draw from the parameters' draws, so their correlation is honoured;
+    None for a model with no scale factor."""
+    combos = combinations.scale_combinations(spec)
+    if not combos:
+        return None
+    return _derived_summary(full, per_walker, [c.label for c in combos],
+                            lambda values: combinations.combination_draws(values, combos), convergence)
+
+
+def orthogonality_summary(full, per_walker, spec, pairs, convergence: dict) -> pd.DataFrame | None:
+    """`summarize` of the channel sets' non-orthogonality (`orthogonality.pair_draws`, arcsec), draw by
+    draw; None where there are no ``pairs`` (a model without misalignments)."""
+    if not pairs:
+        return None
+    return _derived_summary(full, per_walker, [p.label for p in pairs],
+                            lambda values: orthogonality.pair_draws(values, spec, pairs), convergence)
 
 
 def sampler_record(post, summary, sampler_cfg: dict, seed: int) -> dict:
@@ -229,7 +243,9 @@ def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
 
 
 def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
-    """Everything the posterior step writes: ``(idata, summary, fit, sampler record)``.
+    """Everything the posterior step writes: ``(idata, summary, fit, sampler record, orthogonality)``,
+    the last the channel sets' non-orthogonality (`orthogonality_summary`, its pairs' labels as index
+    ``label``; None without misalignments), from every draw like the summary.
 
     ``post``'s linearisations and noise structures are used up (`_fit_and_predictive`).
     The summary and convergence use every draw (the summary also holds the identifiable
@@ -250,6 +266,8 @@ def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
     derived = combination_summary(full, per_walker, spec, convergence)
     if derived is not None:
         summary = pd.concat([summary, derived], ignore_index=True)
+    orth = orthogonality_summary(full, per_walker, spec, orthogonality.pairs(spec, flown_sets(maneuvers)), convergence)
+    orth = orth.set_index("label") if orth is not None else None
     if not record["converged"]:
         log.warning("THE SAMPLER DID NOT CONVERGE: %s; numbers are not reliable",
                     record["failed_parameters"] or "chains shorter than the autocorrelation limit")
@@ -263,4 +281,4 @@ def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
                                   "prior_only": ", ".join(p.label for p in spec.parameters if p.prior_only)})
     for group in idata.groups():
         idata[group].attrs.pop("created_at", None)  # same config and seed, same bytes
-    return idata, summary, fit, record
+    return idata, summary, fit, record, orth

@@ -13,8 +13,9 @@ import logging
 import numpy as np
 
 from gyrocal.inference.fit.likelihood import campaign_stats, maneuver_stats, total
-from gyrocal.inference.fit.noisefit import profile_reml
+from gyrocal.inference.fit.noisefit import finite_profile
 from gyrocal.inference.noise import covariance, segments
+from gyrocal.inference.sampling.proposal import SamplingError
 
 __all__ = ["MAX_HALF_WIDTH_LOG_RATIO", "NoiseShapes", "RatioGrid", "ratio_curvature"]
 
@@ -54,10 +55,11 @@ class NoiseShapes:
         return list(self._built(ratios)) if self.correlated else self.noises
 
     def profile(self, ratios) -> float:
-        """The REML profile's negative log-likelihood at ``ratios`` (`noisefit.profile_reml`); Gauss-Markov
-        structures are built, summed and dropped one at a time."""
+        """The REML profile's negative log-likelihood at ``ratios`` (`noisefit.finite_profile`: inf where the
+        covariance is not positive definite in floating point); Gauss-Markov structures are built, summed
+        and dropped one at a time."""
         parts = self._built(ratios) if self.correlated else self.noises
-        return profile_reml(parts, ratios, self.groups_of_parts)[0]
+        return finite_profile(parts, ratios, self.groups_of_parts)
 
 
 def _lagrange(f):
@@ -74,7 +76,17 @@ class RatioGrid:
     maneuvers' noise structures, or a `NoiseShapes` where they change with the ratios; ``groups``,
     each maneuver's noise group where ``noises`` is a list (a `NoiseShapes` has its own), tabulates
     each group's statistics apart (they scale apart).
+
+    A node whose covariance is not positive definite in floating point (a Gauss-Markov correlation
+    time far beyond the maneuvers while the attitude turns about changing axes: `markov`) has no
+    likelihood: it is left out (``valid``), and a point whose interpolation needs it is off the grid,
+    where the posterior is zero. The posterior is then bounded where the likelihood can be computed,
+    and the log says where; `SamplingError` where no node can be.
     """
+
+    valid = None
+    """Per node (flat index): whether its covariance could be factored and its statistics are finite
+    (None: every node)."""
 
     def __init__(self, noises, center, sd, nodes: int, half_width_sd: float, groups=None):
         shapes = noises if isinstance(noises, NoiseShapes) else NoiseShapes(noises, groups=groups)
@@ -89,6 +101,7 @@ class RatioGrid:
         self.start = center - half_width
         self.step = 2 * half_width / (nodes - 1)
         self.values = None
+        self.valid = np.ones(nodes**self.dims, dtype=bool)
         self._last = None
         """The last `stats` call's ratios, interpolated rows and inside mask (`_interpolated`)."""
         inner = (nodes,) * (self.dims - 1) if shapes.correlated else (nodes,) * self.dims
@@ -97,14 +110,40 @@ class RatioGrid:
             current = shapes.at(self.start + self.step * last) if shapes.correlated else shapes.noises
             for index in np.ndindex(*inner):
                 index = index + (last,) if shapes.correlated else index
+                flat = np.ravel_multi_index(index, (nodes,) * self.dims)
                 r = self.start + self.step * np.array(index)
-                parts = self._group_stats(current, covariance.unit_variances(r))
+                try:
+                    parts = self._group_stats(current, covariance.unit_variances(r))
+                except np.linalg.LinAlgError:
+                    self.valid[flat] = False
+                    continue
                 row = np.concatenate([np.concatenate([s.A.ravel(), s.b, [s.c, s.logdet]]) for s in parts])
+                if not np.all(np.isfinite(row)):
+                    self.valid[flat] = False
+                    continue
                 if self.values is None:
                     self.values = np.empty((nodes**self.dims, len(row)))
-                self.values[np.ravel_multi_index(index, (nodes,) * self.dims)] = row
+                self.values[flat] = row
                 self.n_params = len(parts[0].b)
                 self.n = parts[0].n if self.groups is None else np.array([s.n for s in parts])
+        if self.values is None:
+            raise SamplingError(f"the noise's covariance is not positive definite at any node of the noise-ratio grid "
+                                f"(log ratios {np.round(center, 3).tolist()} +- {np.round(half_width, 3).tolist()}): "
+                                "no likelihood can be computed there")
+        if not self.valid.all():
+            self.values[~self.valid] = 0.0  # never weighted: a point that needs such a node is off the grid
+            self._log_left_out()
+
+    def _log_left_out(self):
+        """Which nodes were left out, in the ratios' ranges they cover."""
+        bad = np.array(np.unravel_index(np.flatnonzero(~self.valid), (self.nodes,) * self.dims)).T
+        ranges = [f"{lo:.3g} to {hi:.3g}" for lo, hi in zip(self.start + self.step * bad.min(axis=0),
+                                                             self.start + self.step * bad.max(axis=0))]
+        logging.getLogger("gyrocal").warning(
+            "noise-ratio grid: %d of %d nodes left out, their covariance not positive definite in floating point "
+            "(log ratios %s; with a Gauss-Markov part, log tau last: a correlation time far beyond the maneuvers "
+            "while the attitude turns); the posterior is bounded to where the likelihood can be computed",
+            (~self.valid).sum(), self.valid.size, ", ".join(ranges))
 
     def _group_stats(self, noises, var) -> list:
         """The statistics of each noise group (one for the campaign without groups)."""
@@ -128,6 +167,8 @@ class RatioGrid:
                 product = product * w1[:, d, offsets[d]]
         weights = np.zeros((len(ratios), self.nodes**self.dims))
         np.put_along_axis(weights, flat, product, axis=1)
+        if self.valid is not None and not self.valid.all():  # a node left out may only have no weight
+            inside &= np.all(self.valid[flat] | (product == 0), axis=1)
         return weights, inside
 
     def _interpolated(self, ratios):

@@ -16,9 +16,14 @@ from gyrocal.inference.noise.covariance import ManeuverNoise, nuisance_design, r
 from gyrocal.inference.noise.selectedinverse import inverse_windows, recursion_bounds
 
 __all__ = [
-    "BlockConditional", "WhitenedManeuver", "block_conditionals", "block_index", "leave_block_out_loglik",
+    "PARETO_K_MAX", "BlockConditional", "WhitenedManeuver", "block_conditionals", "block_index", "leave_block_out_loglik",
     "residuals_body", "sample_blocks", "split_draws", "undifference_body"
 ]
+
+PARETO_K_MAX = 0.7
+"""Above this Pareto k a block's PSIS-LOO estimate is unreliable (Vehtari et al. 2017): the
+posterior's importance weights for that block, from these pointwise log-likelihoods, have too
+heavy a tail."""
 
 
 class WhitenedManeuver:

@@ -58,8 +58,8 @@ def finish():
     Snakemake's benchmark samples memory every few seconds and misses a short peak."""
     if _LOG_PATH is not None:
         peak = peak_rss()
-        log.info("peak memory (RSS): %.0f MB this process, %.0f MB its largest child process",
-                 peak["self_mb"], peak["children_mb"])
+        log.info("peak memory (RSS): %.0f MB this process, %.0f MB its largest child process; CPU %.2f s",
+                 peak["self_mb"], peak["children_mb"], peak["cpu_s"])
         base = _LOG_PATH[:-len(".log")] if _LOG_PATH.endswith(".log") else _LOG_PATH
         write_json(peak, f"{base}.peak_rss.json")
     logging.shutdown()
@@ -71,11 +71,14 @@ def finish():
 def peak_rss() -> dict:
     """The process's peak resident memory and that of its largest child process that has ended
     (the figure pools' workers), in MB of 10^6 bytes, from ``getrusage``: exact, however short the
-    peak. A job's peak is at most ``self_mb`` plus ``children_mb`` times its concurrent children."""
+    peak. A job's peak is at most ``self_mb`` plus ``children_mb`` times its concurrent children.
+    Beside them ``cpu_s``: the CPU seconds (user and system) of the process and its ended children,
+    exact where Snakemake's benchmark file samples them."""
     import resource
     unit = 1 if sys.platform == "darwin" else 1024  # ru_maxrss: bytes on macOS, KiB on Linux
-    return {"self_mb": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * unit / 1e6, 1),
-            "children_mb": round(resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss * unit / 1e6, 1)}
+    own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return {"self_mb": round(own.ru_maxrss * unit / 1e6, 1), "children_mb": round(children.ru_maxrss * unit / 1e6, 1),
+            "cpu_s": round(own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime, 2)}
 
 
 @contextmanager

@@ -17,12 +17,22 @@ __all__ = ["run"]
 log = logging.getLogger("gyrocal")
 
 
+def _informed(spec):
+    """Each prior-only parameter in the log; the variant skipped where its additions are all prior-only
+    (`check_variant_informed`), before its noise scales and WLS are fitted for nothing."""
+    for p in spec.parameters:
+        if p.prior_only:
+            log.warning("%s is prior-only: %s", p.label, p.prior_only)
+    check_variant_informed(spec)
+
+
 def run(maneuver_files, input_json, out_npz, model: str, settings: PointEstimateSettings):
     """The full-trajectory WLS of one model, started from the classic estimate, with the default
     priors of the campaign's gyro sensor class (``campaign.yaml``'s ``gyro.sensor_class``); saved
     with the model's specification, the noise knowledge it used and its linearisation. The classic
     start is computed here, for the model's own specification (a tenth of a second). A variant whose
-    added parameters are all prior-only is skipped (`check_variant_informed`) before it is saved.
+    added parameters are all prior-only is skipped (`check_variant_informed`) before its noise and WLS
+    are fitted.
     ``maneuver_files``: the preprocessed ``.npz``, in the campaign's order; saved to ``out_npz``."""
     maneuvers = load_maneuvers(maneuver_files)
     fx = effects.resolve(model, settings.effects, effects.load_plugins(settings.plugins or []))
@@ -30,11 +40,7 @@ def run(maneuver_files, input_json, out_npz, model: str, settings: PointEstimate
     model_spec = ModelSpec.build(model, fx, maneuvers[0].channels).with_sensor_class(info["gyro"].get("sensor_class"))
     stated = noise_knowledge(info, settings.noise)
     est = point_estimate(maneuvers, model_spec, stated, classic.classic_start(maneuvers, model_spec),
-                         settings.noise["estimate_scales"])
-    for p in est.spec.parameters:
-        if p.prior_only:
-            log.warning("%s is prior-only: %s", p.label, p.prior_only)
-    check_variant_informed(est.spec)
+                         settings.noise["estimate_scales"], check=_informed)
     if model_spec.correlated_noise:
         log.info("star-tracker noise correlation time: %.2f s", est.correlation_time_s)
     log.info("WLS: %s (%d evaluations); noise %s", est.message, est.nfev,

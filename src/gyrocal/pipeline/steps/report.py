@@ -43,7 +43,8 @@ def run(models, files, preprocessed, maneuver_ids, input_json, comparison_csv, o
     table = pd.read_csv(comparison_csv)
     model = str(table.loc[table["reviewed"], "model"].iloc[0])
     reviewed = SimpleNamespace(**{name: getattr(files, name)[models.index(model)]
-                                  for name in ("point_estimate", "posterior", "fit", "sampler", "correction", "diagnostics")})
+                                  for name in ("point_estimate", "posterior", "fit", "sampler", "correction", "diagnostics",
+                                               "orthogonality")})
     calibrations = {m: pd.read_csv(files.calibration[models.index(m)]) for m in kept}
     maneuvers = load_maneuvers(maneuver_files(preprocessed, maneuver_ids))
     est = PointEstimate.load(reviewed.point_estimate, linearizations=False)
@@ -70,6 +71,7 @@ def run(models, files, preprocessed, maneuver_ids, input_json, comparison_csv, o
         comparison=table, info=info, config=cfg, findings=findings, effect_table=effect,
         truth=read_json(truth_json)["parameters"] if truth_json else None, refused=refused,
         reference_interval=read_json(interval) if (interval := Path(preprocessed, REFERENCE_INTERVAL)).exists() else None,
-        loop=loop, loop_steps=[step for _, step in steps], disagreement=disagreement)
+        loop=loop, loop_steps=[step for _, step in steps], disagreement=disagreement,
+        orthogonality=pd.read_csv(reviewed.orthogonality))
     write_text(review.render(review.build_context(inputs, processes)), out_html)
     write_json(verdict.verdict(info["campaign"], model, findings), out_verdict)
