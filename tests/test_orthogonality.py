@@ -12,8 +12,6 @@ from gyrocal.model import orthogonality as orth
 from gyrocal.model.spec import baseline
 from gyrocal.model.units import AXES, rad_to_arcsec
 
-from conftest import run_campaign
-
 TRIAD = [ch.Channel("gyro_x", None, "roll"), ch.Channel("gyro_y", None, "pitch"), ch.Channel("gyro_z", None, "yaw")]
 
 
@@ -97,11 +95,8 @@ def test_mom_layout_gives_three_pairs_per_channel_set_each_once():
 
 
 @pytest.fixture(scope="module")
-def short_run(tiny, short_chains, tmp_path_factory):
-    out = tmp_path_factory.mktemp("orthogonality")
-    cfg = dict(short_chains, models={"baseline": ["scale_factor", "misalignment", "bias"]})
-    run_campaign(tiny[0], out, cfg, truth_path=tiny[0].parent / "truth.json")
-    return out
+def short_run(tiny_short_run):
+    return tiny_short_run[0]
 
 
 def test_on_a_simulated_campaign_orthogonality_csv_covers_the_true_angles(tiny, short_run):
