@@ -106,10 +106,13 @@ def truth_vector(channels, truth):
 
 def run_campaign(campaign_dir, out, cfg, models=("baseline",), truth_path=None, figures=False):
     """Every workflow step in the order the rules run them (`gyrocal.pipeline.run.run_campaign`);
-    the preprocessed maneuvers' files, in the campaign's order. No maneuver figure files unless
-    ``figures`` (the preprocess step's figures, most of its time; the report draws its own)."""
+    the preprocessed maneuvers' files, in the campaign's order. No figures unless ``figures``: no
+    maneuver figure files (most of the preprocess step's time), and the review without its figures
+    (``report.figures: false``, half the report step's)."""
     from gyrocal.pipeline import run
     from gyrocal.pipeline.paths import CampaignPaths
+    cfg = copy.deepcopy(cfg)
+    cfg.setdefault("report", {})["figures"] = figures
     paths = CampaignPaths.under(out)
     ids = run.run_campaign(campaign_dir, paths, cfg, models, truth_path, figures)
     return [Path(p) for p in paths.maneuvers(ids)]
@@ -170,5 +173,6 @@ def tiny_short_run(tiny, short_chains, tmp_path_factory):
 
 @pytest.fixture(scope="session")
 def mom_run(mom, tmp_path_factory, config):
-    """The default campaign through every step with the baseline model."""
-    return _baseline_run(mom, tmp_path_factory.mktemp("mom_run"), config)
+    """The default campaign through every step with the baseline model, its review with its figures
+    (the browser test shows it as a user sees it)."""
+    return _baseline_run(mom, tmp_path_factory.mktemp("mom_run"), config, figures=True)

@@ -23,7 +23,8 @@ def hidden_run(tmp_path_factory, config):
     root = tmp_path_factory.mktemp("hidden")
     simulate.run(DATA / "hidden_bias_drift.yaml", root / "sim")
     cfg = config_with(config, {"baseline": ["scale_factor", "misalignment", "bias"]})
-    run_campaign(root / "sim" / "campaign", root / "out", cfg, ("baseline",), root / "sim" / "truth.json")
+    run_campaign(root / "sim" / "campaign", root / "out", cfg, ("baseline",), root / "sim" / "truth.json",
+                 figures=True)  # the browser test counts its figures
     return root / "out"
 
 
@@ -114,3 +115,12 @@ def test_figures_drawn_by_two_processes_are_the_same_png_bytes(tmp_path):
     one = plots.render_all(jobs, 1, dpi=40)
     two = plots.render_all(jobs, 2, dpi=40)
     assert one == two and len(one) == 3 and all(p.startswith(b"\x89PNG") for p in one)
+
+
+def test_a_review_without_figures_says_so_in_each_ones_place(tiny_short_run):
+    """``report.figures: false`` (the test runs' default, `conftest.run_campaign`): no figure is
+    drawn, and each one's place says why; the tables and the verdict are there as ever."""
+    from gyrocal.report.review import NOT_DRAWN
+    html = (tiny_short_run[0] / "report.html").read_text()
+    assert "<img" not in html and html.count(NOT_DRAWN) >= 8
+    assert "id='verdict'" in html and 'id="table1"' in html and "id='checks'" in html

@@ -30,8 +30,9 @@ from gyrocal.report import resolution
 from gyrocal.report.context import CorrectionSet, ReviewContext, ReviewInputs, campaign_words
 
 __all__ = [
-    "COMBINATION_HEADINGS", "EMBED_PNG", "ORTHOGONALITY_SHOWN", "ReviewContext", "ReviewInputs", "build_context",
-    "channel_kind", "draw_all", "embed_png", "entry", "fold", "html_table", "mounting_text", "number", "paper_tables", "render"
+    "COMBINATION_HEADINGS", "EMBED_PNG", "NOT_DRAWN", "ORTHOGONALITY_SHOWN", "ReviewContext", "ReviewInputs",
+    "build_context", "channel_kind", "draw_all", "embed_png", "entry", "fold", "html_table", "mounting_text", "number",
+    "paper_tables", "render"
 ]
 
 EMBED_PNG = {"dpi": 80, "pil_kwargs": {"compress_level": 3}}  # zlib 3: 28 % faster, 8 % larger
@@ -43,9 +44,16 @@ def embed_png(data: bytes) -> str:
     return f'<img alt="figure" src="data:image/png;base64,{base64.b64encode(data).decode()}">'
 
 
-def draw_all(jobs, processes: int = 1) -> list:
+NOT_DRAWN = '<p class="not-drawn">Figure not drawn (the config\'s <code>report.figures: false</code>).</p>'
+"""What stands in a figure's place where the config asks for none."""
+
+
+def draw_all(jobs, processes: int = 1, figures: bool = True) -> list:
     """`embed_png` of each ``(plots function name, its arguments)``, in order, drawn by ``processes``
-    processes (`plots.render_all`); the PNG bytes are the same either way."""
+    processes (`plots.render_all`); the PNG bytes are the same either way. ``figures`` False: none is
+    drawn (half of a short campaign's report step), `NOT_DRAWN` stands in each one's place."""
+    if not figures:
+        return [NOT_DRAWN] * len(jobs)
     return [embed_png(data) for data in plots.render_all(jobs, processes, **EMBED_PNG)]
 
 
@@ -155,7 +163,8 @@ def _correction_sets(correction: dict) -> list:
 
 def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
     """Everything the template shows, from what the report step read and the verdict's findings.
-    Figures are drawn by ``processes`` processes (`draw_all`)."""
+    Figures are drawn by ``processes`` processes (`draw_all`), unless the config's ``report.figures``
+    is false."""
     spec, calibration, maneuvers, info = inputs.spec, inputs.calibration, inputs.maneuvers, inputs.info
     words = campaign_words(maneuvers)
     jobs = []
@@ -166,7 +175,7 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
                  ("residual_figure", (inputs.fit[inputs.fit["maneuver"] == data.id], data.id))]
     jobs += [("pair_figure", (inputs.posterior, c.name)) for c in spec.channels]
     jobs += [("trace_figure", (inputs.posterior, calibration)), ("comparison_figure", (inputs.comparison,))]
-    drawn = [Markup(img) for img in draw_all(jobs, processes)]
+    drawn = [Markup(img) for img in draw_all(jobs, processes, inputs.config["report"].get("figures", True))]
     draws = inputs.posterior.posterior["channel_param"].sel(parameter=list(spec.labels)).to_numpy()
     cov = np.cov(draws.reshape(-1, len(spec)).T)
     pairs = identification.confounded_pairs(cov, spec.free, spec.labels)
