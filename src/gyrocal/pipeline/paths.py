@@ -6,7 +6,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
-__all__ = ["MODEL_FILES", "REFERENCE_INTERVAL", "CampaignPaths", "ModelPaths", "maneuver_files"]
+__all__ = ["CALIBRATION_FILES", "MODEL_FILES", "REFERENCE_INTERVAL", "STEP_FILES", "CampaignPaths", "ModelPaths",
+           "maneuver_files"]
 
 REFERENCE_INTERVAL = "reference_interval.json"
 """The preprocess step's record of the reference interval it used and why, in its folder."""
@@ -47,8 +48,18 @@ class ModelPaths:
                                           "(`gyrocal.pipeline.steps.common.variant_step`).")
 
 
-MODEL_FILES = ("point_estimate", "posterior", "summary", "fit", "sampler", "elpd_maneuvers", "elpd_blocks",
-               "orthogonality", "calibration", "correction", "diagnostics")
+STEP_FILES = {"point_estimate": ("point_estimate",),
+              "posterior": ("posterior", "summary", "fit", "sampler", "elpd_maneuvers", "elpd_blocks",
+                            "orthogonality", "calibration", "correction"),
+              "diagnostics": ("diagnostics",)}
+"""A model variant's result files (`ModelPaths` names) by the step whose job writes them, the steps in the
+order they run, as their rules declare them: a refused variant's from that step on hold its refusal
+record. The posterior's job ends with the calibration's (`CALIBRATION_FILES`)."""
+
+CALIBRATION_FILES = ("calibration", "correction")
+"""The posterior job's files that its calibrate step writes, from the posterior's summary."""
+
+MODEL_FILES = tuple(f for files in STEP_FILES.values() for f in files)
 """A model variant's result files, by their `ModelPaths` name, in the order its steps write them."""
 
 
@@ -101,8 +112,7 @@ class CampaignPaths:
         """The files missing from a step's output folder that exists (the preprocessed maneuvers
         ``ids``; the simulated campaign, where ``simulated``), each with its folder: Snakemake takes a
         folder that exists for complete, and redoes the step that writes it only once it is gone."""
-        folders = [(self.preprocess, [f"{self.preprocess}/{m}.{ext}"
-                                                    for m in ids for ext in ("npz", "csv", "png")])]
+        folders = [(self.preprocess, [p for ext in ("npz", "csv", "png") for p in self.maneuvers(ids, ext)])]
         if simulated:
             folders.insert(0, (self.simulated, [f"{self.simulated}/{name}" for name in
                                                             ("campaign.yaml", "star_tracker.csv", "gyro.csv")]))

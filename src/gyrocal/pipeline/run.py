@@ -7,7 +7,7 @@ from pathlib import Path
 from gyrocal.criticism.extension import extension_names
 from gyrocal.inference import interval
 from gyrocal.io import telemetry
-from gyrocal.pipeline.paths import CampaignPaths
+from gyrocal.pipeline.paths import CALIBRATION_FILES, STEP_FILES, CampaignPaths
 from gyrocal.pipeline.settings import (
     DiagnosticsSettings,
     ExtendSettings,
@@ -31,7 +31,7 @@ from gyrocal.pipeline.steps import (
     validate,
 )
 
-__all__ = ["STEP_OUTPUTS", "calibrate_campaign", "calibrate_models", "extend_models", "review_campaign", "run_campaign"]
+__all__ = ["calibrate_campaign", "calibrate_models", "extend_models", "review_campaign", "run_campaign"]
 
 
 def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=None, figures=True,
@@ -51,14 +51,6 @@ def calibrate_campaign(campaign_dir, paths: CampaignPaths, cfg: dict, models=Non
     return ids
 
 
-STEP_OUTPUTS = {"point_estimate": ("point_estimate",),
-                "posterior": ("posterior", "summary", "fit", "sampler", "elpd_maneuvers", "elpd_blocks",
-                              "orthogonality", "calibration", "correction"),
-                "diagnostics": ("diagnostics",)}
-"""A model step's files (`ModelPaths` names), as its rule declares them: a refused variant's hold its
-refusal record, here as in the workflow."""
-
-
 def calibrate_models(paths: CampaignPaths, ids, cfg: dict, models, through="diagnostics", strict=False):
     """Each model up to its diagnostics (``through="posterior"``: up to its posterior; ``"point_estimate"``:
     up to its point estimate), on a campaign
@@ -73,7 +65,7 @@ def calibrate_models(paths: CampaignPaths, ids, cfg: dict, models, through="diag
         def variant_step(step, run, model=model, out=out):
             if strict:
                 return run()
-            written = STEP_OUTPUTS[step] if step != "posterior" or through != "posterior" else STEP_OUTPUTS[step][:-2]
+            written = [f for f in STEP_FILES[step] if through != "posterior" or f not in CALIBRATION_FILES]
             return common.variant_step(out.refusal, model, step, run, [getattr(out, f) for f in written])
 
         variant_step("point_estimate", lambda model=model, out=out: point_estimate.run(

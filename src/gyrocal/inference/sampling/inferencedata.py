@@ -29,7 +29,6 @@ from gyrocal.inference.sampling.predictive import PARETO_K_MAX
 from gyrocal.maneuvers import preprocess
 from gyrocal.model import channels as ch
 from gyrocal.model import combinations, orthogonality
-from gyrocal.model.correction import flown_sets
 from gyrocal.model.units import AXES, rad_to_arcsec
 
 __all__ = ["CI_PROB", "assemble", "combination_summary", "loo", "loo_blocks", "orthogonality_summary",
@@ -242,10 +241,11 @@ def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
     return groups, pd.concat(fit_tables, ignore_index=True)
 
 
-def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
+def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int, pairs=()):
     """Everything the posterior step writes: ``(idata, summary, fit, sampler record, orthogonality)``,
-    the last the channel sets' non-orthogonality (`orthogonality_summary`, its pairs' labels as index
-    ``label``; None without misalignments), from every draw like the summary.
+    the last the non-orthogonality of the channel sets' ``pairs`` (`orthogonality.pairs`;
+    `orthogonality_summary`, their labels as index ``label``; None without pairs), from every draw like
+    the summary.
 
     ``post``'s linearisations and noise structures are used up (`_fit_and_predictive`).
     The summary and convergence use every draw (the summary also holds the identifiable
@@ -266,7 +266,7 @@ def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int):
     derived = combination_summary(full, per_walker, spec, convergence)
     if derived is not None:
         summary = pd.concat([summary, derived], ignore_index=True)
-    orth = orthogonality_summary(full, per_walker, spec, orthogonality.pairs(spec, flown_sets(maneuvers)), convergence)
+    orth = orthogonality_summary(full, per_walker, spec, pairs, convergence)
     orth = orth.set_index("label") if orth is not None else None
     if not record["converged"]:
         log.warning("THE SAMPLER DID NOT CONVERGE: %s; numbers are not reliable",

@@ -12,6 +12,7 @@ from pathlib import Path
 from gyrocal.errors import InputError, OutputError
 from gyrocal.io.outputs import write_json, write_text
 from gyrocal.maneuvers import preprocess
+from gyrocal.pipeline.paths import STEP_FILES
 from gyrocal.pipeline.steps import REFUSED
 
 __all__ = ["REFUSAL_KEYS", "VARIANT_STEPS", "compared", "finish", "load_maneuvers", "peak_rss", "read_json", "read_refusal",
@@ -96,8 +97,8 @@ def refusal():
         sys.exit(f"gyrocal: {exc}")
 
 
-VARIANT_STEPS = ("point_estimate", "posterior", "diagnostics")
-"""A model variant's steps, in order; the first starts the variant afresh."""
+VARIANT_STEPS = tuple(STEP_FILES)
+"""A model variant's steps, in order (`gyrocal.pipeline.paths.STEP_FILES`); the first starts the variant afresh."""
 
 
 REFUSAL_KEYS = ("model", "status", "step", "reason")

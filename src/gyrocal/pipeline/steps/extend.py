@@ -5,7 +5,7 @@ import logging
 
 from gyrocal.criticism.extension import Extension, extension_names, next_effect
 from gyrocal.io.outputs import write_json
-from gyrocal.pipeline.paths import MODEL_FILES
+from gyrocal.pipeline.paths import STEP_FILES
 from gyrocal.pipeline.settings import DiagnosticsSettings, ExtendSettings, PointEstimateSettings, PosteriorSettings
 from gyrocal.pipeline.steps import common
 
@@ -38,14 +38,14 @@ def run(name: str, bases, files, maneuver_files, input_json, out, refusal_json, 
     estimate, posterior, calibration and diagnostics as their own rules run them, into ``out`` (its
     files by their `ModelPaths` name: a `ModelPaths`, or the rule's ``snakemake.output``); where it does
     not, the variant is skipped with the reason (in ``refusal_json``), at the cost of reading the
-    diagnostics. A skipped or refused step's files and the later steps' (`MODEL_FILES`, in the order
-    the steps write them, as the workflow's rule declares them) hold the record instead. Returns the decision."""
+    diagnostics. A skipped or refused step's files and the later steps' (`STEP_FILES`, as the
+    workflow's rule declares them) hold the record instead. Returns the decision."""
     step = decide(name, bases, files, settings)
     write_json(step.as_dict(), out.extension)
     log.info("loop step %s: %s", name, step.why)
 
     def variant_step(kind, run):
-        written = [getattr(out, f) for f in MODEL_FILES[MODEL_FILES.index(kind):]]
+        written = [getattr(out, f) for s in common.VARIANT_STEPS[common.VARIANT_STEPS.index(kind):] for f in STEP_FILES[s]]
         return common.variant_step(refusal_json, name, kind, run, written)
 
     if not step.fitted:  # before the model steps' imports (the sampler's, arviz's): a skip costs next to nothing

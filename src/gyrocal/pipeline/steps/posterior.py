@@ -44,7 +44,8 @@ def run(maneuver_files, point_estimate_npz, out: ModelPaths, settings: Posterior
         raise checks.sampling_stopped(stopped, est, weakest, ready.labels) from None
     except SamplingError as failed:
         raise checks.sampling_failed(failed, maneuvers, est) from None
-    idata, summary, fit, record, orth = inferencedata.assemble(post, maneuvers, s.sampler, s.convergence, s.seed)
+    pairs = orthogonality.pairs(est.spec, flown_sets(maneuvers))
+    idata, summary, fit, record, orth = inferencedata.assemble(post, maneuvers, s.sampler, s.convergence, s.seed, pairs)
     blocks = inferencedata.loo_blocks(idata, est.spec.model)
     elpd = posterior.leave_one_maneuver_out(post, priors)
     with atomic(out.posterior) as tmp:
@@ -53,6 +54,5 @@ def run(maneuver_files, point_estimate_npz, out: ModelPaths, settings: Posterior
     write_csv(fit, out.fit)
     write_json(record, out.sampler)
     write_csv(blocks, out.elpd_blocks)
-    pairs = orthogonality.pairs(est.spec, flown_sets(maneuvers))
     write_csv(orthogonality_table(est.spec, est.theta, pairs, orth), out.orthogonality)
     write_csv(pd.DataFrame({"maneuver": [d.id for d in maneuvers], "elpd": elpd}), out.elpd_maneuvers)
