@@ -6,9 +6,7 @@ rule report:
     second and a job's start-up more. It shows the whole config, so it alone takes all of it. Its
     figures are drawn in parallel: it ends the run, when nothing else is left to use the cores."""
     input:
-        **{name: model_files(name) for name in ("point_estimate", "posterior", "summary", "fit", "sampler",
-                                                "elpd_maneuvers", "elpd_blocks", "orthogonality", "calibration", "correction",
-                                                "diagnostics")},
+        **{name: model_files(name) for name in MODEL_FILES},
         extension=[PATHS.model(m).extension for m in EXTENDED],
         preprocessed=PATHS.preprocess,
         checked=PATHS.input_json,
