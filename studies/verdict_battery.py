@@ -154,6 +154,7 @@ def one(args) -> dict:
 def run_battery(n: int, processes: int, out: Path, config_path: Path):
     cfg = yaml.safe_load(config_path.read_text())
     validate(cfg, str(ROOT / "workflow" / "schemas" / "config.schema.yaml"))  # the schema's defaults, as a run's
+    cfg["report"]["figures"] = False  # the battery reads verdicts and tables: no figure changes either
     out.mkdir(parents=True, exist_ok=True)
     todo = [(i, cfg, out) for i in range(n) if not (out / f"{i:04d}.json").exists()]
     with Pool(processes) as pool:

@@ -5,8 +5,8 @@ import pytest
 import yaml
 
 from gyrocal import checks
-from gyrocal.checks.fit import EstimateError, check_noise
-from gyrocal.checks.sensing import increment_quantum_rad
+from gyrocal.inference.sampling.refusals import EstimateError, check_noise
+from gyrocal.model.kinematics import increment_quantum_rad
 from gyrocal.model.units import ARCSEC_RAD
 from gyrocal.simulation import simulate
 from gyrocal.simulation.simulate import STATED_ARW_FLOOR_DEG_SQRT_H

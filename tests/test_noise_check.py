@@ -3,8 +3,8 @@ only where its 95 % interval excludes the stated value and lies wholly outside t
 
 import numpy as np
 
-from gyrocal.checks.fit import NOISE_PLAUSIBLE, noise_beyond
 from gyrocal.criticism.diagnostics import misfit_findings
+from gyrocal.inference.sampling.refusals import NOISE_PLAUSIBLE, noise_beyond
 
 CFG = {"rms_ratio_max": 1.1, "noise_ratio_max": 1.25, "whiteness_z_max": 5.0, "structure_log10_p_min": -6.0}
 STATED = {"sigma_cross_arcsec": 10.0, "sigma_about_arcsec": 40.0, "arw_deg_sqrt_h": 0.003}

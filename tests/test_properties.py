@@ -18,10 +18,10 @@ from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 from gyrocal import checks
-from gyrocal.checks.fit import EstimateError, check_physical
 from gyrocal.inference.fit import classic
 from gyrocal.inference.fit.estimate import point_estimate
 from gyrocal.inference.sampling.priors import Priors
+from gyrocal.inference.sampling.refusals import EstimateError, check_physical
 from gyrocal.io.telemetry import TelemetryError
 from gyrocal.maneuvers import preprocess
 from gyrocal.model.spec import baseline

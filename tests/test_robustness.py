@@ -10,7 +10,7 @@ import pytest
 
 from gyrocal import checks
 from gyrocal.checks import outliers, physics, sampling, saturation, sensing
-from gyrocal.checks.fit import EstimateError
+from gyrocal.inference.sampling.refusals import EstimateError
 from gyrocal.io.calibration import parameter_rows
 from gyrocal.io.telemetry import read_campaign
 from gyrocal.maneuvers import preprocess
@@ -317,8 +317,8 @@ def test_same_config_and_seed_give_byte_identical_outputs(tiny, short_chains, tm
 def test_a_noise_no_sensor_can_have_stops_before_sampling_with_the_residuals(tiny_run):
     import dataclasses
 
-    from gyrocal.checks.fit import check_noise
     from gyrocal.inference.fit.estimate import PointEstimate
+    from gyrocal.inference.sampling.refusals import check_noise
     from gyrocal.maneuvers import preprocess
     out, npz = tiny_run
     est = PointEstimate.load(out / "baseline/point_estimate.npz")
@@ -387,7 +387,7 @@ def test_a_maneuver_too_short_for_the_leave_one_block_out_predictive_is_refused_
     """Each LOO block is predicted from the rest of its maneuver: a maneuver of one block (or one
     whose rest holds a handful of samples) used to crash in a Cholesky factorisation; it is
     refused with its span and the fix."""
-    from gyrocal.checks.fit import check_blocks
+    from gyrocal.inference.sampling.refusals import check_blocks
     enough = types.SimpleNamespace(id="yaw_pos", st_time=np.arange(0.0, 70.0))
     one_block = types.SimpleNamespace(id="roll_neg", st_time=np.arange(0.0, 59.0))
     nearly = types.SimpleNamespace(id="pitch_pos", st_time=np.arange(0.0, 69.0))

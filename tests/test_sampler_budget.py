@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from gyrocal.checks.fit import EstimateError
 from gyrocal.inference.fit import identification
 from gyrocal.inference.fit.likelihood import Stats
 from gyrocal.inference.sampling.budget import SamplingBudget, SamplingStopped
+from gyrocal.inference.sampling.refusals import EstimateError
 from gyrocal.model.spec import baseline
 from gyrocal.simulation import simulate
 
@@ -166,8 +166,8 @@ def test_the_repoimu_z_trial_converges_or_stops_with_why_in_bounded_time(tmp_pat
 def test_a_gauss_markov_share_fitted_at_its_bound_is_named_with_what_to_do():
     """At 100 Hz the REML puts RepoIMU's reference noise all in the Gauss-Markov part (share 0.9997): the
     stop names it and the longer reference interval; inside the bounds, or with white noise, nothing."""
-    from gyrocal.checks.fit import share_at_bound
     from gyrocal.inference.fit.noisefit import GM_LOGIT_BOUND
+    from gyrocal.inference.sampling.refusals import share_at_bound
 
     at_top = np.log([1e-3, 1e-3, 1e-5, 1.0, 0.65])
     at_top[3] = GM_LOGIT_BOUND - 0.01

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from scipy.ndimage import gaussian_filter1d
 
-from gyrocal.checks.fit import share_at_bound
 from gyrocal.criticism.increments import smoothness_finding
 from gyrocal.inference.fit.noisefit import GM_LOGIT_BOUND
 from gyrocal.inference.noise import smoothness
+from gyrocal.inference.sampling.refusals import share_at_bound
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -172,8 +172,8 @@ def test_a_share_at_its_bound_on_a_smooth_residual_is_refused_before_sampling():
     maneuver whose residual is smoothed noise, 10 ms apart, in a tracker that does not turn)."""
     from types import SimpleNamespace
 
-    from gyrocal.checks.fit import EstimateError, check_representable
     from gyrocal.inference.errormodel import Linearization
+    from gyrocal.inference.sampling.refusals import EstimateError, check_representable
 
     rng = np.random.default_rng(6)
     m = 5_000

@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 import yaml
 
-from gyrocal.checks.fit import VariantSkipped, check_variant_informed
 from gyrocal.errors import InputError
+from gyrocal.inference.sampling.refusals import VariantSkipped, check_variant_informed
 from gyrocal.io.calibration import parameter_rows
 from gyrocal.model import effects
 from gyrocal.model.channels import MOM_CHANNELS, Channel

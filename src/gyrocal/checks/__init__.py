@@ -1,5 +1,6 @@
 """Every check of gyrocal as one kind of `Finding`: the input's format and physics, the outlier
-screen, the reference mounting, and the refusals before a posterior is sampled."""
+screen and the reference mounting (the refusals before a posterior is sampled are the sampler's:
+`gyrocal.inference.sampling.refusals`)."""
 
 from gyrocal.checks.campaign import check, read_checked, summary
 from gyrocal.checks.mounting import align, aligned, estimate_mounting

@@ -11,7 +11,6 @@ noise measured in the data themselves, not from one file."""
 
 
 from gyrocal.checks.conventions import convention_findings
-from gyrocal.checks.fit import EstimateError, check_blocks
 from gyrocal.checks.mounting import align
 from gyrocal.checks.outliers import EXCURSION_MAX_S, outlier_distances, screen, trend_distances
 from gyrocal.checks.physics import rotation_findings
@@ -21,6 +20,7 @@ from gyrocal.checks.sensing import physical_limits, sense
 from gyrocal.checks.stuck import stuck_findings
 from gyrocal.finding import Findings
 from gyrocal.inference.fit import classic
+from gyrocal.inference.sampling.refusals import EstimateError, check_blocks
 from gyrocal.io.telemetry import UNIT_NORM_TOL, Campaign, TelemetryError, read_campaign
 from gyrocal.io.telemetry import summary as format_summary
 from gyrocal.maneuvers import preprocess

@@ -25,7 +25,7 @@ __all__ = [
     "consistent_any",
     "fit_rotation",
     "gyro_at_st",
-    "increment_quantum_rad", "interval_rotations",
+    "interval_rotations",
     "neighbour_residual",
     "nominal_body_increments",
     "physical_limits",
@@ -269,20 +269,3 @@ def neighbour_residual(x, reach=OUTLIER_REACH) -> np.ndarray:
     resid = np.zeros_like(x)
     resid[1:-1] = x[1:-1] - np.nanmedian(pairs[:, 1:-1], axis=0)
     return resid
-
-
-def increment_quantum_rad(increments: np.ndarray) -> float:
-    """The angle step (rad) a pulse-counting gyro's increments come in: the largest step of which every
-    channel's every increment is a whole multiple (within a thousandth of it), where the increments take
-    at most a quarter as many values as they have samples; 0 for increments logged at full precision.
-    Its rounding adds ``step / sqrt(12)`` to every attitude error, white."""
-    steps = []
-    for column in np.asarray(increments, dtype=float).reshape(len(increments), -1).T:
-        values = np.unique(np.abs(column[np.isfinite(column)]))
-        if values.size < 2 or values.size > column.size // 4:
-            return 0.0
-        step = float(np.min(np.diff(values)))
-        if step <= 0 or np.max(np.abs(values / step - np.round(values / step))) > 1e-3:
-            return 0.0
-        steps.append(step)
-    return max(steps) if steps else 0.0

@@ -13,7 +13,6 @@ import numpy as np
 import pandas as pd
 from scipy.special import chdtr, chdtrc, gammaln
 
-from gyrocal.checks.fit import noise_beyond
 from gyrocal.criticism import correlation, noiseranking, rategrowth
 from gyrocal.criticism.bands import band_findings
 from gyrocal.criticism.increments import smoothness_finding
@@ -24,6 +23,7 @@ from gyrocal.inference.fit.likelihood import campaign_stats, maneuver_stats, tot
 from gyrocal.inference.noise import covariance, smoothness
 from gyrocal.inference.noise.covariance import CORRELATED_SCALES, JITTER_SCALE, NOISE_SCALES, ratios_of, variances
 from gyrocal.inference.sampling.predictive import WhitenedManeuver
+from gyrocal.inference.sampling.refusals import noise_beyond
 from gyrocal.maneuvers.preprocess import noise_groups
 from gyrocal.model import effects
 from gyrocal.model.units import AXES, rad_to_arcsec
@@ -308,7 +308,7 @@ def misfit_findings(residual_rms, noise_rms, white, ranking, noise_posterior, st
                     noise_interval=None) -> list:
     """Each misfit check as a `Finding`: its figure against the threshold of the config's ``diagnostics``.
     ``noise_interval``: each noise scale's 95 % posterior interval (low, high) by key; a scale
-    without one is judged on its point, ``noise_posterior``, alone (`checks.fit.noise_beyond`)."""
+    without one is judged on its point, ``noise_posterior``, alone (`refusals.noise_beyond`)."""
     findings = []
     ratio = residual_rms / noise_rms
     findings.append(Finding.judged(

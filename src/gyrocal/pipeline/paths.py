@@ -37,8 +37,8 @@ class ModelPaths:
     sampler = _under_root("sampler.json")
     elpd_maneuvers = _under_root("elpd_maneuvers.csv")
     elpd_blocks = _under_root("elpd_blocks.csv")
-    orthogonality = _under_root("orthogonality.csv", "The channel sets' non-orthogonality, beside "
-                                                     "``calibration.csv`` (`gyrocal.io.orthogonality`).")
+    orthogonality = _under_root("orthogonality.csv", "The channel sets' non-orthogonality, beside ``calibration.csv`` "
+                                                     "(`inferencedata.orthogonality_table`).")
     calibration = _under_root("calibration.csv")
     correction = _under_root("correction.json")
     diagnostics = _under_root("diagnostics.json")

@@ -1,5 +1,6 @@
 """The posterior, sampled with emcee: its priors, the noise grid, the proposals, the ensembles, the
-budget that stops a chain that will not converge, the posterior predictive and the InferenceData written from it.
+budget that stops a chain that will not converge, the refusals before sampling,
+the posterior predictive and the InferenceData written from it.
 
 The package imports none of its modules itself: a step that needs one of them (the diagnostics'
 `predictive`) does not import arviz and emcee with it (1.5-2 s of CPU per job). The names it used to
@@ -8,7 +9,7 @@ still there, imported when first asked for."""
 
 import importlib
 
-__all__ = ["budget", "ensemble", "inferencedata", "noisegrid", "posterior", "predictive", "priors", "proposal"]
+__all__ = ["budget", "ensemble", "inferencedata", "noisegrid", "posterior", "predictive", "priors", "proposal", "refusals"]
 
 _FROM = {"assemble": "inferencedata", "Posterior": "posterior", "Prepared": "posterior", "prepare": "posterior",
          "run": "posterior", "Priors": "priors", "model_priors": "priors"}

@@ -1,14 +1,17 @@
-"""What the posterior step writes: the InferenceData, its summary and the fit table.
+"""What the posterior step writes: the InferenceData, its summary, the fit table and the rest.
 
 `assemble` turns a sampled `posterior.Posterior` into an arviz InferenceData holding
 the thinned posterior (in each parameter's unit), the leave-one-block-out pointwise
 log-likelihood PSIS-LOO needs, and a posterior predictive of the attitude errors;
-with it, the per-sample fit table behind the report's figures, the posterior summary
-and the sampler record. The array maths lives in `predictive`; this is the xarray layer.
+with it, the per-sample fit table behind the report's figures, the posterior summary,
+the sampler record, PSIS-LOO per block, the exact leave-one-maneuver-out densities and the
+channel sets' non-orthogonality (`Outputs`). The array maths lives in `predictive`; this is the
+xarray layer.
 """
 
 import logging
 import warnings
+from dataclasses import dataclass
 
 import arviz as az
 import numpy as np
@@ -25,14 +28,16 @@ from gyrocal.inference.noise.covariance import (
     stated_scales,
 )
 from gyrocal.inference.sampling import predictive
+from gyrocal.inference.sampling.posterior import leave_one_maneuver_out
 from gyrocal.inference.sampling.predictive import PARETO_K_MAX
 from gyrocal.maneuvers import preprocess
 from gyrocal.model import channels as ch
 from gyrocal.model import combinations, orthogonality
+from gyrocal.model.correction import flown_sets
 from gyrocal.model.units import AXES, rad_to_arcsec
 
-__all__ = ["CI_PROB", "assemble", "combination_summary", "loo", "loo_blocks", "orthogonality_summary",
-           "posterior_dataset", "sampler_record", "summarize"]
+__all__ = ["CI_PROB", "ORTHOGONALITY_COLUMNS", "Outputs", "assemble", "combination_summary", "loo", "loo_blocks",
+           "orthogonality_summary", "orthogonality_table", "posterior_dataset", "sampler_record", "summarize"]
 
 log = logging.getLogger("gyrocal")
 
@@ -241,17 +246,49 @@ def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
     return groups, pd.concat(fit_tables, ignore_index=True)
 
 
-def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int, pairs=()):
-    """Everything the posterior step writes: ``(idata, summary, fit, sampler record, orthogonality)``,
-    the last the non-orthogonality of the channel sets' ``pairs`` (`orthogonality.pairs`;
-    `orthogonality_summary`, their labels as index ``label``; None without pairs), from every draw like
-    the summary.
+ORTHOGONALITY_COLUMNS = ["set", "channels", "parameter", "unit", "definition", "point", "mean", "sd", "ci95_low",
+                         "ci95_high", "r_hat", "ess_bulk", "prior_only"]
+"""``orthogonality.csv``'s columns (docs/interface.md section 5)."""
+
+
+def orthogonality_table(spec, point_theta, pairs, summary: pd.DataFrame | None) -> pd.DataFrame:
+    """``orthogonality.csv``: per channel set, the non-orthogonality of each pair of its channels
+    (`gyrocal.model.orthogonality`) from the point estimate (SI) and its posterior ``summary``
+    (`orthogonality_summary`, arcsec), beside ``calibration.csv``'s ``sf_mean``; a table of its own,
+    so that ``calibration.csv`` keeps its rows. No rows for a model without misalignments."""
+    point = orthogonality.pair_draws(spec.to_unit(point_theta), spec, pairs) if pairs else []
+    rows = []
+    for p, value in zip(pairs, point, strict=True):
+        row = summary.loc[summary["label"] == p.label].iloc[0]
+        rows.append({"set": p.set, "channels": "+".join(p.channels), "parameter": p.name, "unit": "arcsec",
+                     "definition": p.definition, "point": float(value),
+                     **{k: row[k] for k in ORTHOGONALITY_COLUMNS[6:-1]}, "prior_only": p.prior_only})
+    return pd.DataFrame(rows, columns=ORTHOGONALITY_COLUMNS)
+
+
+@dataclass
+class Outputs:
+    """Everything the posterior step writes, each under its `ModelPaths` name."""
+
+    posterior: az.InferenceData
+    summary: pd.DataFrame
+    fit: pd.DataFrame
+    sampler: dict
+    elpd_blocks: pd.DataFrame
+    elpd_maneuvers: pd.DataFrame
+    orthogonality: pd.DataFrame
+
+
+def assemble(post, maneuvers, priors, sampler_cfg: dict, convergence: dict, seed: int) -> Outputs:
+    """Everything the posterior step writes (`Outputs`) from a sampled ``post`` and its ``priors``.
 
     ``post``'s linearisations and noise structures are used up (`_fit_and_predictive`).
     The summary and convergence use every draw (the summary also holds the identifiable
     combinations, after the noise scales; the sampler record judges the parameters alone); the InferenceData keeps
     ``loglik_draws`` evenly spaced draws per ensemble, with the pointwise
-    log-likelihood per ``block_s`` block and ``predictive_draws`` predictive draws.
+    log-likelihood per ``block_s`` block and ``predictive_draws`` predictive draws. The channel sets'
+    non-orthogonality (every flown set's pairs, `orthogonality.pairs`) is summarised from every draw,
+    like the summary.
     """
     spec, theta_hat = post.estimate.spec, post.estimate.theta
     groups = post.estimate.noise_groups if post.group_index is not None else ()
@@ -266,11 +303,10 @@ def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int, p
     derived = combination_summary(full, per_walker, spec, convergence)
     if derived is not None:
         summary = pd.concat([summary, derived], ignore_index=True)
-    orth = orthogonality_summary(full, per_walker, spec, pairs, convergence)
-    orth = orth.set_index("label") if orth is not None else None
     if not record["converged"]:
         log.warning("THE SAMPLER DID NOT CONVERGE: %s; numbers are not reliable",
                     record["failed_parameters"] or "chains shorter than the autocorrelation limit")
+    elpd = leave_one_maneuver_out(post, priors)
     thin = np.linspace(0, draws.shape[1] - 1, sampler_cfg["loglik_draws"]).astype(int)
     kept = draws[:, thin]
     extra, fit = _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed)
@@ -281,4 +317,8 @@ def assemble(post, maneuvers, sampler_cfg: dict, convergence: dict, seed: int, p
                                   "prior_only": ", ".join(p.label for p in spec.parameters if p.prior_only)})
     for group in idata.groups():
         idata[group].attrs.pop("created_at", None)  # same config and seed, same bytes
-    return idata, summary, fit, record, orth
+    pairs = orthogonality.pairs(spec, flown_sets(maneuvers))
+    orth = orthogonality_summary(full, per_walker, spec, pairs, convergence)
+    return Outputs(idata, summary, fit, record, loo_blocks(idata, spec.model),
+                   pd.DataFrame({"maneuver": [d.id for d in maneuvers], "elpd": elpd}),
+                   orthogonality_table(spec, theta_hat, pairs, orth))

@@ -140,8 +140,8 @@ def compared(models, files) -> list:
 
 
 def skip(reason: str):
-    """Skip a variant with ``reason`` (`gyrocal.checks.fit.VariantSkipped`, which `variant_step` records)."""
-    from gyrocal.checks.fit import VariantSkipped  # the checks' imports, only where a variant is skipped
+    """Skip a variant with ``reason`` (`gyrocal.inference.sampling.refusals.VariantSkipped`, which `variant_step` records)."""
+    from gyrocal.inference.sampling.refusals import VariantSkipped  # the checks' imports, only where a variant is skipped
 
     raise VariantSkipped(reason)
 
@@ -149,7 +149,7 @@ def skip(reason: str):
 def variant_step(record_path, model: str, step: str, run, outputs=()) -> dict | None:
     """Run one step of a model variant (``run()``, a `VARIANT_STEPS` step) so that a refused variant
     does not stop the others: refused input (`gyrocal.errors.InputError`; a variant skipped because
-    the data cannot inform what it adds, `gyrocal.checks.fit.VariantSkipped`) is written to the
+    the data cannot inform what it adds, `gyrocal.inference.sampling.refusals.VariantSkipped`) is written to the
     variant's refusal record ``record_path`` (its ``refused.json``: model, status refused or skipped,
     step, reason) and logged; a later step of a variant refused earlier does not run. Either way each
     of ``outputs`` (the files the workflow's rule declares) is written with that record in place of

@@ -2,10 +2,10 @@
 
 import logging
 
-from gyrocal.checks.fit import check_variant_informed
 from gyrocal.inference.fit import classic
 from gyrocal.inference.fit.estimate import point_estimate
 from gyrocal.inference.noise.covariance import noise_knowledge, stated_scales
+from gyrocal.inference.sampling.refusals import check_variant_informed
 from gyrocal.io.outputs import write_with
 from gyrocal.model import effects
 from gyrocal.model.spec import ModelSpec

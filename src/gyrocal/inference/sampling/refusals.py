@@ -4,11 +4,13 @@ parameter the data do not identify at the fitted noise, or a residual smoother t
 here (`check_representable`); and a sampler stopped by its budget. Each
 raises `EstimateError` with the parameter and the maneuver it concerns. A variant whose every added
 parameter is prior-only is skipped (`VariantSkipped`): the data cannot tell it from the model
-without them."""
+without them.
+
+They are the sampler's preconditions, so they live beside it: the posterior step calls them before
+`posterior.prepare` and between it and `posterior.run`, and nothing here calls back up."""
 
 import numpy as np
 
-from gyrocal.checks.sensing import increment_quantum_rad
 from gyrocal.errors import InputError
 from gyrocal.inference.fit import identification, noisefit
 from gyrocal.inference.fit.estimate import PointEstimate, linearize_all
@@ -16,6 +18,7 @@ from gyrocal.inference.fit.likelihood import maneuver_stats
 from gyrocal.inference.noise import covariance, smoothness
 from gyrocal.inference.noise.covariance import variances
 from gyrocal.model import units
+from gyrocal.model.kinematics import increment_quantum_rad
 
 __all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "NOISE_RATIOS", "SHARE_BOUND_MARGIN", "EstimateError", "VariantSkipped",
            "check_blocks", "check_identified", "check_noise", "check_physical", "check_representable",
@@ -98,7 +101,7 @@ def check_noise(maneuvers, est: PointEstimate):
 
 def _check_resolution(maneuvers, est: PointEstimate, off):
     """Refuse naming the cause where a stated star-tracker noise lies below the gyros' own resolution: a
-    pulse-counting gyro's rounding (`sensing.increment_quantum_rad`) adds white error the fit then gives the
+    pulse-counting gyro's rounding (`kinematics.increment_quantum_rad`) adds white error the fit then gives the
     reference, and every off scale is within `NOISE_PLAUSIBLE` of the stated noise and that rounding added."""
     quantum = max(increment_quantum_rad(d.increments) for d in maneuvers)
     rounding = quantum / np.sqrt(12.0)
