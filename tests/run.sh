@@ -22,13 +22,18 @@ export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"
 python -m pip install --quiet -e ".[workflow,test,docs]"
 python -m ruff check .
 lint-imports --no-logo --no-cache
-python -m snakemake --lint >/dev/null 2>&1 || python -m snakemake --lint
-# The small configs of .test/ (snakemake-workflows' layout): lint the workflow under each, and dry-run it.
+# The workflow linted, under its config and under each small config of .test/ (snakemake-workflows' layout),
+# each of those dry-run, and the docs site built: side by side, one process each on both cores (they
+# are independent); any that fails ends the tier with its own message.
+lint() { python -m snakemake --lint "$@" >/dev/null 2>&1 || python -m snakemake --lint "$@"; }
+jobs=()
+lint & jobs+=($!)
 for config in .test/config/*.yaml; do
-    python -m snakemake --lint --configfile "$config" >/dev/null 2>&1 || python -m snakemake --lint --configfile "$config"
-    python -m snakemake -n -q --configfile "$config" -d "$(mktemp -d)" >/dev/null
+    (lint --configfile "$config" && python -m snakemake -n -q --configfile "$config" -d "$(mktemp -d)" >/dev/null) &
+    jobs+=($!)
 done
-NO_MKDOCS_2_WARNING=1 mkdocs build --strict --quiet --site-dir "$(mktemp -d)"
+NO_MKDOCS_2_WARNING=1 mkdocs build --strict --quiet --site-dir "$(mktemp -d)" & jobs+=($!)
+for job in "${jobs[@]}"; do wait "$job"; done
 if [ "${1:-}" = "--full" ]; then
     shift
     set -- -m "not slow and not slurm" "$@"
