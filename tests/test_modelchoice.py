@@ -192,3 +192,24 @@ def test_the_disagreement_table_has_a_row_per_pair_and_term_and_each_advice_once
     agree = modelchoice.disagreement_table(table, {m: calibration(-1712.0, -1000.0) for m in calibrations}, LABELS,
                                            3.0, LIMITS)
     assert agree.empty
+
+
+def test_terms_too_wide_under_a_variant_are_one_row_per_unit_not_one_per_term():
+    """Twelve terms too wide under one variant were twelve rows; now one per unit, with the count and the range."""
+    labels = [f"dtg{i}_yaw.{p}" for i in (1, 2, 3) for p in ("sf_pos", "sf_neg", "mis_roll", "mis_pitch")]
+    wide = {f"{label}": (900.0 + 10 * k if ".sf" in label else 80.0 + k) for k, label in enumerate(labels)}
+
+    def cal(scale):
+        rows = [{"channel": lab.split(".")[0], "parameter": lab.split(".")[1],
+                 "unit": "ppm" if ".sf" in lab else "arcsec", "mean": 0.0, "sd": w * scale / 3.92,
+                 "ci95_low": -w * scale / 2, "ci95_high": w * scale / 2} for lab, w in wide.items()]
+        return pd.DataFrame(rows)
+
+    table = comparison([("a", BASE, False, [9, 9, 9]), ("b", BASE + "+bias_drift", False, [9, 8.9, 9])])
+    rows = modelchoice.disagreement_table(table, {"a": cal(0.01), "b": cal(1.0)}, labels, 3.0,
+                                          {"ppm": 200.0, "arcsec": 30.0})
+    assert list(rows["term"]) == ["6 terms: dtg1_yaw.sf_pos, dtg1_yaw.sf_neg, dtg2_yaw.sf_pos, ...",
+                                  "6 terms: dtg1_yaw.mis_roll, dtg1_yaw.mis_pitch, dtg2_yaw.mis_roll, ..."]
+    assert rows["difference"].iloc[0] == "under b known only within 900-990 ppm (95 %; limit 200)"
+    assert rows["difference"].iloc[1] == "under b known only within 82-91 arcsec (95 %; limit 30)"
+    assert list(rows["what would separate them"] != "") == [True, False]

@@ -205,21 +205,40 @@ def _model_disagreement(classified: pd.DataFrame, calibrations: dict, core_label
     return reviewed, members, every, found, {m: w for m, w in wide.items() if w}
 
 
+def _by_unit(widths: list) -> list:
+    """Terms too wide under one variant, grouped by unit (ppm, arcsec), in their order."""
+    units = list(dict.fromkeys(x["unit"] for x in widths))
+    return [(u, [x for x in widths if x["unit"] == u]) for u in units]
+
+
+def _terms(group: list, shown: int = 3) -> str:
+    """A group of terms in a table cell: every label where few, else their count and the first few."""
+    labels = [x["label"] for x in group]
+    return ", ".join(labels) if len(labels) <= shown else f"{len(labels)} terms: {', '.join(labels[:shown])}, ..."
+
+
+def _span(values: list) -> str:
+    """A width, or the range of several, as the table prints them."""
+    lo, hi = min(values), max(values)
+    return f"{lo:,.0f}" if round(lo) == round(hi) else f"{lo:,.0f}-{hi:,.0f}"
+
+
 def disagreement_table(classified: pd.DataFrame, calibrations: dict, core_labels: list, agree_sd: float,
                        width_limits: dict) -> pd.DataFrame:
     """The sensitivity check's detail as a table, a row per pair of variants and term: the models,
     the term, the difference (its size, and in combined sd), and what would separate the two
-    (`separating_advice`), each distinct advice once, on its first row. A term known too loosely
-    under a variant has no sd: its row says how wide its interval is."""
+    (`separating_advice`), each distinct advice once, on its first row. Terms known too loosely under a
+    variant have no sd: one row per variant and unit says how many, and how wide their intervals are."""
     reviewed, _, _, found, wide = _model_disagreement(classified, calibrations, core_labels, agree_sd, width_limits)
     effects = {r.model: r.effects.split("+") for r in classified.itertuples()}
     rows = [{"models": f"{d['models'][0]} / {d['models'][1]}", "term": d["label"],
              "difference": f"{abs(d['difference']):,.1f} {d['unit']}", "difference (sd)": round(d["z"], 1),
              "advice": separating_advice(effects[d["models"][0]], effects[d["models"][1]])} for d in found]
-    rows += [{"models": f"{reviewed} / {other}", "term": x["label"],
-              "difference": f"under {other} known only within {x['width']:,.0f} {x['unit']} (95 %; limit {x['limit']:g})",
+    rows += [{"models": f"{reviewed} / {other}", "term": _terms(group),
+              "difference": f"under {other} known only within {_span([x['width'] for x in group])} {unit} "
+                            f"(95 %; limit {group[0]['limit']:g})",
               "difference (sd)": None, "advice": separating_advice(effects[reviewed], effects[other])}
-             for other, w in wide.items() for x in w]
+             for other, w in wide.items() for unit, group in _by_unit(w)]
     table = pd.DataFrame(rows, columns=["models", "term", "difference", "difference (sd)", "advice"])
     first = ~table["advice"].duplicated()
     return table.assign(advice=table["advice"].where(first, "")).rename(
