@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from gyrocal.errors import excerpt
-from gyrocal.io.yamlfile import TelemetryError, check_schema, read_yaml
+from gyrocal.io.yamlfile import TelemetryError, check_schema, read_yaml, schema
 from gyrocal.model.channels import Channel, channel_sets
 from gyrocal.model.sensorclass import SENSOR_CLASSES
 from gyrocal.model.units import AXES
@@ -43,15 +43,18 @@ NAME_PATTERN = re.compile(r"\A[A-Za-z0-9_]+\Z")
 r"""A campaign name, maneuver id or channel name, matched whole (`re.fullmatch`; ``\Z``, unlike ``$``,
 does not match before a final newline, so ``.match`` is whole too): ``evil\n`` is refused."""
 CHANNEL_PATTERN = re.compile(r"\A(?:dtg(\d+)_(roll|pitch|yaw))\Z")
-NAME_MAX = 64
-"""The longest campaign name: it names folders and files of a run (``results/<name>/``, ``logs/<name>/``),
-and a file system refuses a name over 255 bytes ("File name too long")."""
-PERIODIC_TAIL = re.compile(r"(.+?)\1{19,}\Z")
-"""A name ending in one part repeated 20 times or more (``run_000000000000000000000000``): Snakemake refuses
-such a wildcard value (PeriodicWildcardError), taking it for an endless recursion of a rule."""
-RESERVED_NAMES = ("fleet", "plan", "study")
-"""Names no campaign may take: the folders ``results/fleet`` (a fleet's summary), ``results/plan``
-(``gyrocal plan``'s default) and ``results/study`` (the validation study's default)."""
+_NAME_SCHEMA = schema("campaign")["properties"]["name"]
+NAME_MAX = int(_NAME_SCHEMA["maxLength"])
+"""The longest campaign name (``campaign.schema.json``, which states it): it names folders and files of a
+run (``results/<name>/``, ``logs/<name>/``), and a file system refuses a name over 255 bytes ("File name
+too long")."""
+PERIODIC_TAIL = re.compile(_NAME_SCHEMA["not"]["anyOf"][1]["pattern"].replace("(?![\\s\\S])", r"\Z"))
+"""A name ending in one part repeated 20 times or more (``run_000000000000000000000000``; the schema's
+pattern): Snakemake refuses such a wildcard value (PeriodicWildcardError), taking it for an endless
+recursion of a rule."""
+RESERVED_NAMES = tuple(_NAME_SCHEMA["not"]["anyOf"][0]["enum"])
+"""Names no campaign may take (the schema's): the folders ``results/fleet`` (a fleet's summary),
+``results/plan`` (``gyrocal plan``'s default) and ``results/study`` (the validation study's default)."""
 DIRECTIONS = ("+", "-", "both")
 """A maneuver turns one way, the other, or both (several turns each way, no inertial holds)."""
 DEFAULT_NOISE_GROUP = "all"
@@ -235,7 +238,9 @@ def read_meta(directory) -> dict:
         fail(cpath, f"{len(name)} characters, over the {NAME_MAX} a campaign name may have (it names the run's "
                     f"folders): {name[:20]}...", where, "give the campaign a shorter name: name: ...")
     if repeated := PERIODIC_TAIL.search(name):
-        fail(cpath, f"{excerpt(name)} ends in {repeated.group(1)!r} repeated {len(repeated.group(0)) // len(repeated.group(1))} "
+        unit = repeated.group(1)
+        times = len(re.search(f"(?:{re.escape(unit)})+\\Z", name).group(0)) // len(unit)
+        fail(cpath, f"{excerpt(name)} ends in {unit!r} repeated {times} "
                     "times, which Snakemake refuses in a run's paths (it takes it for an endless recursion)", where,
              "give the campaign a name without such a repetition: name: ...")
     if name in RESERVED_NAMES:
