@@ -188,7 +188,8 @@ def triad_rotation(spec: ModelSpec) -> np.ndarray:
 def mounting_separability(cov_unit: np.ndarray, spec: ModelSpec) -> list:
     """Per body axis: the triad's rotation about it (the mean of the misalignments a turn about it
     moves, each signed as the turn moves it; for one triad half the difference of the two opposite
-    misalignments) and each pair's non-orthogonality (half the sum of two opposite misalignments),
+    misalignments) and each pair's non-orthogonality (the sum of two opposite misalignments, to first
+    order 90 deg less the angle between their sensing axes, as `orthogonality` and ``orthogonality.csv`` give it),
     with the posterior sd over the prior's as fitted (mounting taken as known) and with the
     mounting free: the data's information (`data_information`) with a turn of the triad about
     every axis integrated out. A combination the mounting takes up has a ratio near 1 there: not
@@ -220,8 +221,8 @@ def mounting_separability(cov_unit: np.ndarray, spec: ModelSpec) -> list:
         for i in np.flatnonzero(rot[:, k] > 0):
             for j in np.flatnonzero(rot[:, k] < 0):
                 w = np.zeros(len(idx))
-                w[[i, j]] = 0.5
-                rows.append(row(axis, "non-orthogonality", w, f"({spec.labels[idx[i]]} + {spec.labels[idx[j]]}) / 2"))
+                w[[i, j]] = 1.0
+                rows.append(row(axis, "non-orthogonality", w, f"{spec.labels[idx[i]]} + {spec.labels[idx[j]]}"))
     return rows
 
 
