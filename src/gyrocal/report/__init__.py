@@ -1,4 +1,11 @@
 """What a reviewer reads: the pre-uplink HTML report, its figures and the fleet summary. It renders
-findings and decides nothing."""
+findings and decides nothing. Its entry points, below, are imported when first asked for
+(`gyrocal.exports`)."""
 
-__all__ = ["context", "figures", "fleet", "review"]
+from gyrocal.exports import lazy
+
+_ENTRY_POINTS = {"build_context": "review", "render": "review", "ReviewInputs": "review"}
+"""Each entry point and the module it comes from."""
+
+__all__ = sorted(_ENTRY_POINTS)
+__getattr__, __dir__ = lazy(__name__, _ENTRY_POINTS)

@@ -2,20 +2,15 @@
 budget that stops a chain that will not converge, the refusals before sampling,
 the posterior predictive and the InferenceData written from it.
 
-The package imports none of its modules itself: a step that needs one of them (the diagnostics'
-`predictive`) does not import arviz and emcee with it (1.5-2 s of CPU per job). The names it used to
-take from them (`assemble`, `Posterior`, `Prepared`, `Priors`, `model_priors`, `prepare`, `run`) are
-still there, imported when first asked for."""
+Its entry points, below, are imported when first asked for (`gyrocal.exports`): a step that needs one
+of its modules (the diagnostics' `predictive`) does not import arviz and emcee with it (1.5-2 s of CPU
+per job)."""
 
-import importlib
+from gyrocal.exports import lazy
 
-__all__ = ["budget", "ensemble", "inferencedata", "noisegrid", "posterior", "predictive", "priors", "proposal", "refusals"]
+_ENTRY_POINTS = {"model_priors": "priors", "Priors": "priors", "prepare": "posterior", "run": "posterior",
+                 "Prepared": "posterior", "Posterior": "posterior", "assemble": "inferencedata"}
+"""Each entry point and the module it comes from."""
 
-_FROM = {"assemble": "inferencedata", "Posterior": "posterior", "Prepared": "posterior", "prepare": "posterior",
-         "run": "posterior", "Priors": "priors", "model_priors": "priors"}
-
-
-def __getattr__(name):
-    if name in _FROM:
-        return getattr(importlib.import_module(f"{__name__}.{_FROM[name]}"), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__all__ = sorted(_ENTRY_POINTS)
+__getattr__, __dir__ = lazy(__name__, _ENTRY_POINTS)
