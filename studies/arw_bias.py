@@ -13,6 +13,9 @@ thing changed at a time, to find where a bias comes from:
 ``--channels dtg1_roll,dtg1_pitch,dtg2_yaw`` flies three of the scenario's channels: one channel
 set, as a triad of single-axis gyros, where no second set's difference measures the walk.
 ``--gyro-hz 2.5`` samples the gyros so that every other 1-Hz star-tracker sample falls mid-interval.
+``--misalignment-arcsec 2000,2800`` draws each campaign's misalignments afresh, of either sign and of a
+magnitude between the two (a triad far from its nominal axes, as the verdict battery's
+``large_misalignment``; the mounting declared correctly).
 
     python studies/arw_bias.py [--scenario tests/data/tiny.yaml] [--seeds 20] [--posterior] [--out OUT.csv]
 
@@ -120,6 +123,18 @@ def fit(scenario, seed, cfg, posterior_draws: bool) -> dict:
     return {k: (float(np.exp(v) / stated_arw) if k != "seed" else v) for k, v in row.items()}
 
 
+def with_misalignments(scenario, bounds_arcsec, seed):
+    """The scenario with every channel's misalignments drawn afresh for ``seed``: either sign, magnitude
+    uniform between ``bounds_arcsec``."""
+    rng = np.random.default_rng([seed, 2800])
+    out = copy.deepcopy(scenario)
+    for values in out["truth"].values():
+        for key in values:
+            if key.startswith("mis_"):
+                values[key] = float(rng.choice([-1.0, 1.0]) * rng.uniform(*bounds_arcsec))
+    return out
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scenario", default=str(ROOT / "tests" / "data" / "tiny.yaml"))
@@ -129,6 +144,8 @@ def main(argv=None):
     parser.add_argument("--channels", default="", help="comma-separated: fly only these channels")
     parser.add_argument("--gyro-hz", type=float, default=None,
                         help="the gyros' rate; 2.5 puts every other 1-Hz star-tracker sample mid-interval")
+    parser.add_argument("--misalignment-arcsec", default="",
+                        help="LO,HI: every misalignment drawn per campaign, either sign, magnitude in [LO, HI]")
     parser.add_argument("--out", default=None)
     args = parser.parse_args(argv)
     from gyrocal.io.scenario import load_scenario
@@ -145,6 +162,8 @@ def main(argv=None):
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     rows = []
     for seed in range(args.first_seed, args.first_seed + args.seeds):
+        if args.misalignment_arcsec:
+            scenario = with_misalignments(scenario, [float(v) for v in args.misalignment_arcsec.split(",")], seed)
         rows.append(fit(scenario, seed, cfg, args.posterior))
         print(" ".join(f"{k}={v:.4f}" if k != "seed" else f"seed={v}" for k, v in rows[-1].items()), flush=True)
     table = pd.DataFrame(rows)
@@ -157,7 +176,8 @@ def main(argv=None):
         "below_1": (table.drop(columns="seed") < 1).sum(),
     })
     print(f"\nARW fitted / stated over {len(table)} campaigns of {Path(args.scenario).name}"
-          f"{' with ' + args.channels if args.channels else ''}:")
+          f"{' with ' + args.channels if args.channels else ''}"
+          f"{', misalignments ' + args.misalignment_arcsec + ' arcsec' if args.misalignment_arcsec else ''}:")
     print(summary.to_string(float_format=lambda v: f"{v:.4f}"))
     return 0
 
