@@ -159,21 +159,3 @@ def test_sampled_jitter_and_the_calibrations_intervals_cover_the_truth():
     assert np.percentile(jitter, 97.5) < 1.0, np.percentile(jitter, [2.5, 50, 97.5])
     _, z_white = _sampled(campaign, truth, BASE)
     assert max(abs(z[k] - z_white[k]) for k in z) < 0.2, {k: z[k] - z_white[k] for k in z}
-
-
-@pytest.mark.full  # the correlated model's REML on the jittered campaign: 50 s
-def test_the_ranking_never_names_the_jitter_to_a_model_that_cannot_take_it():
-    """A model with Gauss-Markov reference noise cannot hold the timing jitter (`effects.incompatible`):
-    on the jittered campaign, whose white model's ranking puts st_jitter first, the correlated model's
-    ranking leaves it out, given the same significant rate growth."""
-    from gyrocal.criticism import diagnostics
-
-    campaign = _campaign(5.0)[0]
-    maneuvers, est = _fitted(campaign, BASE + ["st_correlated_noise"])
-    growth = {"chi2": 1000.0, "log10_p": -200.0}
-    white = {"gauss_markov": {"chi2": 0.0}, "rate_growth": growth}
-    ranking, _ = diagnostics.rank(maneuvers, est, [], white=white)
-    assert "st_jitter" not in [r["name"] for r in ranking]
-    maneuvers, est = _fitted(campaign, BASE)
-    ranking, _ = diagnostics.rank(maneuvers, est, [], white=white)
-    assert "st_jitter" in [r["name"] for r in ranking]

@@ -198,9 +198,7 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
     scored once, under its name, with the signature beside it. A noise-model effect
     (correlated star-tracker noise) is scored from ``white`` by the likelihood ratio of white plus
     Gauss-Markov noise over white (`correlation.score`, on two degrees of freedom), and set below a
-    deterministic candidate that leaves it unexplained (`noiseranking.demote_explained`). A noise-model
-    effect the model cannot hold beside its own (`effects.incompatible`) is not scored: it would be named
-    as the explanation of a misfit that no extension of this model can take.
+    deterministic candidate that leaves it unexplained (`noiseranking.demote_explained`).
     Returns a list of dicts (best first) and, per candidate with per-channel columns,
     its statistic channel by channel.
     """
@@ -221,16 +219,13 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
         if per_channel:
             detail[effect.name] = {extras[i].label: round(_chi2_drop(stats, n_model, [i]), 2)
                                                        for i in per_channel}
-    have = [effects.LIBRARY[n] for n in estimate.spec.effect_names if n in effects.LIBRARY]
     if white is not None and not estimate.spec.correlated_noise:
         fitted = white["gauss_markov"]
-        for effect in (e for e in effects.LIBRARY.values() if e.noise and not e.rate_noise
-                       and not effects.incompatible(have + [e])):
+        for effect in (e for e in effects.LIBRARY.values() if e.noise and not e.rate_noise):
             ranking.append(_entry(effect.name, "effect", fitted["chi2"], correlation.GAUSS_MARKOV_DF,
                                   effect.description + correlation.caveat(fitted)))
-    jitter = effects.LIBRARY["st_jitter"]
-    if (white is not None and white.get("rate_growth") and not estimate.spec.jitter_noise
-            and not effects.incompatible(have + [jitter])):
+    if white is not None and white.get("rate_growth") and not estimate.spec.jitter_noise:
+        jitter = effects.LIBRARY["st_jitter"]
         ranking.append(_entry(jitter.name, "effect", white["rate_growth"]["chi2"], rategrowth.RATE_DF,
                               jitter.description))
     ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
