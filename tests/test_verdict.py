@@ -133,3 +133,18 @@ def test_an_explanation_is_called_best_only_where_its_test_is_significant():
     assert weak.why.endswith("No effect or signature explains the misfit significantly (log10 p below -6); the "
                              "top-ranked: effect bias_drift (log10 p = -3.2), effect rate_sign (log10 p = -2.1), "
                              "effect st_latency (log10 p = -1.0)")
+
+
+def test_a_best_explanation_the_model_cannot_take_says_why_and_advises_a_variant_without_what_it_cannot_join():
+    """A Gauss-Markov model whose misfit the timing jitter explains best: st_jitter cannot join
+    st_correlated_noise (`effects.incompatible`), so the advice is not to add it to this model."""
+    diagnostics = misfit_diagnostics([-9.0])
+    diagnostics["ranking"][0]["name"] = "st_jitter"
+    diagnostics["effects"] = ["scale_factor", "misalignment", "bias", "st_correlated_noise"]
+    check = verdict.misfit_check(diagnostics, -6.0)
+    assert "Best explanation: effect st_jitter" in check.why
+    assert check.why.endswith("; this model cannot take it: st_jitter and st_correlated_noise cannot be combined yet "
+                              "(the Gauss-Markov filter has no timing-jitter component)")
+    assert check.action == "add a variant with st_jitter in place of the effect it cannot join (models:)"
+    diagnostics["effects"] = ["scale_factor", "misalignment", "bias"]
+    assert verdict.misfit_check(diagnostics, -6.0).action == "add a variant with st_jitter (models:)"

@@ -6,7 +6,7 @@ library effect whose score test is significant (log10 p below the config's
 extended by that effect as one more variant (``extended``; ``extended_<k>`` for the k-th step,
 up to the config's ``loop.depth``), and the comparison and the review show the error before and
 after. Anything else (no misfit, a signature or a plugin's effect, nothing significant, an
-effect the model has already, or one it cannot take with its own, `effects.incompatible`) stops the
+effect the model has already, or one it cannot take with its own, `effects.cannot_join`) stops the
 loop with its reason.
 """
 
@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass
 
 import pandas as pd
 
-from gyrocal.model.effects import LIBRARY, incompatible
+from gyrocal.model.effects import LIBRARY, cannot_join
 
 __all__ = ["EXTENDED", "Extension", "before_after", "extension_names", "next_effect", "outside_share"]
 
@@ -68,7 +68,7 @@ def next_effect(base: str, base_effects, diagnostics: dict, log10_p_min: float) 
                     f"(log10 p = {best['log10_p']:.1f}), which is not a library effect: model it (plugins:)")
     if best["name"] in effects:
         return stop(f"model {base} has {best['name']} already")
-    if why := incompatible([LIBRARY[n] for n in effects + [best["name"]] if n in LIBRARY]):
+    if why := cannot_join(effects, best["name"]):
         return stop(f"model {base} misfits and its best explanation is effect {best['name']} "
                     f"(log10 p = {best['log10_p']:.1f}), but {why}")
     return Extension(base, best["name"], effects + [best["name"]],
