@@ -24,7 +24,7 @@ python -m ruff check .
 lint-imports --no-logo --no-cache
 # The workflow linted, under its config and under each small config of .test/ (snakemake-workflows' layout),
 # each of those dry-run, and the docs site built: side by side, one process each on both cores (they
-# are independent); any that fails ends the tier with its own message.
+# are independent); the first that fails ends the tier with its own message, and stops the others.
 lint() { python -m snakemake --lint "$@" >/dev/null 2>&1 || python -m snakemake --lint "$@"; }
 jobs=()
 lint & jobs+=($!)
@@ -33,7 +33,9 @@ for config in .test/config/*.yaml; do
     jobs+=($!)
 done
 NO_MKDOCS_2_WARNING=1 mkdocs build --strict --quiet --site-dir "$(mktemp -d)" & jobs+=($!)
-for job in "${jobs[@]}"; do wait "$job"; done
+for _ in "${jobs[@]}"; do
+    wait -n || { status=$?; kill "${jobs[@]}" 2>/dev/null || true; exit "$status"; }
+done
 if [ "${1:-}" = "--full" ]; then
     shift
     set -- -m "not slow and not slurm" "$@"

@@ -22,15 +22,15 @@ def run(maneuver_files, point_estimate_npz, out: ModelPaths, settings: Posterior
     leave-one-maneuver-out predictive densities, PSIS-LOO per block and the channel sets'
     non-orthogonality. ``maneuver_files``: the preprocessed ``.npz``, in the campaign's order; ``out``:
     where each output goes, by its `ModelPaths` name (a `ModelPaths`, or the rule's
-    ``snakemake.output``, whose names are those). Load, check, prepare, check, run, write."""
+    ``snakemake.output``, whose names are those). Load, check, priors, check, prepare, check, run, write."""
     s = settings
     maneuvers = load_maneuvers(maneuver_files)
     est = PointEstimate.load(point_estimate_npz, effects.known(s.plugins))
     refusals.check_blocks(maneuvers, s.sampler["block_s"])
     refusals.check_noise(maneuvers, est)
-    refusals.check_physical(maneuvers, est, est.spec.bound_si)
+    priors = model_priors(est, s.priors, s.prior_from)  # their bounds are the config's where it sets them
+    refusals.check_physical(maneuvers, est, priors.bound)
     refusals.check_representable(maneuvers, est)
-    priors = model_priors(est, s.priors, s.prior_from)
     try:
         ready = posterior.prepare(maneuvers, est, priors, s.grid)
         weakest = refusals.check_identified(est, priors.sd, ready.stats, ready.ratio_sd, priors.log_ratio_sd)
