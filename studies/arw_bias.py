@@ -148,6 +148,9 @@ def main(argv=None):
                         help="LO,HI: every misalignment drawn per campaign, either sign, magnitude in [LO, HI]")
     parser.add_argument("--out", default=None)
     args = parser.parse_args(argv)
+    bounds = [float(v) for v in args.misalignment_arcsec.split(",")] if args.misalignment_arcsec else None
+    if bounds is not None and not (len(bounds) == 2 and 0.0 <= bounds[0] <= bounds[1]):
+        parser.error(f"--misalignment-arcsec: two numbers LO,HI with 0 <= LO <= HI, got {args.misalignment_arcsec}")
     from gyrocal.io.scenario import load_scenario
 
     scenario = load_scenario(args.scenario)
@@ -162,9 +165,8 @@ def main(argv=None):
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     rows = []
     for seed in range(args.first_seed, args.first_seed + args.seeds):
-        if args.misalignment_arcsec:
-            scenario = with_misalignments(scenario, [float(v) for v in args.misalignment_arcsec.split(",")], seed)
-        rows.append(fit(scenario, seed, cfg, args.posterior))
+        flown = with_misalignments(scenario, bounds, seed) if bounds else scenario
+        rows.append(fit(flown, seed, cfg, args.posterior))
         print(" ".join(f"{k}={v:.4f}" if k != "seed" else f"seed={v}" for k, v in rows[-1].items()), flush=True)
     table = pd.DataFrame(rows)
     if args.out:

@@ -5,6 +5,7 @@ imports none of its modules, so a step that needs one module does not pay for th
 (arviz, emcee, matplotlib: 1.5-2 s of CPU per job). ``from package import module`` works as before."""
 
 import importlib
+import sys
 
 __all__ = ["lazy"]
 
@@ -19,6 +20,6 @@ def lazy(package: str, sources: dict) -> tuple:
         raise AttributeError(f"module {package!r} has no attribute {name!r}")
 
     def __dir__():
-        return sorted(sources)
+        return sorted(set(vars(sys.modules[package])) | set(sources))
 
     return __getattr__, __dir__

@@ -7,7 +7,7 @@ from gyrocal.exports import lazy
 
 _ENTRY_POINTS = {"diagnose": "diagnostics", "rank": "diagnostics", "compare": "comparison",
                  "reviewed_model": "modelchoice", "next_effect": "extension", "compare_files": "agreement",
-                 "joint_fit": "joint", "checks": "verdict"}
+                 "joint_fit": "joint"}
 """Each entry point and the module it comes from."""
 
 __all__ = sorted(_ENTRY_POINTS)

@@ -4,7 +4,7 @@ whole or not at all. Its entry points, below, are imported when first asked for 
 
 from gyrocal.exports import lazy
 
-_ENTRY_POINTS = {"read_campaign": "telemetry", "write_campaign": "telemetry", "TelemetryError": "telemetry",
+_ENTRY_POINTS = {"read_campaign": "telemetry", "write_campaign": "telemetry", "TelemetryError": "yamlfile",
                  "import_files": "importer", "load_scenario": "scenario", "calibration_table": "calibration",
                  "write_csv": "outputs", "write_json": "outputs"}
 """Each entry point and the module it comes from."""

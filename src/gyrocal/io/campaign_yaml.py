@@ -41,18 +41,20 @@ NORM_REFUSE_TOL = 1e-3
 inside, a wrong column does not."""
 NAME_PATTERN = re.compile(r"\A[A-Za-z0-9_]+\Z")
 r"""A campaign name, maneuver id or channel name, matched whole (`re.fullmatch`; ``\Z``, unlike ``$``,
-does not match before a final newline, so ``.match`` is whole too): ``evil\n`` is refused."""
+does not match before a final newline, so ``.match`` is whole too): ``evil\n`` is refused. The schema
+states it for ``name``; it is stated here too because maneuver ids and channel names take it as well."""
 CHANNEL_PATTERN = re.compile(r"\A(?:dtg(\d+)_(roll|pitch|yaw))\Z")
 _NAME_SCHEMA = schema("campaign")["properties"]["name"]
+_NAME_REFUSED = _NAME_SCHEMA["not"]["anyOf"]
 NAME_MAX = int(_NAME_SCHEMA["maxLength"])
 """The longest campaign name (``campaign.schema.json``, which states it): it names folders and files of a
 run (``results/<name>/``, ``logs/<name>/``), and a file system refuses a name over 255 bytes ("File name
 too long")."""
-PERIODIC_TAIL = re.compile(_NAME_SCHEMA["not"]["anyOf"][1]["pattern"].replace("(?![\\s\\S])", r"\Z"))
+PERIODIC_TAIL = re.compile(next(s["pattern"] for s in _NAME_REFUSED if "pattern" in s))
 """A name ending in one part repeated 20 times or more (``run_000000000000000000000000``; the schema's
 pattern): Snakemake refuses such a wildcard value (PeriodicWildcardError), taking it for an endless
 recursion of a rule."""
-RESERVED_NAMES = tuple(_NAME_SCHEMA["not"]["anyOf"][0]["enum"])
+RESERVED_NAMES = tuple(next(s["enum"] for s in _NAME_REFUSED if "enum" in s))
 """Names no campaign may take (the schema's): the folders ``results/fleet`` (a fleet's summary),
 ``results/plan`` (``gyrocal plan``'s default) and ``results/study`` (the validation study's default)."""
 DIRECTIONS = ("+", "-", "both")
@@ -238,9 +240,7 @@ def read_meta(directory) -> dict:
         fail(cpath, f"{len(name)} characters, over the {NAME_MAX} a campaign name may have (it names the run's "
                     f"folders): {name[:20]}...", where, "give the campaign a shorter name: name: ...")
     if repeated := PERIODIC_TAIL.search(name):
-        unit = repeated.group(1)
-        times = len(re.search(f"(?:{re.escape(unit)})+\\Z", name).group(0)) // len(unit)
-        fail(cpath, f"{excerpt(name)} ends in {unit!r} repeated {times} "
+        fail(cpath, f"{excerpt(name)} ends in {repeated.group(1)!r} repeated {len(repeated.group(0)) // len(repeated.group(1))} "
                     "times, which Snakemake refuses in a run's paths (it takes it for an endless recursion)", where,
              "give the campaign a name without such a repetition: name: ...")
     if name in RESERVED_NAMES:

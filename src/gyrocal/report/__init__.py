@@ -4,7 +4,7 @@ findings and decides nothing. Its entry points, below, are imported when first a
 
 from gyrocal.exports import lazy
 
-_ENTRY_POINTS = {"build_context": "review", "render": "review", "ReviewInputs": "review"}
+_ENTRY_POINTS = {"build_context": "review", "render": "review", "ReviewInputs": "context"}
 """Each entry point and the module it comes from."""
 
 __all__ = sorted(_ENTRY_POINTS)

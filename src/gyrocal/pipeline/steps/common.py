@@ -141,7 +141,7 @@ def compared(models, files) -> list:
 
 def skip(reason: str):
     """Skip a variant with ``reason`` (`gyrocal.inference.sampling.refusals.VariantSkipped`, which `variant_step` records)."""
-    from gyrocal.inference.sampling.refusals import VariantSkipped  # the checks' imports, only where a variant is skipped
+    from gyrocal.inference.sampling.refusals import VariantSkipped  # the refusals' imports, only where a variant is skipped
 
     raise VariantSkipped(reason)
 
