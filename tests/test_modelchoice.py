@@ -115,8 +115,8 @@ def test_a_variant_the_data_cannot_rule_out_under_which_a_term_is_unknown_blocks
     check = modelchoice.sensitivity_check(table, {"baseline": calibration(-1700, -1000),
                                                   "nonlin": calibration(-1650, -1000, sd=510.0)}, LABELS, 3.0, LIMITS)
     assert not check.passed
-    assert check.why.startswith("the data cannot tell baseline from nonlin: under nonlin, dtg2_yaw.sf_pos is known "
-                                   "only within 1,999 ppm (95 %; limit 200)")
+    assert check.why.startswith("the data cannot tell baseline from nonlin: dtg2_yaw.sf_pos, dtg2_yaw.sf_neg under "
+                                "nonlin known only within 1,999 ppm (95 %; limit 200)")
     assert "sf_nonlinearity: a second rotation rate in each direction" in check.why
 
 
@@ -138,7 +138,7 @@ def test_a_pair_that_both_disagrees_and_leaves_a_term_unknown_is_one_sentence_wi
                                           LABELS, 3.0, LIMITS)
     assert not check.passed and ": ." not in check.why and check.why.count("cannot tell") == 1
     assert check.why.startswith("the data cannot tell a from b: dtg2_yaw.sf_pos differs by 5,000.0 ppm (9.8 sd); "
-                                "under a, dtg2_yaw.sf_pos is known only within 1,999 ppm")
+                                "dtg2_yaw.sf_pos, dtg2_yaw.sf_neg under a known only within 1,999 ppm")
 
 
 def symmetric_calibration(sf, sd=10.0):

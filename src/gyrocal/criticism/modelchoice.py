@@ -223,6 +223,12 @@ def _span(values: list) -> str:
     return f"{lo:,.0f}" if round(lo) == round(hi) else f"{lo:,.0f}-{hi:,.0f}"
 
 
+def _known_within(other: str, group: list) -> str:
+    """How loosely the terms of one unit are known under variant ``other``, against their limit."""
+    return (f"under {other} known only within {_span([x['width'] for x in group])} {group[0]['unit']} "
+            f"(95 %; limit {group[0]['limit']:g})")
+
+
 def disagreement_table(classified: pd.DataFrame, calibrations: dict, core_labels: list, agree_sd: float,
                        width_limits: dict) -> pd.DataFrame:
     """The sensitivity check's detail as a table, a row per pair of variants and term: the models,
@@ -234,11 +240,9 @@ def disagreement_table(classified: pd.DataFrame, calibrations: dict, core_labels
     rows = [{"models": f"{d['models'][0]} / {d['models'][1]}", "term": d["label"],
              "difference": f"{abs(d['difference']):,.1f} {d['unit']}", "difference (sd)": round(d["z"], 1),
              "advice": separating_advice(effects[d["models"][0]], effects[d["models"][1]])} for d in found]
-    rows += [{"models": f"{reviewed} / {other}", "term": _terms(group),
-              "difference": f"under {other} known only within {_span([x['width'] for x in group])} {unit} "
-                            f"(95 %; limit {group[0]['limit']:g})",
+    rows += [{"models": f"{reviewed} / {other}", "term": _terms(group), "difference": _known_within(other, group),
               "difference (sd)": None, "advice": separating_advice(effects[reviewed], effects[other])}
-             for other, w in wide.items() for unit, group in _by_unit(w)]
+             for other, w in wide.items() for _, group in _by_unit(w)]
     table = pd.DataFrame(rows, columns=["models", "term", "difference", "difference (sd)", "advice"])
     first = ~table["advice"].duplicated()
     return table.assign(advice=table["advice"].where(first, "")).rename(
@@ -272,8 +276,7 @@ def sensitivity_check(classified: pd.DataFrame, calibrations: dict, core_labels:
             f"{d['label']} differs by {abs(d['difference']):,.1f} {d['unit']} ({d['z']:.1f} sd)")
     for other, w in wide.items():
         terms.setdefault(frozenset((reviewed, other)), ((reviewed, other), []))[1].extend(
-            f"under {other}, {x['label']} is known only within {x['width']:,.0f} {x['unit']} (95 %; limit {x['limit']:g})"
-            for x in w)
+            f"{_terms(group)} {_known_within(other, group)}" for _, group in _by_unit(w))
     sentences = []
     for (a, b), said in terms.values():
         shown = "; ".join(said[:3]) + (f"; and {len(said) - 3} more" if len(said) > 3 else "")
