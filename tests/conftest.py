@@ -36,7 +36,7 @@ def short_chains(config):
     return cfg
 
 
-LONGEST_FIRST = ("test_workflow.py", "test_report.py", "test_interval.py", "test_resume.py", "test_criticism.py",
+LONGEST_FIRST = ("test_workflow.py", "test_report.py", "test_interval.py", "test_resume.py",
                  "test_robustness.py", "test_looexact.py", "test_pipeline.py", "test_realdata.py", "test_jitter.py",
                  "test_spec.py", "test_freemotion.py", "test_properties.py", "test_combinations.py",
                  "test_variants.py", "test_refusals.py", "test_degenerate.py", "test_prior_yields.py")

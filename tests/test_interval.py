@@ -88,6 +88,7 @@ def test_a_nominal_error_smooth_from_the_scale_factors_alone_is_fitted_and_keeps
     assert "the baseline model's residual, fitted at every sample with its noise scales estimated, is not smooth" in choice.reason
 
 
+@pytest.mark.full  # 11 s; the fast tier keeps the smooth error found between slews and the interval's refusals
 def test_a_reference_error_smooth_at_its_rate_is_used_every_five_knees_and_is_not_smooth_there():
     """A 30-arcsec error through a 0.5 s kernel on a 10 Hz tracker (the T-stick's kind at 100 Hz):
     smooth on both maneuvers; used every `recommended_interval_s`, the pilot's residual is no longer smooth."""
