@@ -154,6 +154,7 @@ def test_gyrocal_run_without_snakemake_says_to_install_the_workflow_extra(tmp_pa
     assert 'pip install -e ".[workflow]"' in run.stderr
 
 
+@pytest.mark.full  # 11 s: the rerun of posterior, diagnostics and report; the fast tier keeps the deleted-file refusal
 def test_a_deleted_intermediate_file_is_redone_by_the_plain_rerun(tiny, workflow_run, tmp_path):
     work = tmp_path / "work"
     shutil.copytree(workflow_run, work, symlinks=True)  # copy2: the same times, so the copy is as complete
