@@ -220,3 +220,22 @@ def test_a_latency_the_acceleration_signature_also_explains_is_ranked_first_and_
     assert -2 < latency["leftover_log10_p"] < signature["leftover_log10_p"]
     step = next_effect("baseline", BASE, {"misfit": True, "ranking": ranking}, cfg["diagnostics"]["structure_log10_p_min"])
     assert step.effect == "st_latency"
+
+
+def test_a_signature_a_library_effect_explains_as_well_extends_the_model_by_that_effect():
+    """One rate per direction (battery campaign 6): rate_sign leads (log10 p -200.6), sf_nonlinearity
+    explains the same misfit (each leaves the other nothing: leftover log10 p -0.04 and -0.0); the loop
+    fits sf_nonlinearity, where it stopped at the signature. Where the effect leaves the signature
+    significant, or the signature leaves the effect so, it still stops."""
+    def doc(lead_left, effect_left):
+        return {"misfit": True, "ranking": [
+            {"kind": "signature", "name": "rate_sign", "log10_p": -200.6, "leftover_log10_p": lead_left},
+            {"kind": "effect", "name": "sf_nonlinearity", "log10_p": -104.0, "leftover_log10_p": effect_left},
+            {"kind": "effect", "name": "st_correlated_noise", "log10_p": -62.0}]}
+
+    step = next_effect("baseline", BASE, doc(-0.04, -0.0), -6.0)
+    assert step.fitted and step.effect == "sf_nonlinearity"
+    assert step.why.endswith("signature rate_sign (log10 p = -200.6), first, is no library effect, and "
+                             "sf_nonlinearity explains the same misfit (given it, the other leaders' log10 p = -0.0)")
+    for lead_left, effect_left in ((-0.04, -30.0), (-30.0, -0.0)):
+        assert not next_effect("baseline", BASE, doc(lead_left, effect_left), -6.0).fitted

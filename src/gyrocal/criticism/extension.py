@@ -5,9 +5,10 @@ library effect whose score test is significant (log10 p below the config's
 ``diagnostics.structure_log10_p_min``, the misfit check's own rule), the run fits the model
 extended by that effect as one more variant (``extended``; ``extended_<k>`` for the k-th step,
 up to the config's ``loop.depth``), and the comparison and the review show the error before and
-after. Anything else (no misfit, a signature or a plugin's effect, nothing significant, an
-effect the model has already, or one it cannot take with its own, `effects.cannot_join`) stops the
-loop with its reason.
+after. A leading signature that a significant library effect explains as well (`equivalent_effect`)
+extends the model by that effect. Anything else (no misfit, a signature or a plugin's effect no library
+effect stands in for, nothing significant, an effect the model has already, or one it cannot take with
+its own, `effects.cannot_join`) stops the loop with its reason.
 """
 
 from dataclasses import asdict, dataclass
@@ -16,7 +17,7 @@ import pandas as pd
 
 from gyrocal.model.effects import LIBRARY, cannot_join
 
-__all__ = ["EXTENDED", "Extension", "before_after", "extension_names", "next_effect", "outside_share"]
+__all__ = ["EXTENDED", "Extension", "before_after", "equivalent_effect", "extension_names", "next_effect", "outside_share"]
 
 EXTENDED = "extended"
 """The first extended variant's name; the k-th step's is ``extended_<k>`` (`extension_names`)."""
@@ -63,9 +64,16 @@ def next_effect(base: str, base_effects, diagnostics: dict, log10_p_min: float) 
     if best["log10_p"] >= log10_p_min:
         return stop(f"model {base} misfits, but its best explanation, {best['kind']} {best['name']} "
                     f"(log10 p = {best['log10_p']:.1f}), is not significant below {log10_p_min:g}")
+    as_well = ""
     if best["kind"] != "effect" or best["name"] not in LIBRARY:
-        return stop(f"model {base} misfits and its best explanation is {best['kind']} {best['name']} "
-                    f"(log10 p = {best['log10_p']:.1f}), which is not a library effect: model it (plugins:)")
+        alike = equivalent_effect(ranking, effects, log10_p_min)
+        if alike is None:
+            return stop(f"model {base} misfits and its best explanation is {best['kind']} {best['name']} "
+                        f"(log10 p = {best['log10_p']:.1f}), which is not a library effect: model it (plugins:)")
+        as_well = (f"; {best['kind']} {best['name']} (log10 p = {best['log10_p']:.1f}), first, is no library "
+                   f"effect, and {alike['name']} explains the same misfit (given it, the other leaders' "
+                   f"log10 p = {alike['leftover_log10_p']:.1f})")
+        best = alike
     if best["name"] in effects:
         return stop(f"model {base} has {best['name']} already")
     if why := cannot_join(effects, best["name"]):
@@ -73,7 +81,26 @@ def next_effect(base: str, base_effects, diagnostics: dict, log10_p_min: float) 
                     f"(log10 p = {best['log10_p']:.1f}), but {why}")
     return Extension(base, best["name"], effects + [best["name"]],
                      f"model {base} misfits and its best explanation is effect {best['name']} "
-                     f"(log10 p = {best['log10_p']:.1f}, significant below {log10_p_min:g})")
+                     f"(log10 p = {best['log10_p']:.1f}, significant below {log10_p_min:g}){as_well}")
+
+
+def equivalent_effect(ranking, effects, log10_p_min: float):
+    """A library effect that explains the misfit as well as the leading signature does, or None: among
+    the ranking's leaders (`diagnostics.rank`'s encompassing test gives each its ``leftover_log10_p``, the
+    most significant other leader given it), the first significant library effect the model lacks and
+    can take, given which no other leader is significant, where the signature leaves nothing either.
+    One rate per direction makes a rate-squared scale factor and a bias that flips with the rotation
+    (``rate_sign``) one misfit: the loop fits the one the library holds."""
+    lead = ranking[0].get("leftover_log10_p")
+    if lead is None or lead < log10_p_min:
+        return None
+    for r in ranking[1:]:
+        if r.get("leftover_log10_p") is None:
+            return None
+        if (r["kind"] == "effect" and r["name"] in LIBRARY and r["name"] not in effects
+                and r["log10_p"] < log10_p_min <= r["leftover_log10_p"] and not cannot_join(effects, r["name"])):
+            return r
+    return None
 
 
 def outside_share(fit) -> float:
