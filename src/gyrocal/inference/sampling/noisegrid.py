@@ -84,9 +84,9 @@ class RatioGrid:
     and the log says where; `SamplingError` where no node can be.
     """
 
-    valid = None
-    """Per node (flat index): whether its covariance could be factored and its statistics are finite
-    (None: every node)."""
+    complete = True
+    """Whether every node is valid (``valid``), so that no point's weights need checking against it; a grid
+    whose nodes were not tabulated here (built bare, as the interpolation's tests build it) has none left out."""
 
     def __init__(self, noises, center, sd, nodes: int, half_width_sd: float, groups=None):
         shapes = noises if isinstance(noises, NoiseShapes) else NoiseShapes(noises, groups=groups)
@@ -102,6 +102,7 @@ class RatioGrid:
         self.step = 2 * half_width / (nodes - 1)
         self.values = None
         self.valid = np.ones(nodes**self.dims, dtype=bool)
+        """Per node (flat index): whether its covariance could be factored and its statistics are finite."""
         self._last = None
         """The last `stats` call's ratios, interpolated rows and inside mask (`_interpolated`)."""
         inner = (nodes,) * (self.dims - 1) if shapes.correlated else (nodes,) * self.dims
@@ -130,7 +131,8 @@ class RatioGrid:
             raise SamplingError(f"the noise's covariance is not positive definite at any node of the noise-ratio grid "
                                 f"(log ratios {np.round(center, 3).tolist()} +- {np.round(half_width, 3).tolist()}): "
                                 "no likelihood can be computed there")
-        if not self.valid.all():
+        self.complete = bool(self.valid.all())
+        if not self.complete:
             self.values[~self.valid] = 0.0  # never weighted: a point that needs such a node is off the grid
             self._log_left_out()
 
@@ -167,7 +169,7 @@ class RatioGrid:
                 product = product * w1[:, d, offsets[d]]
         weights = np.zeros((len(ratios), self.nodes**self.dims))
         np.put_along_axis(weights, flat, product, axis=1)
-        if self.valid is not None and not self.valid.all():  # a node left out may only have no weight
+        if not self.complete:  # a node left out may only have no weight
             inside &= np.all(self.valid[flat] | (product == 0), axis=1)
         return weights, inside
 
