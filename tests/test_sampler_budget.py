@@ -37,6 +37,7 @@ def test_the_budget_stops_after_its_wall_clock_time_unless_converged():
     assert "max_seconds = 60" in budget.stop(300, np.full((4, 27), 20.0))  # 15 tau of the 50 needed
     assert budget.stop(1000, np.full((4, 27), 20.0)) == ""  # 50 tau: converged, nothing to stop
     assert SamplingBudget(SAMPLER).stop(300, np.full((4, 27), 20.0)) == ""  # no time limit given
+    assert SamplingBudget({**SAMPLER, "max_seconds": None}).stop(300, np.full((4, 27), 20.0)) == ""  # the default
 
 
 def test_a_parameter_pinned_only_in_combination_carries_no_information_of_its_own():
@@ -131,20 +132,19 @@ def run_posterior(campaign_dir, out, cfg):
 
 
 @pytest.mark.full
-def test_a_single_axis_campaign_converges_with_the_default_settings_in_bounded_time(tmp_path, config):
+def test_a_single_axis_campaign_converges_with_the_default_settings_within_the_step_budget(tmp_path, config):
     simulate.run(DATA / "yaw_only.yaml", tmp_path / "sim")
     cfg = copy.deepcopy(config)
     cfg["models"] = {"baseline": ["scale_factor", "misalignment", "bias"]}
-    start = time.monotonic()
     record = run_posterior(tmp_path / "sim" / "campaign", tmp_path / "run", cfg)
-    assert time.monotonic() - start < 2 * cfg["sampler"]["max_seconds"]
     assert isinstance(record, dict) and record["converged"], record
+    assert record["steps"] <= cfg["sampler"]["max_steps"]
 
 
 @pytest.mark.full
 @pytest.mark.skipif(not (REPOIMU / "TStick_Test04_Trial1.csv").is_file(),
                     reason="the shared RepoIMU recordings (../shared/data/repoimu) are not here")
-def test_the_repoimu_z_trial_converges_or_stops_with_why_in_bounded_time(tmp_path, config):
+def test_the_repoimu_z_trial_converges_or_stops_with_why_within_the_step_budget(tmp_path, config):
     import yaml
 
     from gyrocal.io import importer
@@ -154,13 +154,11 @@ def test_the_repoimu_z_trial_converges_or_stops_with_why_in_bounded_time(tmp_pat
     for key in ("noise", "priors"):
         cfg[key] = {**cfg[key], **tstick[key]}
     cfg["models"] = {"baseline": ["scale_factor", "misalignment", "bias"]}
-    start = time.monotonic()
     record = run_posterior(tmp_path / "z", tmp_path / "run", cfg)
-    assert time.monotonic() - start < 2 * cfg["sampler"]["max_seconds"]
     if isinstance(record, str):
         assert "Slowest:" in record or "do not identify" in record, record
     else:
-        assert record["converged"], record
+        assert record["converged"] and record["steps"] <= cfg["sampler"]["max_steps"], record
 
 
 def test_a_gauss_markov_share_fitted_at_its_bound_is_named_with_what_to_do():
