@@ -22,19 +22,22 @@ import numpy as np
 import pandas as pd
 
 from gyrocal.inference.fit.estimate import PointEstimate
-from gyrocal.model import orthogonality
+from gyrocal.model import combinations, orthogonality
 
 
-def scale_factors(names, flat) -> list:
-    """Per channel and term (sf_pos, sf_neg, sf_mean): the draws (ppm), with whether a part is prior-only."""
+def scale_factors(spec, values) -> list:
+    """Per channel: ``sf_pos`` and ``sf_neg`` where sampled, and ``sf_mean`` (`combinations.scale_combinations`),
+    each as its draws (ppm, from ``values`` in the spec's order) and whether a part is prior-only."""
+    means = [c for c in combinations.scale_combinations(spec) if c.name == "sf_mean"]
+    mean_draws = combinations.combination_draws(values, means)
     rows = []
-    for channel in dict.fromkeys(n.split(".")[0] for n in names):
-        terms = {t: flat[:, names.index(f"{channel}.{t}")] for t in ("sf_pos", "sf_neg") if f"{channel}.{t}" in names}
-        if f"{channel}.sf" in names:
-            terms = {"sf_mean": flat[:, names.index(f"{channel}.sf")]}
-        elif len(terms) == 2:
-            terms["sf_mean"] = (terms["sf_pos"] + terms["sf_neg"]) / 2
-        rows += [(channel, t, v) for t, v in terms.items()]
+    for k, c in enumerate(means):
+        for name in ("sf_pos", "sf_neg"):
+            if (label := f"{c.owner}.{name}") in spec.labels:
+                i = spec.labels.index(label)
+                rows.append((c.owner, name, values[:, i], spec.parameters[i].prior_only))
+        parts = np.flatnonzero(c.weights)
+        rows.append((c.owner, "sf_mean", mean_draws[:, k], any(spec.parameters[i].prior_only for i in parts)))
     return rows
 
 
@@ -46,15 +49,13 @@ def summaries(run: Path) -> pd.DataFrame:
     flat = draws.values.reshape(-1, len(names))
     spec = PointEstimate.load(run / "point_estimate.npz", linearizations=False).spec
     prior_only = {p.label for p in spec.parameters if p.prior_only}
+    values = flat[:, [names.index(label) for label in spec.labels]]
     rows = [{"channel": c, "term": t, "unit": "ppm", "mean": float(v.mean()), "sd": float(v.std(ddof=1)),
-             "prior_part": any(label in prior_only for label in (f"{c}.sf_pos", f"{c}.sf_neg", f"{c}.sf")
-                               if t == "sf_mean" or label == f"{c}.{t}")}
-            for c, t, v in scale_factors(names, flat)]
+             "prior_part": part} for c, t, v, part in scale_factors(spec, values)]
     sets = [tuple(s["channels"]) for s in json.loads((run / "correction.json").read_text())["sets"]]
     pairs = orthogonality.pairs(spec, sets)
     if pairs:
-        order = [names.index(label) for label in spec.labels]
-        values = orthogonality.pair_draws(flat[:, order], spec, pairs)
+        values = orthogonality.pair_draws(values, spec, pairs)
         for k, p in enumerate(pairs):
             (a, b), (i, j) = p.axes, p.channels
             rows.append({"channel": "+".join(p.channels), "term": p.name, "unit": "arcsec",
