@@ -46,23 +46,19 @@ def test_anything_else_stops_the_loop_with_its_reason(doc, present):
     assert not step.fitted and step.effects == present and step.why.startswith("model m ")
 
 
-def test_an_effect_the_model_cannot_take_with_its_own_stops_the_loop_and_a_model_defined_so_is_refused():
+def test_a_gauss_markov_model_whose_ranking_names_the_jitter_is_extended_by_it_and_the_model_builds():
     """The reviewed model has Gauss-Markov reference noise and its ranking names the timing jitter (a
-    RepoIMU run with config/tstick.yaml): the loop stops with why, where it used to build the model and
-    end in a traceback; a variant defined with both is refused as input, not a ValueError."""
-    from gyrocal.errors import InputError
+    RepoIMU run with config/tstick.yaml): the loop extends it by st_jitter, and the model with both has
+    the two noise models (`covariance.noise_scales`: six scales)."""
     from gyrocal.model import effects
     from gyrocal.model.channels import Channel
     from gyrocal.model.spec import ModelSpec
 
     present = BASE + ["st_correlated_noise"]
     step = next_effect("m", present, diagnostics(ranking=(("effect", "st_jitter", -30.0),)), -6.0)
-    assert not step.fitted and step.effects == present
-    assert step.why.endswith("but st_jitter and st_correlated_noise cannot be combined yet "
-                             "(the Gauss-Markov filter has no timing-jitter component)")
-    both = effects.resolve("both", BASE + ["st_correlated_noise", "st_jitter"], {})
-    with pytest.raises(InputError, match="model both: st_jitter and st_correlated_noise cannot be combined yet"):
-        ModelSpec.build("both", both, [Channel("gyro_x", None, "roll")])
+    assert step.fitted and step.effect == "st_jitter" and step.effects == present + ["st_jitter"]
+    both = ModelSpec.build("both", effects.resolve("both", step.effects, {}), [Channel("gyro_x", None, "roll")])
+    assert both.correlated_noise and both.jitter_noise
 
 
 def test_the_loops_variants_are_named_by_their_step():

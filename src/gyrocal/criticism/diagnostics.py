@@ -21,7 +21,7 @@ from gyrocal.inference import errormodel
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.fit.likelihood import campaign_stats, maneuver_stats, total
 from gyrocal.inference.noise import covariance, smoothness
-from gyrocal.inference.noise.covariance import CORRELATED_SCALES, JITTER_SCALE, NOISE_SCALES, ratios_of, variances
+from gyrocal.inference.noise.covariance import NOISE_SCALES, noise_scales, ratios_of, variances
 from gyrocal.inference.sampling.predictive import WhitenedManeuver
 from gyrocal.inference.sampling.refusals import noise_beyond
 from gyrocal.maneuvers.preprocess import noise_groups
@@ -367,7 +367,7 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
     white = whiteness(maneuvers, _measuring(walks, linearized(maneuvers, estimate), measured), estimate)
     ranking, detail = rank(maneuvers, estimate, list(maneuvers[0].extras), plugin_effects, white)
     keys = [s.key for s in NOISE_SCALES]
-    sampled = CORRELATED_SCALES + (JITTER_SCALE,)
+    sampled = noise_scales(True, True)
     noise_post = {s.key: float(summary.loc[f"noise.{s.key}", "mean"]) for s in sampled if f"noise.{s.key}" in summary.index}
     noise_ci = {s.key: [float(summary.loc[f"noise.{s.key}", c]) for c in ("ci95_low", "ci95_high")]
                 for s in sampled if f"noise.{s.key}" in summary.index and "ci95_low" in summary.columns}

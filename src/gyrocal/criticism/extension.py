@@ -7,15 +7,14 @@ extended by that effect as one more variant (``extended``; ``extended_<k>`` for 
 up to the config's ``loop.depth``), and the comparison and the review show the error before and
 after. A leading signature that a significant library effect explains as well (`equivalent_effect`)
 extends the model by that effect. Anything else (no misfit, a signature or a plugin's effect no library
-effect stands in for, nothing significant, an effect the model has already, or one it cannot take with
-its own, `effects.cannot_join`) stops the loop with its reason.
+effect stands in for, nothing significant, an effect the model has already) stops the loop with its reason.
 """
 
 from dataclasses import asdict, dataclass
 
 import pandas as pd
 
-from gyrocal.model.effects import LIBRARY, cannot_join
+from gyrocal.model.effects import LIBRARY
 
 __all__ = ["EXTENDED", "Extension", "before_after", "equivalent_effect", "extension_names", "next_effect", "outside_share"]
 
@@ -76,9 +75,6 @@ def next_effect(base: str, base_effects, diagnostics: dict, log10_p_min: float) 
         best = alike
     if best["name"] in effects:
         return stop(f"model {base} has {best['name']} already")
-    if why := cannot_join(effects, best["name"]):
-        return stop(f"model {base} misfits and its best explanation is effect {best['name']} "
-                    f"(log10 p = {best['log10_p']:.1f}), but {why}")
     return Extension(base, best["name"], effects + [best["name"]],
                      f"model {base} misfits and its best explanation is effect {best['name']} "
                      f"(log10 p = {best['log10_p']:.1f}, significant below {log10_p_min:g}){as_well}")
@@ -87,8 +83,8 @@ def next_effect(base: str, base_effects, diagnostics: dict, log10_p_min: float) 
 def equivalent_effect(ranking, effects, log10_p_min: float):
     """A library effect that explains the misfit as well as the leading signature does, or None: among
     the ranking's leaders (`diagnostics.rank`'s encompassing test gives each its ``leftover_log10_p``, the
-    most significant other leader given it), the first significant library effect the model lacks and
-    can take, given which no other leader is significant, where the signature leaves nothing either.
+    most significant other leader given it), the first significant library effect the model lacks,
+    given which no other leader is significant, where the signature leaves nothing either.
     One rate per direction makes a rate-squared scale factor and a bias that flips with the rotation
     (``rate_sign``) one misfit: the loop fits the one the library holds."""
     lead = ranking[0].get("leftover_log10_p")
@@ -98,7 +94,7 @@ def equivalent_effect(ranking, effects, log10_p_min: float):
         if r.get("leftover_log10_p") is None:
             return None
         if (r["kind"] == "effect" and r["name"] in LIBRARY and r["name"] not in effects
-                and r["log10_p"] < log10_p_min <= r["leftover_log10_p"] and not cannot_join(effects, r["name"])):
+                and r["log10_p"] < log10_p_min <= r["leftover_log10_p"]):
             return r
     return None
 

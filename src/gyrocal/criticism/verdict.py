@@ -15,7 +15,7 @@ from gyrocal.finding import Finding
 from gyrocal.inference.fit.classic import hold_windows
 from gyrocal.io.calibration import core_rows, posterior_mean_params
 from gyrocal.maneuvers import preprocess
-from gyrocal.model import effects, sensorclass
+from gyrocal.model import sensorclass
 from gyrocal.model.units import AXES, rad_to_arcsec
 
 __all__ = ["RANKED_SHOWN", "bounds_check", "checks", "convergence_check", "correction_check", "correction_effect",
@@ -92,9 +92,8 @@ RANKED_SHOWN = 3
 def misfit_check(diagnostics: dict, log10_p_min: float) -> Finding:
     """The reviewed model's residuals are consistent with its noise model (``diagnostics.json``);
     a misfit names the failed checks and the best explanation, where its score test is significant
-    at ``log10_p_min`` (the config's ``diagnostics.structure_log10_p_min``), and why the model cannot
-    take it where it cannot (`effects.cannot_join`); where none is, it says so and names the
-    top-ranked ones with their p."""
+    at ``log10_p_min`` (the config's ``diagnostics.structure_log10_p_min``); where none is, it says so
+    and names the top-ranked ones with their p."""
     failed = [c for c in diagnostics["checks"] if not c["passed"]]
     if not failed:
         return Finding.judged("no misfit", not diagnostics["misfit"], "the residuals are consistent with the noise model")
@@ -106,9 +105,6 @@ def misfit_check(diagnostics: dict, log10_p_min: float) -> Finding:
                 f"significant below {log10_p_min:g})")
         action = (f"add a variant with {best['name']} (models:)" if best["kind"] == "effect" else
                   f"model what follows the {best['name']} signature (an effect under plugins:)")
-        if best["kind"] == "effect" and (why_not := effects.cannot_join(diagnostics.get("effects", []), best["name"])):
-            why += f"; this model cannot take it: {why_not}"
-            action = f"add a variant with {best['name']} in place of the effect it cannot join (models:)"
     else:
         top = ", ".join(f"{r['kind']} {r['name']} (log10 p = {r['log10_p']:.1f})" for r in ranking[:RANKED_SHOWN])
         why += (f". No effect or signature explains the misfit significantly (log10 p below {log10_p_min:g})"

@@ -42,8 +42,8 @@ from gyrocal.model.units import AXES, DEG_H_RAD_S, PPM, STANDARD_GRAVITY_M_S2, a
 __all__ = [
     "BASELINE", "LIBRARY", "SCALE_FACTORS", "SF_BOUND_PPM", "SF_PRIOR_SD_PPM", "Bias", "BiasDrift", "Effect",
     "GSensitivity", "GravityOffset", "ManeuverView", "Misalignment", "Parameter", "PluginError", "ScaleFactor",
-    "ScaleFactorSymmetric", "SfNonlinearity", "StCorrelatedNoise", "StLatency", "cannot_join", "check_effect",
-    "incompatible", "known", "load_plugins", "resolve"
+    "ScaleFactorSymmetric", "SfNonlinearity", "StCorrelatedNoise", "StLatency", "check_effect", "known",
+    "load_plugins", "resolve"
 ]
 
 
@@ -312,21 +312,6 @@ def check_effect(effect, where):
             raise PluginError(f"plugin {where}: {effect.name}.{p.name}: prior_sd and si_per_unit must be positive")
     if type(effect).gyro is Effect.gyro and type(effect).star_tracker is Effect.star_tracker:
         raise PluginError(f"plugin {where}: {effect.name} overrides neither gyro(m) nor star_tracker(m)")
-
-
-def incompatible(effects) -> str:
-    """Why these effects cannot make one model, or ``""`` where they can: the reference's Gauss-Markov
-    noise (`StCorrelatedNoise`) and its timing jitter (`StJitter`) together, which the Gauss-Markov
-    filter cannot hold yet (it has no timing-jitter component)."""
-    if any(e.noise and not e.rate_noise for e in effects) and any(e.rate_noise for e in effects):
-        return "st_jitter and st_correlated_noise cannot be combined yet (the Gauss-Markov filter has no timing-jitter component)"
-    return ""
-
-
-def cannot_join(model_effects, name: str) -> str:
-    """Why the library effect ``name`` cannot join a model of the effects named ``model_effects``
-    (`incompatible`), or ``""`` where it can (a plugin's effect is taken to join any model)."""
-    return incompatible([LIBRARY[n] for n in [*model_effects, name] if n in LIBRARY])
 
 
 def resolve(model_name: str, names, plugins: dict) -> list:

@@ -13,7 +13,6 @@ from dataclasses import asdict, dataclass, replace
 
 import numpy as np
 
-from gyrocal.errors import InputError
 from gyrocal.model import channels as ch
 from gyrocal.model import effects as fx
 from gyrocal.model.sensorclass import class_priors
@@ -97,8 +96,6 @@ class ModelSpec:
                 for p in e.channel_parameters(c) for s in [_spec(e, p, c.name, i, True)]]
         extra = [s for e in effects if not (e.core or e.noise) for p in e.parameters
                  for s in _specs_of(e, p, channels, False)]
-        if why := fx.incompatible(effects):
-            raise InputError(f"model {model}: {why}")  # a model as defined: refused, as a variant, with why
         correlated = any(e.noise and not e.rate_noise for e in effects)
         return cls(model, channels, core + extra, [e.name for e in effects], correlated,
                    {e.name: e for e in effects})

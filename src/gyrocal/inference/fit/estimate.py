@@ -38,7 +38,8 @@ class PointEstimate:
     """(n_maneuvers, n_channels) rad/s."""
     chi0: np.ndarray
     log_sigma: np.ndarray
-    """log [sigma_cross_rad, sigma_about_rad, arw_rad_sqrt_s] used for the weights."""
+    """log [sigma_cross_rad, sigma_about_rad, arw_rad_sqrt_s] used for the weights, and the model's
+    other noise scales after them (`covariance.noise_scales`)."""
     cost: float
     nfev: int
     message: str
@@ -318,7 +319,7 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
         tau0 = noisefit.correlation_time(lins) or noisefit.TAU_START_INTERVALS * noisefit.st_step(lins)
         log_sigma, offsets = noisefit.estimate_correlated_noise(lins, start.boresight, log_sigma, tau0, index,
                                                                   segments.Chains.of(maneuvers))
-        tau = float(np.exp(log_sigma[4]))
+        tau = covariance.correlation_time_of(covariance.ratios_of(log_sigma))
     elif estimate_scales:
         log_sigma, offsets = noisefit.estimate_noise(noises, log_sigma, index)
     del noises  # the REML's right-hand sides: as large as the linearisations, and the WLS needs neither

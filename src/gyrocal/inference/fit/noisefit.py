@@ -4,7 +4,8 @@ With the channel parameters and the nuisance integrated out under flat priors, t
 likelihood of the noise depends on ``sigma_cross^2`` in closed form and on the shape of
 the covariance (`covariance.ratios_of`) through the banded statistics; the shape is found by
 Nelder-Mead on the profile. Correlated star-tracker noise (`markov`) adds the Gauss-Markov
-part's sd and correlation time, its filter rebuilt at each tau tried.
+part's sd and correlation time, its filter rebuilt at each tau tried; the reference's timing jitter
+adds its ``sigma_t``, with white noise or correlated, kept above `covariance.JITTER_FLOOR_S`.
 """
 
 import numpy as np
@@ -14,8 +15,8 @@ from gyrocal.inference.fit.likelihood import campaign_stats, maneuver_stats, tot
 from gyrocal.inference.noise import covariance, segments
 
 __all__ = [
-    "GM_LOGIT_BOUND", "GROUP_ITERATIONS", "SCAN_EVALUATIONS", "SCAN_MARGIN", "TAU_SCAN", "TAU_START_INTERVALS",
-    "campaign_level", "correlation_time", "estimate_correlated_noise", "estimate_noise", "finite_profile",
+    "GM_LOGIT_BOUND", "GROUP_ITERATIONS", "SCAN_EVALUATIONS", "SCAN_MARGIN", "SIMPLEX_STEPS", "TAU_SCAN",
+    "TAU_START_INTERVALS", "campaign_level", "correlation_time", "estimate_correlated_noise", "estimate_noise", "finite_profile",
     "profile_group_levels", "profile_reml", "st_step",
 ]
 
@@ -44,8 +45,9 @@ def profile_reml(noises, ratios, groups=None):
     """REML of the noise with the cross-boresight variance profiled out in closed form.
 
     ``ratios`` are ``log(sigma_about / sigma_cross)`` and ``log(arw / sigma_cross)``
-    (arw per sqrt(s)), and with correlated noise ``logit st_gm_fraction`` and
-    ``log tau`` (`covariance.ratios_of`); the covariance is ``sigma_cross^2`` times one built from them.
+    (arw per sqrt(s)), with correlated noise ``logit st_gm_fraction`` and ``log tau``, with the timing
+    jitter ``log(sigma_t / sigma_cross)`` (`covariance.ratios_of`); the covariance is ``sigma_cross^2``
+    times one built from them.
     Returns the negative log-likelihood (up to a constant) and ``log sigma_cross``.
     Prior-only parameters have no column, so they are left out. With ``groups`` (each maneuver's
     noise group, `preprocess.noise_groups`) of more than one group, each group's level is
@@ -129,27 +131,36 @@ def campaign_level(log_cross, noises, groups):
     return level, log_cross - level
 
 
+def _jitter_floor(ratios, log_cross0):
+    """Where the timing jitter's ``sigma_t`` sits among ``ratios`` (`covariance.ratios_of`'s; None without
+    one), and its floor there: `covariance.JITTER_FLOOR_S` over the start's ``sigma_cross``."""
+    return covariance.ratio_position(ratios, covariance.JITTER_SCALE), np.log(covariance.JITTER_FLOOR_S) - log_cross0
+
+
+def _floored(ratios, k, floor):
+    """``ratios`` with the jitter's (at ``k``; None: none) kept above ``floor``, where the profile is flat."""
+    if k is None:
+        return ratios
+    out = np.array(ratios, dtype=float)
+    out[k] = max(out[k], floor)
+    return out
+
+
 def estimate_noise(noises, log_sigma0, groups=None):
-    """Type-II maximum likelihood (REML) of ``log [sigma_cross, sigma_about, arw]``, and each noise
-    group's offset of ``log sigma_cross`` (None for one group; `campaign_level`).
+    """Type-II maximum likelihood (REML) of ``log [sigma_cross, sigma_about, arw]`` (and the timing
+    jitter's ``sigma_t``, kept above `covariance.JITTER_FLOOR_S`), and each noise group's offset of
+    ``log sigma_cross`` (None for one group; `campaign_level`).
 
     The channel parameters and the nuisance are integrated out under flat priors.
     """
     log_sigma0 = np.asarray(log_sigma0, dtype=float)
-    start = log_sigma0[1:] - log_sigma0[0]
-    if covariance.is_jitter(log_sigma0):  # sigma_t kept above its floor (there the profile is flat)
-        floor = np.log(covariance.JITTER_FLOOR_S) - log_sigma0[0]
-
-        def negative(r):
-            return profile_reml(noises, np.append(r[:2], max(r[2], floor)), groups)[0]
-        opt = minimize(negative, start, method="Nelder-Mead", options={"xatol": 1e-3, "fatol": 1e-3})
-        ratios = np.append(opt.x[:2], max(opt.x[2], floor))
-        log_cross, offsets = campaign_level(profile_reml(noises, ratios, groups)[1], noises, groups)
-        return covariance.absolute_of(log_cross, ratios), offsets
-    opt = minimize(lambda r: profile_reml(noises, r, groups)[0], start, method="Nelder-Mead",
+    start = covariance.ratios_of(log_sigma0)
+    k, floor = _jitter_floor(start, log_sigma0[0])
+    opt = minimize(lambda r: profile_reml(noises, _floored(r, k, floor), groups)[0], start, method="Nelder-Mead",
                    options={"xatol": 1e-3, "fatol": 1e-3})
-    log_cross, offsets = campaign_level(profile_reml(noises, opt.x, groups)[1], noises, groups)
-    return np.array([log_cross, log_cross + opt.x[0], log_cross + opt.x[1]]), offsets
+    ratios = _floored(opt.x, k, floor)
+    log_cross, offsets = campaign_level(profile_reml(noises, ratios, groups)[1], noises, groups)
+    return covariance.absolute_of(log_cross, ratios), offsets
 
 
 GM_LOGIT_BOUND = 8.0
@@ -173,49 +184,68 @@ SCAN_MARGIN = 0.5
 """A point of the scan must beat the descent's optimum by this much (log-likelihood) to restart it."""
 
 
+SIMPLEX_STEPS = {"sigma_about_arcsec": 0.3, "arw_deg_sqrt_h": 0.3, "st_gm_fraction": 1.0, "st_gm_tau_s": 0.7,
+                 "st_jitter_ms": 1.0}
+"""The REML of correlated noise: its simplex's first step in each ratio (`covariance.ratios_of`): a factor
+1.35 in the white scales' ratios, 2 in tau, e in the jitter's; 1 in the share's logit."""
+
+
 def estimate_correlated_noise(lins, boresight, log_sigma0, tau0_s, groups=None, chained=None):
-    """REML of ``[log sigma_cross, log sigma_about, log arw, logit st_gm_fraction, log tau_s]``:
-    star-tracker noise white plus first-order Gauss-Markov (`markov`), the filter rebuilt at each
-    tau tried, from an even split; the simplex starts wide (a factor 1.35 in the ratios, 2 in tau)
-    and stops at 1 % (the posterior's grid refines it), and starts again from the best of a scan in
-    tau (`TAU_SCAN`) that beats it. Tau is kept between half the star tracker's interval and ten times
-    the longest maneuver. ``chained`` (`segments.Chains`): the
+    """REML of ``[log sigma_cross, log sigma_about, log arw, logit st_gm_fraction, log tau_s]`` (and
+    ``log sigma_t`` after them where ``log_sigma0`` holds the timing jitter's, kept above
+    `covariance.JITTER_FLOOR_S`): star-tracker noise white plus first-order Gauss-Markov (`markov`), the
+    filter rebuilt at each tau tried, from an even split; the simplex starts wide (a factor 1.35 in the
+    ratios, 2 in tau, e in the jitter) and stops at 1 % (the posterior's grid refines it), and starts again
+    from the best of a scan in tau (`TAU_SCAN`) that beats it. Tau is kept between half the star tracker's
+    interval and ten times the longest maneuver. ``chained`` (`segments.Chains`): the
     error runs on between consecutive maneuvers of a group; None: the maneuvers apart. Returns the
     scales and the groups' offsets (`estimate_noise`)."""
     log_sigma0 = np.asarray(log_sigma0, dtype=float)
+    jitter = covariance.position(log_sigma0, covariance.JITTER_SCALE) is not None
+    white0 = covariance.ratios_of(log_sigma0)
     step = st_step(lins)
     longest = max(float(np.sum(lin.st_dt)) for lin in lins)
     log_tau_bounds = np.log([0.5 * step, 10.0 * longest])
     chained = segments.Chains.apart(len(lins)) if chained is None else chained
     groups = chained.groups(groups)
+    layout = covariance.noise_scales(True, jitter)[1:]  # the ratios'
+    share, tau = layout.index(covariance.GM_FRACTION_SCALE), layout.index(covariance.GM_TAU_SCALE)
+    given = {**dict(zip(covariance.scales_of(log_sigma0)[1:], white0)), covariance.GM_FRACTION_SCALE: 0.0,
+             covariance.GM_TAU_SCALE: np.clip(np.log(tau0_s), *log_tau_bounds)}
+    start = np.array([given[s] for s in layout])
+    k, floor = _jitter_floor(start, log_sigma0[0])
+    widths = np.array([SIMPLEX_STEPS[s.key] for s in layout])
 
-    def structures(tau):
-        return chained.noises(lins, boresight, tau)
-    start = np.concatenate([log_sigma0[1:3] - log_sigma0[0], [0.0, np.clip(np.log(tau0_s), *log_tau_bounds)]])
+    def structures(tau_s):
+        return chained.noises(lins, boresight, tau_s, jitter)
 
     def negative(r):
-        if abs(r[2]) > GM_LOGIT_BOUND or not log_tau_bounds[0] <= r[3] <= log_tau_bounds[1]:
+        if abs(r[share]) > GM_LOGIT_BOUND or not log_tau_bounds[0] <= r[tau] <= log_tau_bounds[1]:
             return np.inf
         # one noise structure at a time: each is built, summed into the statistics and dropped (a
         # list of them all held 5 GB at 100x the default campaign; the same sums)
-        return finite_profile(structures(float(np.exp(r[3]))), r, groups)
+        return finite_profile(structures(float(np.exp(r[tau]))), _floored(r, k, floor), groups)
 
     def descend(x0):
-        simplex = x0 + np.vstack([np.zeros(4), np.diag([0.3, 0.3, 1.0, 0.7])])
+        simplex = x0 + np.vstack([np.zeros(len(x0)), np.diag(widths)])
         return minimize(negative, x0, method="Nelder-Mead",
                         options={"xatol": 1e-2, "fatol": 1e-2, "initial_simplex": simplex})
 
     def at_tau(log_tau):
-        """The other three ratios briefly refitted at one tau, from the descent's and an even split."""
-        simplex = np.concatenate([opt.x[:2], [0.0]]) + np.vstack([np.zeros(3), np.diag([0.3, 0.3, 1.0])])
-        sub = minimize(lambda q: negative(np.append(q, log_tau)), simplex[0], method="Nelder-Mead",
+        """The other ratios briefly refitted at one tau, from the descent's and an even split."""
+        others = np.delete(np.arange(len(layout)), tau)
+        x0 = opt.x[others]
+        x0[share] = 0.0
+        simplex = x0 + np.vstack([np.zeros(len(x0)), np.diag(widths[others])])
+        sub = minimize(lambda q: negative(np.insert(q, tau, log_tau)), simplex[0], method="Nelder-Mead",
                        options={"maxfev": SCAN_EVALUATIONS, "initial_simplex": simplex})
-        return sub.fun, np.append(sub.x, log_tau)
+        return sub.fun, np.insert(sub.x, tau, log_tau)
 
     opt = descend(start)
     best_value, best = min((at_tau(t) for t in np.linspace(*log_tau_bounds, TAU_SCAN)), key=lambda v: v[0])
     if best_value < opt.fun - SCAN_MARGIN:  # the descent from ``best`` ends no worse than it
         opt = descend(best)
-    noises = list(structures(float(np.exp(opt.x[3]))))
-    log_cross, offsets = campaign_level(profile_reml(noises, opt.x, groups)[1], noises, groups)
-    return np.array([log_cross, log_cross + opt.x[0], log_cross + opt.x[1], opt.x[2], opt.x[3]]), offsets
+    ratios = _floored(opt.x, k, floor)
+    noises = list(structures(float(np.exp(ratios[tau]))))
+    log_cross, offsets = campaign_level(profile_reml(noises, ratios, groups)[1], noises, groups)
+    return covariance.absolute_of(log_cross, ratios), offsets

@@ -9,9 +9,14 @@ covariance of the differenced, set-stacked series is block tridiagonal: O(N) to
 factor with LAPACK's banded Cholesky. Its three components are linear in
 ``sigma_cross^2``, ``sigma_about^2`` and ``ARW^2``. Star-tracker noise with a Gauss-Markov
 part is filtered instead (`markov`): two samples deep, two more components. A timing jitter of
-the reference (sd ``sigma_t``, `st_jitter`) adds a fourth, linear in ``sigma_t^2``: the
+the reference (sd ``sigma_t``, `st_jitter`) adds one more, linear in ``sigma_t^2``: the
 reference attitude taken ``dt`` off its time tag errs by ``omega dt``, a white error of covariance
-``sigma_t^2 omega omega^T`` at each sample, along the rotation axis (rank one), as banded as the rest.
+``sigma_t^2 omega omega^T`` at each sample, along the rotation axis (rank one), as banded as the rest,
+differenced or filtered alike (white, it has no Gauss-Markov counterpart).
+
+The noise scales (``log_sigma``) are laid out as `noise_scales` gives them: the three white ones,
+then with correlated noise the Gauss-Markov share and tau, then with the jitter ``sigma_t``. Each
+`NoiseScale` says how it enters the covariance; the layout's length (3 to 6) tells which it is.
 """
 
 from dataclasses import dataclass
@@ -19,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import cholesky_banded
 from scipy.linalg.lapack import dtbtrs
-from scipy.special import expit
+from scipy.special import expit, logit
 
 from gyrocal.inference.errormodel import Linearization
 from gyrocal.inference.noise import markov
@@ -28,6 +33,8 @@ from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 __all__ = [
     "COMPONENTS",
     "CORRELATED_SCALES",
+    "GM_FRACTION_SCALE",
+    "GM_TAU_SCALE",
     "JITTER_FLOOR_S",
     "JITTER_SCALE",
     "JITTER_SCALES",
@@ -37,17 +44,21 @@ __all__ = [
     "NoiseScale",
     "absolute_of",
     "build",
+    "correlation_time_of",
     "difference",
     "filtered",
-    "is_jitter",
+    "jitter_shapes",
     "jitter_stated_ms",
     "log_sigma_of",
     "noise_knowledge",
     "noise_labels",
     "noise_scales",
     "nuisance_design",
+    "position",
+    "ratio_position",
     "ratios_of",
     "scales_in_units",
+    "scales_of",
     "stated_scales",
     "stated_si",
     "transformed",
@@ -72,6 +83,10 @@ class NoiseScale:
     """The prior's median in the unit of ``key`` where no data sheet states it (None: the stated value)."""
     prior_log_sd: float | None = None
     """The log-normal prior's sd where it is the scale's own (None: the config's ``noise_log_sd``)."""
+    relative: bool = True
+    """Whether the covariance takes it as its ratio to ``sigma_cross`` (an sd that scales a component:
+    the white scales, the jitter's), or as itself (the Gauss-Markov share and tau, which shape it at
+    any level): `ratios_of`."""
 
 
 NOISE_SCALES = (NoiseScale("sigma_cross_arcsec", ARCSEC_RAD), NoiseScale("sigma_about_arcsec", ARCSEC_RAD),
@@ -79,15 +94,22 @@ NOISE_SCALES = (NoiseScale("sigma_cross_arcsec", ARCSEC_RAD), NoiseScale("sigma_
 """The three sampled scales, in the order of ``log_sigma``: star tracker across and about its
 boresight (rad), gyro angle random walk (rad/sqrt(s))."""
 
-CORRELATED_SCALES = NOISE_SCALES + (NoiseScale("st_gm_fraction", 1.0, logit=True), NoiseScale("st_gm_tau_s", 1.0))
-"""With correlated star-tracker noise (`markov`), two more: the share of the star tracker's
-variance that is Gauss-Markov (the same share across and about the boresight, so
-``sigma_cross`` and ``sigma_about`` stay its total sd, as data sheets state it), and its
-correlation time (s)."""
+GM_FRACTION_SCALE = NoiseScale("st_gm_fraction", 1.0, logit=True, prior_center=0.5, prior_log_sd=2.0, relative=False)
+"""With correlated star-tracker noise (`markov`), the share of the star tracker's variance that is
+Gauss-Markov (the same share across and about the boresight, so ``sigma_cross`` and ``sigma_about``
+stay its total sd, as data sheets state it); its prior logit-normal about one half, sd 2 (12 % to
+88 % within one sd)."""
+
+GM_TAU_SCALE = NoiseScale("st_gm_tau_s", 1.0, prior_center=30.0, prior_log_sd=2.0, relative=False)
+"""... and its correlation time (s); its prior log-normal about 30 s, sd 2: 4 s to 220 s within one
+sd, 0.5 s to 1 600 s within two."""
+
+CORRELATED_SCALES = NOISE_SCALES + (GM_FRACTION_SCALE, GM_TAU_SCALE)
+"""The scales with correlated star-tracker noise: the white three, its share and correlation time."""
 
 JITTER_SCALE = NoiseScale("st_jitter_ms", 1e-3, prior_center=1.0, prior_log_sd=2.0)
 """The reference's timing jitter against the gyros' clock (`st_jitter`), sampled as its log after
-the three white scales: the prior's median 1 ms (a clock sync over USB or a network), its sd a
+the others: the prior's median 1 ms (a clock sync over USB or a network), its sd a
 factor e^2, 0.14 to 7 ms within one sd and 18 us to 55 ms within two; a campaign.yaml's
 ``star_tracker: st_jitter_ms`` moves the median."""
 
@@ -101,11 +123,13 @@ NOISE_LABELS = [f"noise.{s.key}" for s in NOISE_SCALES]
 
 
 def noise_scales(correlated: bool, jitter: bool = False) -> tuple:
-    """The scales a model samples: three, four with the reference's timing jitter, or five with
-    correlated star-tracker noise."""
-    if jitter:
-        return JITTER_SCALES
-    return CORRELATED_SCALES if correlated else NOISE_SCALES
+    """The scales a model samples, in the order of ``log_sigma``: the three white ones, then with
+    correlated star-tracker noise its share and tau, then with the reference's timing jitter its sd
+    (3, 4, 5 or 6): the one place the layout is declared."""
+    return (CORRELATED_SCALES if correlated else NOISE_SCALES) + ((JITTER_SCALE,) if jitter else ())
+
+
+_LAYOUTS = {len(noise_scales(c, j)): noise_scales(c, j) for c in (False, True) for j in (False, True)}
 
 
 def noise_labels(correlated: bool, jitter: bool = False) -> list:
@@ -113,13 +137,27 @@ def noise_labels(correlated: bool, jitter: bool = False) -> list:
     return [f"noise.{s.key}" for s in noise_scales(correlated, jitter)]
 
 
-def _scales_of(log_sigma) -> tuple:
-    return {len(s): s for s in (NOISE_SCALES, JITTER_SCALES, CORRELATED_SCALES)}[np.shape(log_sigma)[-1]]
+def scales_of(log_sigma) -> tuple:
+    """The `noise_scales` that ``log_sigma`` (last axis) holds, told by its length."""
+    return _LAYOUTS[np.shape(log_sigma)[-1]]
 
 
-def is_jitter(log_sigma) -> bool:
-    """Whether ``log_sigma`` (last axis) holds the timing jitter's scale (four scales)."""
-    return np.shape(log_sigma)[-1] == len(JITTER_SCALES)
+def position(log_sigma, scale: NoiseScale) -> int | None:
+    """Where ``scale`` sits on the last axis of ``log_sigma``; None where its model has no such scale."""
+    scales = scales_of(log_sigma)
+    return scales.index(scale) if scale in scales else None
+
+
+def ratio_position(ratios, scale: NoiseScale) -> int | None:
+    """Where ``scale`` sits on the last axis of `ratios_of`'s ratios (``sigma_cross`` has none)."""
+    scales = _LAYOUTS[np.shape(ratios)[-1] + 1]
+    return scales.index(scale) - 1 if scale in scales[1:] else None
+
+
+def correlation_time_of(ratios) -> float:
+    """The Gauss-Markov correlation time (s) of one row of `ratios_of`'s ratios; 0 where the noise is white."""
+    k = ratio_position(ratios, GM_TAU_SCALE)
+    return 0.0 if k is None else float(np.exp(ratios[k]))
 
 
 def jitter_stated_ms(stated: dict) -> float:
@@ -132,26 +170,28 @@ def stated_si(stated: dict) -> np.ndarray:
     return np.array([stated[s.key] * s.si_per_unit for s in NOISE_SCALES])
 
 
-def log_sigma_of(stated: dict, jitter: bool = False) -> np.ndarray:
-    """``log_sigma`` of noise given in the contract's units; ``jitter``: the timing jitter's appended
-    (`jitter_stated_ms`)."""
-    if jitter:
-        return np.log(np.append(stated_si(stated), jitter_stated_ms(stated) * JITTER_SCALE.si_per_unit))
-    return np.log(stated_si(stated))
+def log_sigma_of(stated: dict, jitter: bool = False, correlated: bool = False) -> np.ndarray:
+    """``log_sigma`` (`noise_scales`) of noise given in the contract's units: each scale as stated, or
+    its prior's median where it has one and nothing states it (the jitter's: `jitter_stated_ms`); a
+    fraction as its logit."""
+    scales = noise_scales(correlated, jitter)
+    si = [(stated[s.key] if s.prior_center is None else float(stated.get(s.key, s.prior_center))) * s.si_per_unit
+          for s in scales]
+    return np.array([logit(v) if s.logit else np.log(v) for s, v in zip(scales, si)])
 
 
 def scales_in_units(log_sigma) -> np.ndarray:
     """The noise scales of ``log_sigma`` (last axis) in the contract's units (a fraction from its logit)."""
     log_sigma = np.asarray(log_sigma, dtype=float)
-    scales = _scales_of(log_sigma)
-    logit = np.array([s.logit for s in scales])
-    values = np.where(logit, expit(log_sigma), np.exp(np.where(logit, 0.0, log_sigma)))
+    scales = scales_of(log_sigma)
+    fraction = np.array([s.logit for s in scales])
+    values = np.where(fraction, expit(log_sigma), np.exp(np.where(fraction, 0.0, log_sigma)))
     return values / np.array([s.si_per_unit for s in scales])
 
 
 def stated_scales(log_sigma) -> dict:
     """``{key: value}`` of one ``log_sigma`` in the contract's units, for JSON files."""
-    return {s.key: float(v) for s, v in zip(_scales_of(log_sigma), scales_in_units(log_sigma))}
+    return {s.key: float(v) for s, v in zip(scales_of(log_sigma), scales_in_units(log_sigma))}
 
 
 def noise_knowledge(info: dict, defaults: dict) -> dict:
@@ -167,27 +207,33 @@ def noise_knowledge(info: dict, defaults: dict) -> dict:
 
 
 def variances(log_sigma) -> dict:
-    """Noise variances from ``log [sigma_cross_rad, sigma_about_rad, arw_rad_sqrt_s]``; with
-    correlated noise ``logit st_gm_fraction, log tau_s`` follow, and the star tracker's variance
-    splits into its white and Gauss-Markov shares (tau is not a variance)."""
+    """Noise variances from ``log_sigma`` (`noise_scales`): ``log [sigma_cross_rad, sigma_about_rad,
+    arw_rad_sqrt_s]``; with correlated noise the star tracker's variance splits into its white and
+    Gauss-Markov shares (tau is not a variance); with the timing jitter, ``sigma_t^2`` (s^2)."""
     log_sigma = np.asarray(log_sigma, dtype=float)
     s = np.exp(2.0 * log_sigma[:3])
-    if len(log_sigma) == 3:
-        return {"cross": s[0], "about": s[1], "walk": s[2]}
-    if len(log_sigma) == 4:  # timing jitter: sigma_t^2 (s^2)
-        return {"cross": s[0], "about": s[1], "walk": s[2], "jitter": float(np.exp(2.0 * log_sigma[3]))}
-    white, gm = expit(-log_sigma[3]), expit(log_sigma[3])
-    return {"cross": s[0] * white, "about": s[1] * white, "walk": s[2], "gm_cross": s[0] * gm, "gm_about": s[1] * gm}
+    out = {"cross": s[0], "about": s[1], "walk": s[2]}
+    share = position(log_sigma, GM_FRACTION_SCALE)
+    if share is not None:
+        white, gm = expit(-log_sigma[share]), expit(log_sigma[share])
+        out = {"cross": s[0] * white, "about": s[1] * white, "walk": s[2], "gm_cross": s[0] * gm, "gm_about": s[1] * gm}
+    jitter = position(log_sigma, JITTER_SCALE)
+    if jitter is not None:
+        out["jitter"] = float(np.exp(2.0 * log_sigma[jitter]))
+    return out
+
+
+def _relative(scales) -> np.ndarray:
+    return np.array([s.relative for s in scales])
 
 
 def ratios_of(log_sigma) -> np.ndarray:
-    """What the covariance's shape depends on (last axis): the log ratios of ``sigma_about`` and the
-    ARW to ``sigma_cross``, and with correlated noise ``logit st_gm_fraction`` and ``log tau_s``, with
-    the timing jitter the log ratio of ``sigma_t`` to it; ``sigma_cross^2`` enters in closed form."""
+    """What the covariance's shape depends on (last axis): each scale after ``sigma_cross``, as its log
+    ratio to it where it is `NoiseScale.relative` (``sigma_about``, the ARW, the jitter's ``sigma_t``),
+    else as itself (``logit st_gm_fraction``, ``log tau_s``); ``sigma_cross^2`` enters in closed form."""
     log_sigma = np.asarray(log_sigma, dtype=float)
-    if is_jitter(log_sigma):
-        return log_sigma[..., 1:] - log_sigma[..., :1]
-    return np.concatenate([log_sigma[..., 1:3] - log_sigma[..., :1], log_sigma[..., 3:]], axis=-1)
+    relative = _relative(scales_of(log_sigma)[1:])
+    return np.where(relative, log_sigma[..., 1:] - log_sigma[..., :1], log_sigma[..., 1:])
 
 
 def unit_variances(ratios) -> dict:
@@ -199,8 +245,8 @@ def unit_variances(ratios) -> dict:
 def absolute_of(log_cross, ratios) -> np.ndarray:
     """`ratios_of`'s inverse: ``log_sigma`` from ``log sigma_cross`` and the ratios."""
     ratios = np.asarray(ratios, dtype=float)
-    rel = len(ratios) if len(ratios) == len(JITTER_SCALES) - 1 else 2
-    return np.concatenate([[log_cross], log_cross + ratios[:rel], ratios[rel:]])
+    relative = _relative(_LAYOUTS[len(ratios) + 1][1:])
+    return np.concatenate([[log_cross], np.where(relative, log_cross + ratios, ratios)])
 
 
 def _banded_lower(diag_blocks, lower_blocks, depth=1):
@@ -316,15 +362,26 @@ def _body_shapes(boresight_body) -> dict:
     return {"cross": np.eye(3) - np.outer(b, b), "about": np.outer(b, b)}
 
 
+def jitter_shapes(lin: Linearization) -> np.ndarray:
+    """(M, 3, 3) the timing jitter's covariance per unit ``sigma_t^2`` at each reference sample, body axes:
+    ``omega omega^T`` of the body rate there (`Linearization.st_body_rate`)."""
+    if lin.st_body_rate is None:
+        raise ValueError(f"maneuver {lin.maneuver}: the timing jitter needs the body rate at the reference samples")
+    return np.einsum("ja,jb->jab", lin.st_body_rate, lin.st_body_rate)
+
+
 def filtered(maneuver: str, z, design, nuisance, st_matrix, walk, st_dt, walk_lag1, boresight_body,
-             correlation_time_s: float) -> ManeuverNoise:
+             correlation_time_s: float, jitter=None) -> ManeuverNoise:
     """A `ManeuverNoise` of star-tracker noise with a Gauss-Markov part (`markov`): its exact filter,
     two samples deep, and two more components; from the arrays of one series (`build`, or maneuvers
-    chained by `segments`): ``z`` (M, S, 3), ``design`` and ``nuisance`` (M, S, 3, .), ``walk`` (M, S, S, 3, 3)."""
+    chained by `segments`): ``z`` (M, S, 3), ``design`` and ``nuisance`` (M, S, 3, .), ``walk`` (M, S, S, 3, 3).
+    ``jitter`` (M, 3, 3, `jitter_shapes`): the timing jitter's component too, white, filtered as the
+    tracker's white noise is; None: none."""
     m_samples, n_sets = z.shape[:2]
     n = m_samples * 3 * n_sets
+    white = None if jitter is None else {"jitter": jitter}
     blocks, filt = markov.covariance_blocks(st_matrix, _body_shapes(boresight_body), walk, st_dt, correlation_time_s,
-                                            n_sets, walk_lag1)
+                                            n_sets, walk_lag1, white)
     components = {k: _banded_lower(v[0], [v[1][1:], v[2][2:]], 2) for k, v in blocks.items()}
     rhs = np.asfortranarray(np.concatenate([filt.apply(design).reshape(n, -1), filt.apply(nuisance).reshape(n, -1),
                                             filt.apply(z).reshape(n, 1)], axis=1))
@@ -335,9 +392,9 @@ def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0, j
     """Covariance components and transformed right-hand sides of a linearised maneuver.
 
     White star-tracker noise: first differences, the covariance one sample deep. With
-    ``correlation_time_s`` > 0 the star-tracker noise has a first-order Gauss-Markov part too
-    (`filtered`). ``jitter``: a fourth component, the reference's timing jitter, ``omega omega^T``
-    per unit ``sigma_t^2`` at each sample (body rate ``lin.st_body_rate``), white like the tracker's.
+    ``correlation_time_s`` > 0 the star-tracker noise has a Gauss-Markov part too
+    (`filtered`). ``jitter``: one more component, the reference's timing jitter, ``omega omega^T``
+    per unit ``sigma_t^2`` at each sample (`jitter_shapes`), white like the tracker's, with either.
     """
     m_samples, n_sets = lin.z.shape[:2]
     block = 3 * n_sets
@@ -345,12 +402,11 @@ def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0, j
     n = m_samples * block
     if correlation_time_s > 0:
         return filtered(lin.maneuver, lin.z, lin.design, nuis, lin.st_matrix, lin.random_walk(), lin.st_dt,
-                        lin.walk_lag1_or_none(), boresight_body, correlation_time_s)
+                        lin.walk_lag1_or_none(), boresight_body, correlation_time_s,
+                        jitter_shapes(lin) if jitter else None)
     shapes = _body_shapes(boresight_body)
     if jitter:
-        if lin.st_body_rate is None:
-            raise ValueError(f"maneuver {lin.maneuver}: the timing jitter needs the body rate at the reference samples")
-        shapes["jitter"] = np.einsum("ja,jb->jab", lin.st_body_rate, lin.st_body_rate)
+        shapes["jitter"] = jitter_shapes(lin)
     R = lin.st_matrix
     ones = np.ones((n_sets, n_sets))
     diag, lower = {}, {}

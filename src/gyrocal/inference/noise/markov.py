@@ -16,8 +16,11 @@ ends the memory of both the walk (``I + A + B = 0``) and the GM (the coefficient
 ``(phi_j R_j + A_j R_(j-1)) phi_(j-1) + B_j R_(j-2)``, vanishes), for any sampling and attitude
 (gaps included): the filtered walk is ``xi_j - B_j xi_(j-1)``, the filtered GM
 ``R_j nu_j + D_j nu_(j-1)`` with ``D_j = phi_j R_j + A_j R_(j-1)``, the filtered white noise a
-moving average of three samples. The filtered series' covariance is banded two samples deep and
-linear in the five variances, and the filter is unit lower triangular, so the likelihood is that
+moving average of three samples. Any white error filters so, whatever its covariance ``U_j`` at each
+sample: the reference's timing jitter (``sigma_t^2 R_j omega_j omega_j^T R_j^T``, `covariance`) is one
+more such component, linear in ``sigma_t^2``, with no Gauss-Markov counterpart. The filtered series'
+covariance is banded two samples deep and linear in the five variances (six with the jitter), and the
+filter is unit lower triangular, so the likelihood is that
 of the series itself: the banded algebra of `noise` (Cholesky, whitening, selected inverse)
 applies unchanged, at a cost linear in the telemetry length whatever tau is. While the attitude
 holds, ``A_j`` is the scalar ``-(1 - phi_j phi_(j-1)) / (1 - phi_(j-1))``; at ``tau -> 0``
@@ -35,7 +38,8 @@ __all__ = ["COMPONENTS", "Filter", "coefficients", "covariance_blocks", "over_se
 
 COMPONENTS = ("cross", "about", "walk", "gm_cross", "gm_about")
 """The filtered covariance's components, each linear in its own variance: the white star-tracker
-noise across and about the boresight, the gyro walk, and the GM across and about the boresight."""
+noise across and about the boresight, the gyro walk, and the GM across and about the boresight; and
+where the reference's timing jitter is modelled, ``jitter`` (`covariance_blocks`' ``white_only``)."""
 
 
 def _transposed(x: np.ndarray) -> np.ndarray:
@@ -140,14 +144,26 @@ def over_sets(pattern: np.ndarray, u: np.ndarray) -> np.ndarray:
     return np.einsum("st,jab->jsatb", pattern, u).reshape(len(u), 3 * n_sets, 3 * n_sets)
 
 
+def _filtered_white(u, a, b, a_t, b_t, a_prev_t, ones):
+    """White noise of per-sample covariance ``u`` (M, 3, 3), shared by the sets, through the filter: a
+    moving average of three samples, its diagonal blocks and those one and two samples below them."""
+    u1, u2 = _lagged(u, 1), _lagged(u, 2)
+    diag = u + a @ u1 @ a_t + b @ u2 @ b_t
+    lag1 = a @ u1 + b @ u2 @ a_prev_t
+    lag2 = b @ u2
+    return tuple(over_sets(ones, x) for x in (diag, lag1, lag2))
+
+
 def covariance_blocks(st_matrix: np.ndarray, body_shapes: dict, walk: np.ndarray, st_dt_s: np.ndarray,
-                      tau_s: float, n_sets: int, walk_lag1=None):
+                      tau_s: float, n_sets: int, walk_lag1=None, white_only=None):
     """Per component, the filtered covariance's diagonal blocks (M, B, B) and the blocks one and
     two samples below them, per unit variance (B = 3 x sets). ``body_shapes`` maps ``cross`` and
-    ``about`` to the tracker-frame 3x3 covariance shapes; ``walk`` is (M, S, S, 3, 3), each
-    interval's walk covariance per unit ARW^2, ``walk_lag1`` (M,) the walk shared by step j with
-    step j - 1 where star-tracker samples fall inside gyro intervals (`errormodel.walk_steps`).
-    Returns ``(blocks, filter)``."""
+    ``about`` to the tracker-frame 3x3 covariance shapes, each white with a Gauss-Markov counterpart
+    (``gm_cross``, ``gm_about``); ``white_only`` maps more white components without one to their
+    (M, 3, 3) per-sample shapes (the timing jitter's ``omega omega^T``, `covariance.jitter_shapes`).
+    ``walk`` is (M, S, S, 3, 3), each interval's walk covariance per unit ARW^2, ``walk_lag1`` (M,)
+    the walk shared by step j with step j - 1 where star-tracker samples fall inside gyro intervals
+    (`errormodel.walk_steps`). Returns ``(blocks, filter)``."""
     a, b, phi = coefficients(st_dt_s, tau_s, st_matrix)
     r = np.asarray(st_matrix, dtype=float)
     ones = np.ones((n_sets, n_sets))
@@ -159,16 +175,13 @@ def covariance_blocks(st_matrix: np.ndarray, body_shapes: dict, walk: np.ndarray
     innovation = (1.0 - phi**2)[:, None, None]
     blocks = {}
     for name, shape in body_shapes.items():
-        u = r @ shape @ _transposed(r)
-        u1, u2 = _lagged(u, 1), _lagged(u, 2)
-        diag = u + a @ u1 @ a_t + b @ u2 @ b_t
-        lag1 = a @ u1 + b @ u2 @ a_prev_t
-        lag2 = b @ u2
-        blocks[name] = tuple(over_sets(ones, x) for x in (diag, lag1, lag2))
+        blocks[name] = _filtered_white(r @ shape @ _transposed(r), a, b, a_t, b_t, a_prev_t, ones)
         v = innovation * shape
         v1 = _lagged(v, 1)
         gm_diag = r @ v @ _transposed(r) + d @ v1 @ _transposed(d)
         blocks[f"gm_{name}"] = tuple(over_sets(ones, x) for x in (gm_diag, d @ v1 @ r_prev_t, np.zeros_like(v)))
+    for name, shapes in (white_only or {}).items():
+        blocks[name] = _filtered_white(r @ shapes @ _transposed(r), a, b, a_t, b_t, a_prev_t, ones)
     m = len(st_dt_s)
     w = walk.transpose(0, 1, 3, 2, 4).reshape(m, 3 * n_sets, 3 * n_sets)
     w1 = _lagged(w, 1)

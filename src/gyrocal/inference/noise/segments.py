@@ -12,6 +12,8 @@ the end of the earlier maneuvers, a constant over the later one) is taken up by 
 set, which for every later maneuver stands where the initial attitude error, one for all sets,
 stood: the same span and more. The likelihood is then exact for a model that forgets only that the
 sets restart together (with one set, it forgets nothing), and stays banded two samples deep.
+The reference's timing jitter (`st_jitter`), white, is one more component at each sample, from each
+maneuver's body rate there: the chain's is theirs end to end.
 """
 
 import itertools
@@ -73,13 +75,14 @@ def _set_offsets(m_samples: int, n_sets: int) -> np.ndarray:
     return out
 
 
-def build(lins, gaps, boresight_body, correlation_time_s: float) -> covariance.ManeuverNoise:
+def build(lins, gaps, boresight_body, correlation_time_s: float, jitter: bool = False) -> covariance.ManeuverNoise:
     """One `covariance.ManeuverNoise` for maneuvers flown one after another (``lins`` in time order,
     ``gaps`` between them, s) with Gauss-Markov star-tracker noise of ``correlation_time_s``: the
     filter runs on across the gaps; the nuisance is each maneuver's own (its biases; the first its
-    initial attitude error, the later ones an offset per set)."""
+    initial attitude error, the later ones an offset per set). ``jitter``: the reference's timing
+    jitter too, white at each sample of each maneuver (`covariance.jitter_shapes`)."""
     if len(lins) == 1:
-        return covariance.build(lins[0], boresight_body, correlation_time_s)
+        return covariance.build(lins[0], boresight_body, correlation_time_s, jitter)
     n_sets = lins[0].z.shape[1]
     parts = [covariance.nuisance_design(lin) for lin in lins]
     parts[1:] = [np.concatenate([_set_offsets(len(lin.z), n_sets), nuis[..., 3:]], axis=3)
@@ -97,7 +100,8 @@ def build(lins, gaps, boresight_body, correlation_time_s: float) -> covariance.M
     return covariance.filtered(
         "+".join(lin.maneuver for lin in lins), np.concatenate([lin.z for lin in lins]),
         np.concatenate([lin.design for lin in lins]), nuisance, np.concatenate([lin.st_matrix for lin in lins]),
-        np.concatenate([lin.random_walk() for lin in lins]), st_dt, lag1, boresight_body, correlation_time_s)
+        np.concatenate([lin.random_walk() for lin in lins]), st_dt, lag1, boresight_body, correlation_time_s,
+        np.concatenate([covariance.jitter_shapes(lin) for lin in lins]) if jitter else None)
 
 
 class Chains:
@@ -122,7 +126,8 @@ class Chains:
         """Each chain's noise group from each maneuver's (``index``; None stays None)."""
         return None if index is None else np.asarray(index)[[c[0] for c in self.members]]
 
-    def noises(self, lins, boresight_body, correlation_time_s: float):
-        """The chains' `build`, one at a time (a generator: each is summed and dropped by its caller)."""
+    def noises(self, lins, boresight_body, correlation_time_s: float, jitter: bool = False):
+        """The chains' `build`, one at a time (a generator: each is summed and dropped by its caller);
+        ``jitter``: with the reference's timing jitter."""
         for chain, gap in zip(self.members, self.gaps):
-            yield build([lins[m] for m in chain], gap, boresight_body, correlation_time_s)
+            yield build([lins[m] for m in chain], gap, boresight_body, correlation_time_s, jitter)

@@ -20,9 +20,8 @@ import xarray as xr
 
 from gyrocal import __version__
 from gyrocal.inference.noise.covariance import (
-    CORRELATED_SCALES,
-    JITTER_SCALE,
     build,
+    correlation_time_of,
     noise_scales,
     scales_in_units,
     stated_scales,
@@ -72,10 +71,10 @@ def loo_blocks(idata, model: str) -> pd.DataFrame:
 
 
 def posterior_dataset(draws, theta_hat, spec, noise_groups=()) -> az.InferenceData:
-    """(chains, draws, P + 3) sampled offsets and log noise scales (P + 5 with correlated noise), in
-    the parameters' units; with ``noise_groups`` (more than one), each group's level (its
-    ``sigma_cross`` over the campaign's) and their log sd follow, as ``noise_group_level`` and
-    ``noise_group_sd``."""
+    """(chains, draws, P + k) sampled offsets and the k log noise scales of the model
+    (`covariance.noise_scales`), in the parameters' units; with ``noise_groups`` (more than one), each
+    group's level (its ``sigma_cross`` over the campaign's) and their log sd follow, as
+    ``noise_group_level`` and ``noise_group_sd``."""
     p = len(spec)
     scales = noise_scales(spec.correlated_noise, spec.jitter_noise)
     k = len(scales)
@@ -107,7 +106,7 @@ def summarize(idata, per_walker, labels, convergence: dict) -> pd.DataFrame:
     tail = (1 - CI_PROB) / 2
     low, high = (draws.quantile(q, dim=("chain", "draw")) for q in (tail, 1 - tail))
     rows = []
-    noise_labels = [f"noise.{s.key}" for s in CORRELATED_SCALES + (JITTER_SCALE,) if s.key in draws]
+    noise_labels = [f"noise.{s.key}" for s in noise_scales(True, True) if s.key in draws]
     group_labels = {}
     if "noise_group_level" in draws:
         group_labels = {f"noise.level.{g}": ("noise_group_level", {"noise_group": g})
@@ -201,7 +200,7 @@ def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
     for m, (data, (lin, nz)) in enumerate(zip(maneuvers, post.take_maneuvers(), strict=True)):
         level = 1.0 if offsets is None else np.exp(2 * offsets[:, post.group_index[m]])
         if nz.filter is not None:  # Gauss-Markov noise: filtered at the draws' mean correlation time
-            nz = build(lin, post.estimate.boresight, float(np.exp(ratios[-1])))
+            nz = build(lin, post.estimate.boresight, correlation_time_of(ratios), post.estimate.spec.jitter_noise)
         wm = predictive.WhitenedManeuver(nz, ratios)
         blocks = predictive.block_index(lin, data.st_time, sampler_cfg["block_s"])
         loglik.append(predictive.leave_block_out_loglik(lin, wm, dtheta, scale2 * level, blocks))

@@ -1,11 +1,11 @@
 """The likelihood's sufficient statistics tabulated over the noise's shape, and interpolated.
 
 The noise covariance is ``sigma_cross^2`` times a matrix fixed by the log ratios of the other
-scales to it (`covariance.ratios_of`): two for white star-tracker noise, and with a Gauss-Markov
-part (`markov`) its ratio and ``log tau`` too. The scale enters in closed form; the statistics
-at unit scale are tabulated on a grid over the ratios, spanning many posterior standard
-deviations, and interpolated (tensor-product cubic Lagrange), so a posterior draw costs a
-weighted sum instead of a factorisation.
+scales to it (`covariance.ratios_of`): two for white star-tracker noise, with a Gauss-Markov
+part (`markov`) its share's logit and ``log tau`` too, with the reference's timing jitter its
+ratio. The scale enters in closed form; the statistics at unit scale are tabulated on a grid over
+the ratios, spanning many posterior standard deviations, and interpolated (tensor-product cubic
+Lagrange), so a posterior draw costs a weighted sum instead of a factorisation.
 """
 
 import logging
@@ -29,14 +29,16 @@ noise): where the ratios' profile is flat and the grid falls back on their prior
 class NoiseShapes:
     """The likelihood's noise structures at a noise shape: each maneuver's, fixed, for white noise;
     for Gauss-Markov noise each chain's (`segments.Chains`: the error runs on between consecutive
-    maneuvers of a group), rebuilt at each correlation time (its filter depends on tau). ``groups``
-    (each maneuver's noise group) gives the REML profile one level per group; `groups_of_parts` is
-    the structures' own."""
+    maneuvers of a group), rebuilt at each correlation time (its filter depends on tau; every other
+    ratio only weighs the components). ``groups`` (each maneuver's noise group) gives the REML profile
+    one level per group; `groups_of_parts` is the structures' own."""
 
-    def __init__(self, noises, lins=None, boresight=None, groups=None, chained=None):
-        """``chained``: a `segments.Chains` (None: every maneuver apart)."""
+    def __init__(self, noises, lins=None, boresight=None, groups=None, chained=None, jitter=False):
+        """``chained``: a `segments.Chains` (None: every maneuver apart); ``jitter``: the Gauss-Markov
+        structures hold the reference's timing jitter too (white structures have it as built)."""
         self.noises, self.lins, self.boresight, self.groups = noises, lins, boresight, groups
         self.chained = segments.Chains.apart(len(lins)) if chained is None and lins is not None else chained
+        self.jitter = jitter
 
     @property
     def correlated(self) -> bool:
@@ -48,10 +50,10 @@ class NoiseShapes:
         return self.chained.groups(self.groups) if self.correlated else self.groups
 
     def _built(self, ratios):
-        return self.chained.noises(self.lins, self.boresight, float(np.exp(ratios[-1])))
+        return self.chained.noises(self.lins, self.boresight, covariance.correlation_time_of(ratios), self.jitter)
 
     def at(self, ratios) -> list:
-        """The `covariance.ManeuverNoise` structures for ``ratios`` (only ``log tau``, the last, matters)."""
+        """The `covariance.ManeuverNoise` structures for ``ratios`` (only ``log tau`` matters)."""
         return list(self._built(ratios)) if self.correlated else self.noises
 
     def profile(self, ratios) -> float:
@@ -72,7 +74,9 @@ class RatioGrid:
     """Unit-scale sufficient statistics on a grid over the noise ratios (`covariance.ratios_of`).
 
     At each node the statistics are computed with ``sigma_cross = 1``. The grid spans
-    ``half_width_sd`` sd either way, at most `MAX_HALF_WIDTH_LOG_RATIO`. ``noises`` is the
+    ``half_width_sd`` sd either way, at most `MAX_HALF_WIDTH_LOG_RATIO`, with ``nodes`` along every
+    ratio (the config's ``grid.nodes``), or its own along each. With Gauss-Markov noise the structures
+    are built once per node of ``log tau`` (`NoiseShapes.at`), the outer loop. ``noises`` is the
     maneuvers' noise structures, or a `NoiseShapes` where they change with the ratios; ``groups``,
     each maneuver's noise group where ``noises`` is a list (a `NoiseShapes` has its own), tabulates
     each group's statistics apart (they scale apart).
@@ -88,10 +92,12 @@ class RatioGrid:
     """Whether every node is valid (``valid``), so that no point's weights need checking against it; a grid
     whose nodes were not tabulated here (built bare, as the interpolation's tests build it) has none left out."""
 
-    def __init__(self, noises, center, sd, nodes: int, half_width_sd: float, groups=None):
+    def __init__(self, noises, center, sd, nodes, half_width_sd: float, groups=None):
+        """``nodes``: per ratio, or one count for all."""
         shapes = noises if isinstance(noises, NoiseShapes) else NoiseShapes(noises, groups=groups)
         center = np.asarray(center, dtype=float)
         self.nodes, self.dims = nodes, len(center)
+        shape = self.shape
         groups = shapes.groups_of_parts
         self.groups = None if groups is None or np.max(groups) == 0 else np.asarray(groups)
         self.n_groups = 1 if self.groups is None else int(self.groups.max()) + 1
@@ -99,19 +105,19 @@ class RatioGrid:
         self.sd = half_width / half_width_sd
         """The ratios' sd that the grid spans ``half_width_sd`` of: ``sd``, or less where the span is capped."""
         self.start = center - half_width
-        self.step = 2 * half_width / (nodes - 1)
+        self.step = 2 * half_width / (np.array(shape) - 1)
         self.values = None
-        self.valid = np.ones(nodes**self.dims, dtype=bool)
+        self.valid = np.ones(self.size, dtype=bool)
         """Per node (flat index): whether its covariance could be factored and its statistics are finite."""
         self._last = None
         """The last `stats` call's ratios, interpolated rows and inside mask (`_interpolated`)."""
-        inner = (nodes,) * (self.dims - 1) if shapes.correlated else (nodes,) * self.dims
-        outer = range(nodes) if shapes.correlated else [None]
-        for last in outer:  # Gauss-Markov: tau (the last ratio) outermost, each filter built once
-            current = shapes.at(self.start + self.step * last) if shapes.correlated else shapes.noises
+        tau = covariance.ratio_position(center, covariance.GM_TAU_SCALE) if shapes.correlated else None
+        inner = shape if tau is None else shape[:tau] + shape[tau + 1:]
+        for outer in [None] if tau is None else range(shape[tau]):  # Gauss-Markov: tau outermost, each filter built once
+            current = shapes.noises if tau is None else shapes.at(self.start + self.step * outer)
             for index in np.ndindex(*inner):
-                index = index + (last,) if shapes.correlated else index
-                flat = np.ravel_multi_index(index, (nodes,) * self.dims)
+                index = index if tau is None else index[:tau] + (outer,) + index[tau:]
+                flat = np.ravel_multi_index(index, shape)
                 r = self.start + self.step * np.array(index)
                 try:
                     parts = self._group_stats(current, covariance.unit_variances(r))
@@ -123,7 +129,7 @@ class RatioGrid:
                     self.valid[flat] = False
                     continue
                 if self.values is None:
-                    self.values = np.empty((nodes**self.dims, len(row)))
+                    self.values = np.empty((self.size, len(row)))
                 self.values[flat] = row
                 self.n_params = len(parts[0].b)
                 self.n = parts[0].n if self.groups is None else np.array([s.n for s in parts])
@@ -136,15 +142,25 @@ class RatioGrid:
             self.values[~self.valid] = 0.0  # never weighted: a point that needs such a node is off the grid
             self._log_left_out()
 
+    @property
+    def shape(self) -> tuple:
+        """The nodes along each ratio."""
+        return tuple(int(n) for n in np.broadcast_to(self.nodes, (self.dims,)))
+
+    @property
+    def size(self) -> int:
+        """The count of nodes."""
+        return int(np.prod(self.shape))
+
     def _log_left_out(self):
         """Which nodes were left out, in the ratios' ranges they cover."""
-        bad = np.array(np.unravel_index(np.flatnonzero(~self.valid), (self.nodes,) * self.dims)).T
+        bad = np.array(np.unravel_index(np.flatnonzero(~self.valid), self.shape)).T
         ranges = [f"{lo:.3g} to {hi:.3g}" for lo, hi in zip(self.start + self.step * bad.min(axis=0),
                                                              self.start + self.step * bad.max(axis=0))]
         logging.getLogger("gyrocal").warning(
             "noise-ratio grid: %d of %d nodes left out, their covariance not positive definite in floating point "
-            "(log ratios %s; with a Gauss-Markov part, log tau last: a correlation time far beyond the maneuvers "
-            "while the attitude turns); the posterior is bounded to where the likelihood can be computed",
+            "(log ratios %s; with a Gauss-Markov part, log tau fourth: a correlation time far beyond the "
+            "maneuvers while the attitude turns); the posterior is bounded to where the likelihood can be computed",
             (~self.valid).sum(), self.valid.size, ", ".join(ranges))
 
     def _group_stats(self, noises, var) -> list:
@@ -155,19 +171,20 @@ class RatioGrid:
         return [total([s for s, g in zip(each, self.groups) if g == k]) for k in range(self.n_groups)]
 
     def weights(self, ratios: np.ndarray):
-        """(W, nodes^dims) cubic Lagrange weights, and a mask of points inside the grid."""
+        """(W, `size`) cubic Lagrange weights, and a mask of points inside the grid."""
+        shape = np.array(self.shape)
         t = (ratios - self.start) / self.step
-        inside = np.all((t >= 1) & (t <= self.nodes - 2), axis=1)
-        i = np.clip(np.floor(t), 1, self.nodes - 3).astype(int)
+        inside = np.all((t >= 1) & (t <= shape - 2), axis=1)
+        i = np.clip(np.floor(t), 1, shape - 3).astype(int)
         w1 = _lagrange(t - i)
         offsets = np.indices((4,) * self.dims).reshape(self.dims, -1)
         flat = np.zeros((len(ratios), offsets.shape[1]), dtype=int)
         product = w1[:, 0, offsets[0]]
         for d in range(self.dims):
-            flat = flat * self.nodes + (i[:, d, None] + offsets[d] - 1)
+            flat = flat * shape[d] + (i[:, d, None] + offsets[d] - 1)
             if d:
                 product = product * w1[:, d, offsets[d]]
-        weights = np.zeros((len(ratios), self.nodes**self.dims))
+        weights = np.zeros((len(ratios), self.size))
         np.put_along_axis(weights, flat, product, axis=1)
         if not self.complete:  # a node left out may only have no weight
             inside &= np.all(self.valid[flat] | (product == 0), axis=1)

@@ -27,7 +27,7 @@ from gyrocal.inference.fit.likelihood import (
     total,
 )
 from gyrocal.inference.noise import segments
-from gyrocal.inference.noise.covariance import noise_labels, ratios_of, variances
+from gyrocal.inference.noise.covariance import noise_labels, noise_scales, ratios_of, variances
 from gyrocal.inference.sampling.ensemble import SamplerResult, run_ensembles
 from gyrocal.inference.sampling.noisegrid import NoiseShapes, RatioGrid, ratio_curvature
 from gyrocal.inference.sampling.priors import GROUP_SD_PRIOR_LOG_SD, GROUP_SD_PRIOR_MEDIAN, Priors
@@ -43,7 +43,8 @@ GROUP_SD_START_VARIANCE = 0.25
 
 class LogPosterior:
     """Vectorised log posterior of ``x = [dtheta (P), log sigma_cross, log sigma_about, log arw]``
-    (and ``logit st_gm_fraction, log tau`` with correlated noise).
+    (and ``logit st_gm_fraction, log tau`` with correlated noise, then ``log sigma_t`` with the timing
+    jitter: `covariance.noise_scales`).
 
     With noise groups, each group's own ``log sigma_cross`` and the log of their sd follow; the
     campaign's ``log sigma_cross`` is then their mean, and they are partially pooled about it
@@ -133,8 +134,8 @@ def absolute(x):
 
 
 def start_covariance(cond_cov, n_obs, ratio_sd):
-    """Laplace covariance of ``[dtheta, log sigma_cross, log sigma_about, log arw]`` (and
-    ``logit st_gm_fraction, log tau`` with correlated noise).
+    """Laplace covariance of ``[dtheta, log sigma_cross, log sigma_about, log arw]`` (and the model's
+    other noise scales after them, `covariance.noise_scales`).
 
     ``log sigma_cross`` is known to about ``1/sqrt(2n)``; the other two are it plus the
     ratios, whose spread comes from the REML Hessian, as does the Gauss-Markov part's; give them
@@ -242,16 +243,13 @@ def prepare(maneuvers, estimate, priors: Priors, grid_cfg: dict) -> Prepared:
     """Linearise about the point estimate, tabulate the noise ratios on their grid and gather the data's
     information at the fitted noise: everything the sampler needs, and what is checked before it runs."""
     lins, noises = linearize_all(maneuvers, estimate)
+    spec = estimate.spec
     ratios = ratios_of(estimate.log_sigma)
-    fallback = priors.log_ratio_sd
     index = noise_groups(maneuvers)[1] if estimate.group_offsets is not None else None
     shapes = NoiseShapes(noises, groups=index)
-    if estimate.spec.correlated_noise:
-        shapes = NoiseShapes(noises, lins, estimate.boresight, index, segments.Chains.of(maneuvers))
-        fallback = np.concatenate([[fallback, fallback], priors.log_sigma_sd[3:]])
-    if estimate.spec.jitter_noise:
-        fallback = np.array([fallback, fallback, np.hypot(priors.log_sigma_sd[0], priors.log_sigma_sd[3])])
-    ratio_sd = ratio_curvature(shapes, ratios, fallback)
+    if spec.correlated_noise:
+        shapes = NoiseShapes(noises, lins, estimate.boresight, index, segments.Chains.of(maneuvers), spec.jitter_noise)
+    ratio_sd = ratio_curvature(shapes, ratios, priors.ratio_sd(noise_scales(spec.correlated_noise, spec.jitter_noise)))
     grid = RatioGrid(shapes, ratios, ratio_sd, grid_cfg["nodes"], grid_cfg["half_width_sd"])
     logpost = LogPosterior(grid, estimate.theta, priors)
     if index is None:

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from gyrocal.inference.noise.covariance import JITTER_SCALE, log_sigma_of
+from gyrocal.inference.noise.covariance import GM_FRACTION_SCALE, GM_TAU_SCALE, log_sigma_of, noise_scales
 from gyrocal.io.calibration import parameter_rows
 from gyrocal.model import priorfamily
 
@@ -15,13 +15,13 @@ __all__ = ["GM_FRACTION_LOGIT_SD", "GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDI
            "TAU_PRIOR_LOG_SD", "Priors", "model_priors", "posterior_spec"]
 
 
-GM_FRACTION_LOGIT_SD = 2.0
+GM_FRACTION_LOGIT_SD = GM_FRACTION_SCALE.prior_log_sd
 """Correlated star-tracker noise: sd of the logit of its Gauss-Markov share (12 % to 88 % within one sd)."""
 
-TAU_PRIOR_CENTER_S = 30.0
+TAU_PRIOR_CENTER_S = GM_TAU_SCALE.prior_center
 """Correlated star-tracker noise: the prior's median correlation time (s)."""
 
-TAU_PRIOR_LOG_SD = 2.0
+TAU_PRIOR_LOG_SD = GM_TAU_SCALE.prior_log_sd
 """... and its log-normal sd: 4 s to 220 s within one sd, 0.5 s to 1 600 s within two."""
 
 
@@ -59,16 +59,14 @@ class Priors:
     @classmethod
     def from_spec(cls, spec, stated_noise: dict, noise_log_sd: float) -> "Priors":
         """The spec's priors (as declared, or overridden by `ModelSpec.with_priors`); the noise
-        scales' priors are centred on the stated noise. With correlated noise, the star tracker's
-        Gauss-Markov share has a logit-normal prior about one half (`GM_FRACTION_LOGIT_SD`), its
-        correlation time a log-normal one about `TAU_PRIOR_CENTER_S`."""
-        center, sd = log_sigma_of(stated_noise), np.full(3, float(noise_log_sd))  # the jitter's below
-        if spec.correlated_noise:
-            center = np.concatenate([center, [0.0, np.log(TAU_PRIOR_CENTER_S)]])
-            sd = np.concatenate([sd, [GM_FRACTION_LOGIT_SD, TAU_PRIOR_LOG_SD]])
-        if spec.jitter_noise:  # log-normal about the stated jitter, or the scale's own median (`JITTER_SCALE`)
-            center = log_sigma_of(stated_noise, jitter=True)
-            sd = np.append(sd, JITTER_SCALE.prior_log_sd)
+        scales' (`covariance.noise_scales`) are centred on the stated noise, each where the campaign
+        states it or else about its own median (`covariance.log_sigma_of`), with its own sd or else
+        the config's ``noise_log_sd``: with correlated noise, the star tracker's Gauss-Markov share
+        logit-normal about one half (`GM_FRACTION_LOGIT_SD`), its correlation time log-normal about
+        `TAU_PRIOR_CENTER_S`; the timing jitter log-normal (`covariance.JITTER_SCALE`)."""
+        scales = noise_scales(spec.correlated_noise, spec.jitter_noise)
+        center = log_sigma_of(stated_noise, spec.jitter_noise, spec.correlated_noise)
+        sd = np.array([float(noise_log_sd) if s.prior_log_sd is None else s.prior_log_sd for s in scales])
         return cls(spec.prior_mean_si, spec.prior_sd_si, spec.bound_si, center, sd, spec.prior_dof)
 
     @property
@@ -76,6 +74,14 @@ class Priors:
         """The prior sd of a white noise scale's log ratio to ``sigma_cross`` (two log scales'
         difference): where the data do not tell a ratio, its spread is this."""
         return np.sqrt(2.0) * self.log_sigma_sd[0]
+
+    def ratio_sd(self, scales) -> np.ndarray:
+        """Each noise ratio's prior sd (`covariance.ratios_of`, of the model's ``scales``), where the data
+        do not tell it: a ratio of two scales under the config's ``noise_log_sd`` `log_ratio_sd`, one of a
+        scale with its own prior to ``sigma_cross`` the two in quadrature, a share or tau its own."""
+        sd = self.log_sigma_sd
+        return np.array([self.log_ratio_sd if s.prior_log_sd is None else np.hypot(sd[0], sd[i]) if s.relative
+                         else sd[i] for i, s in enumerate(scales) if i])
 
 
 def posterior_spec(spec, priors_cfg: dict, prior_from=None):

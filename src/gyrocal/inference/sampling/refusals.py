@@ -143,7 +143,8 @@ def check_representable(maneuvers, est: PointEstimate):
     smooth at the sampling interval (`smoothness`): no noise model here represents it, and the posterior
     lies beyond the share's bound, where the sampler's chains drift (RepoIMU at 100 Hz: stopped
     unconverged after 750-800 steps, a minute per model)."""
-    if len(est.log_sigma) < 5 or est.log_sigma[3] < noisefit.GM_LOGIT_BOUND - SHARE_BOUND_MARGIN:
+    share = covariance.position(est.log_sigma, covariance.GM_FRACTION_SCALE)
+    if share is None or est.log_sigma[share] < noisefit.GM_LOGIT_BOUND - SHARE_BOUND_MARGIN:
         return
     measured = smoothness.of_estimate(maneuvers, est, [est.linearize(maneuvers, m) for m in range(len(maneuvers))])
     if smoothness.describe(measured):
@@ -199,9 +200,11 @@ def check_blocks(maneuvers, block_s: float):
 SHARE_BOUND_MARGIN = 0.05
 """A fitted ``logit st_gm_fraction`` this close to its bound is at it (`share_at_bound`)."""
 
-NOISE_RATIOS = ("log(sigma_about / sigma_cross)", "log(arw / sigma_cross)", "logit st_gm_fraction", "log st_gm_tau_s")
-"""The noise ratios the posterior's grid spans (`noisegrid.RatioGrid`, `covariance.ratios_of`), in its
-order: two, and two more with correlated star-tracker noise."""
+NOISE_RATIOS = {"sigma_about_arcsec": "log(sigma_about / sigma_cross)", "arw_deg_sqrt_h": "log(arw / sigma_cross)",
+                "st_gm_fraction": "logit st_gm_fraction", "st_gm_tau_s": "log st_gm_tau_s",
+                "st_jitter_ms": "log(st_jitter / sigma_cross)"}
+"""The noise ratios the posterior's grid spans (`noisegrid.RatioGrid`, `covariance.ratios_of`) in words,
+by the key of their scale: two, two more with correlated star-tracker noise, one with the timing jitter."""
 
 
 def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_sd: float) -> str:
@@ -232,7 +235,8 @@ def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_
                                                 [spec.labels[i] for i in index])
     notes += [f"a direction only the prior holds ({value:.2g} of its information): "
               + " ".join(f"{w:+.2f} {label}" for label, w in loads) for value, loads in held]
-    flat = [name for name, sd in zip(NOISE_RATIOS, ratio_sd) if sd >= 0.5 * ratio_prior_sd]
+    flat = [NOISE_RATIOS[scale.key] for scale, sd in zip(covariance.scales_of(est.log_sigma)[1:], ratio_sd)
+            if sd >= 0.5 * ratio_prior_sd]
     if flat:
         notes.append(f"the data hardly tell the noise ratio(s) {', '.join(flat)} (their profile is as wide as "
                      "the prior): a longer maneuver, or holds, separate the gyro walk from the reference noise")
@@ -245,14 +249,16 @@ def share_at_bound(log_sigma, measured=()) -> str:
     noise, in words; "" where it is inside, or the noise white. At the upper bound the posterior lies
     beyond the grid, where the sampler cannot follow it; where the residual is smooth (``measured``:
     `smoothness.of_maneuver` of each maneuver) that is why, and the reference interval to use follows."""
-    if len(log_sigma) < 5 or abs(log_sigma[3]) < noisefit.GM_LOGIT_BOUND - SHARE_BOUND_MARGIN:
+    k = covariance.position(log_sigma, covariance.GM_FRACTION_SCALE)
+    if k is None or abs(log_sigma[k]) < noisefit.GM_LOGIT_BOUND - SHARE_BOUND_MARGIN:
         return ""
-    share = covariance.stated_scales(log_sigma)["st_gm_fraction"]
-    if log_sigma[3] < 0:
+    stated = covariance.stated_scales(log_sigma)
+    share = stated["st_gm_fraction"]
+    if log_sigma[k] < 0:
         return (f"the reference's noise fits as white (Gauss-Markov share {share:.2g}, at its bound): the model "
                 "without st_correlated_noise holds it")
     head = (f"the reference's noise fits as all Gauss-Markov (share {share:.4g}, at its bound, tau "
-            f"{np.exp(log_sigma[4]):.3g} s): it has no white part at this sampling")
+            f"{stated['st_gm_tau_s']:.3g} s): it has no white part at this sampling")
     if words := smoothness.describe(measured):
         return f"{head}, and {words}"
     return (f"{head}, and one Gauss-Markov part may be standing in for errors on two time scales; import the "
