@@ -130,6 +130,7 @@ def test_the_preprocess_step_records_the_interval_it_used_and_counts_what_it_lef
     assert ("as the config sets" in record["reason"]) == (setting != "auto")
 
 
+@pytest.mark.full
 def test_a_maneuver_too_short_for_the_interval_auto_chose_is_used_at_the_longest_one_it_can_take(tmp_path, config):
     """The smooth-error campaign of above, its second maneuver cut to 14 s: auto chooses 5 s from the long
     one; the short one cannot keep 10 samples every 5 or 2 s, and is used every 1 s, which the record and

@@ -73,6 +73,7 @@ def test_pointwise_terms_rebuilt_from_posterior_nc_are_the_stored_ones(tiny_run,
     assert full.term(BLOCK).loglik(dtheta, scale) == pytest.approx(stored, rel=1e-12, abs=1e-9)
 
 
+@pytest.mark.full
 def test_exact_refit_without_a_block_agrees_with_psis_loo(tiny, tiny_run, baseline_cfg, tmp_path):
     full = looexact.FullRun(tiny_run[0], baseline_cfg)
     result = full.refit(BLOCK, tiny[0], tmp_path)
