@@ -26,18 +26,22 @@ from gyrocal.model import combinations, orthogonality
 
 
 def scale_factors(spec, values) -> list:
-    """Per channel: ``sf_pos`` and ``sf_neg`` where sampled, and ``sf_mean`` (`combinations.scale_combinations`),
-    each as its draws (ppm, from ``values`` in the spec's order) and whether a part is prior-only."""
-    means = [c for c in combinations.scale_combinations(spec) if c.name == "sf_mean"]
-    mean_draws = combinations.combination_draws(values, means)
+    """Per channel, in the spec's order: ``sf_pos`` and ``sf_neg`` where sampled, and ``sf_mean``
+    (`combinations.scale_combinations`), each as its draws (ppm, from ``values`` in the spec's order)
+    and whether a part is prior-only."""
+    means = {c.owner: (c, k) for k, c in enumerate(
+        [c for c in combinations.scale_combinations(spec) if c.name == "sf_mean"])}
+    mean_draws = combinations.combination_draws(values, [c for c, _ in means.values()])
     rows = []
-    for k, c in enumerate(means):
+    for channel in spec.channels:
         for name in ("sf_pos", "sf_neg"):
-            if (label := f"{c.owner}.{name}") in spec.labels:
+            if (label := f"{channel.name}.{name}") in spec.labels:
                 i = spec.labels.index(label)
-                rows.append((c.owner, name, values[:, i], spec.parameters[i].prior_only))
-        parts = np.flatnonzero(c.weights)
-        rows.append((c.owner, "sf_mean", mean_draws[:, k], any(spec.parameters[i].prior_only for i in parts)))
+                rows.append((channel.name, name, values[:, i], bool(spec.parameters[i].prior_only)))
+        if channel.name in means:
+            c, k = means[channel.name]
+            parts = np.flatnonzero(c.weights)
+            rows.append((channel.name, "sf_mean", mean_draws[:, k], any(bool(spec.parameters[i].prior_only) for i in parts)))
     return rows
 
 

@@ -102,7 +102,7 @@ class ModelSpec:
 
     @property
     def jitter_noise(self) -> bool:
-        """The reference's timing jitter (`effects.StJitter`) is a fourth noise scale."""
+        """The reference's timing jitter (`effects.StJitter`) is one more noise scale, after the others."""
         return "st_jitter" in self.effect_names
 
     def __len__(self) -> int:

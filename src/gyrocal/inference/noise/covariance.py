@@ -37,7 +37,6 @@ __all__ = [
     "GM_TAU_SCALE",
     "JITTER_FLOOR_S",
     "JITTER_SCALE",
-    "JITTER_SCALES",
     "NOISE_LABELS",
     "NOISE_SCALES",
     "ManeuverNoise",
@@ -112,8 +111,6 @@ JITTER_SCALE = NoiseScale("st_jitter_ms", 1e-3, prior_center=1.0, prior_log_sd=2
 the others: the prior's median 1 ms (a clock sync over USB or a network), its sd a
 factor e^2, 0.14 to 7 ms within one sd and 18 us to 55 ms within two; a campaign.yaml's
 ``star_tracker: st_jitter_ms`` moves the median."""
-
-JITTER_SCALES = NOISE_SCALES + (JITTER_SCALE,)
 
 JITTER_FLOOR_S = 1e-6
 """The REML keeps ``sigma_t`` above this: 1 us, 0.2 arcsec at 1 rad/s, where the profile is flat."""

@@ -59,11 +59,13 @@ class Priors:
     @classmethod
     def from_spec(cls, spec, stated_noise: dict, noise_log_sd: float) -> "Priors":
         """The spec's priors (as declared, or overridden by `ModelSpec.with_priors`); the noise
-        scales' (`covariance.noise_scales`) are centred on the stated noise, each where the campaign
-        states it or else about its own median (`covariance.log_sigma_of`), with its own sd or else
+        scales' (`covariance.noise_scales`) are centred on the stated noise (`covariance.log_sigma_of`:
+        the three white scales, and the timing jitter where campaign.yaml states it, as
+        `covariance.noise_knowledge` passes it on), else on their own median, with their own sd or else
         the config's ``noise_log_sd``: with correlated noise, the star tracker's Gauss-Markov share
         logit-normal about one half (`GM_FRACTION_LOGIT_SD`), its correlation time log-normal about
-        `TAU_PRIOR_CENTER_S`; the timing jitter log-normal (`covariance.JITTER_SCALE`)."""
+        `TAU_PRIOR_CENTER_S` (no campaign states either); the timing jitter log-normal
+        (`covariance.JITTER_SCALE`)."""
         scales = noise_scales(spec.correlated_noise, spec.jitter_noise)
         center = log_sigma_of(stated_noise, spec.jitter_noise, spec.correlated_noise)
         sd = np.array([float(noise_log_sd) if s.prior_log_sd is None else s.prior_log_sd for s in scales])

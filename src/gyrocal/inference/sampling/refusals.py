@@ -207,15 +207,16 @@ NOISE_RATIOS = {"sigma_about_arcsec": "log(sigma_about / sigma_cross)", "arw_deg
 by the key of their scale: two, two more with correlated star-tracker noise, one with the timing jitter."""
 
 
-def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_sd: float) -> str:
+def check_identified(est: PointEstimate, priors, stats, ratio_sd) -> str:
     """Before sampling, at the fitted noise (``stats``: the data's information, the nuisance integrated
     out): refuse when a parameter the point estimate kept free carries less than
     `identification.INFORMATION_RATIO_MIN` of its prior's information, the others estimated with it
     (it was judged at the stated noise; a fitted noise far above it leaves less), naming it and what to
     fly. Otherwise return what is weakest, in words, for a sampler that does not converge: the least
     informed parameters, directions only the prior holds, noise ratios the data do not tell, a
-    Gauss-Markov share at its bound (over a smooth residual `check_representable` refused it first)."""
-    spec = est.spec
+    Gauss-Markov share at its bound (over a smooth residual `check_representable` refused it first). A
+    noise ratio is not told where its sd (``ratio_sd``) is half its prior's (`Priors.ratio_sd`) or more."""
+    spec, prior_sd = est.spec, priors.sd
     index = np.flatnonzero(spec.free)
     joint = identification.joint_information(stats.A[np.ix_(index, index)], np.asarray(prior_sd)[index])
     weak = joint < identification.INFORMATION_RATIO_MIN
@@ -235,8 +236,9 @@ def check_identified(est: PointEstimate, prior_sd, stats, ratio_sd, ratio_prior_
                                                 [spec.labels[i] for i in index])
     notes += [f"a direction only the prior holds ({value:.2g} of its information): "
               + " ".join(f"{w:+.2f} {label}" for label, w in loads) for value, loads in held]
-    flat = [NOISE_RATIOS[scale.key] for scale, sd in zip(covariance.scales_of(est.log_sigma)[1:], ratio_sd)
-            if sd >= 0.5 * ratio_prior_sd]
+    scales = covariance.scales_of(est.log_sigma)
+    flat = [NOISE_RATIOS[scale.key] for scale, sd, prior in zip(scales[1:], ratio_sd, priors.ratio_sd(scales))
+            if sd >= 0.5 * prior]
     if flat:
         notes.append(f"the data hardly tell the noise ratio(s) {', '.join(flat)} (their profile is as wide as "
                      "the prior): a longer maneuver, or holds, separate the gyro walk from the reference noise")

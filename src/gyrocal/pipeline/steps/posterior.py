@@ -33,7 +33,7 @@ def run(maneuver_files, point_estimate_npz, out: ModelPaths, settings: Posterior
     refusals.check_representable(maneuvers, est)
     try:
         ready = posterior.prepare(maneuvers, est, priors, s.grid)
-        weakest = refusals.check_identified(est, priors.sd, ready.stats, ready.ratio_sd, priors.log_ratio_sd)
+        weakest = refusals.check_identified(est, priors, ready.stats, ready.ratio_sd)
         post = posterior.run(ready, s.sampler, s.seed)
     except SamplingStopped as stopped:
         raise refusals.sampling_stopped(stopped, est, weakest, ready.labels) from None
