@@ -25,19 +25,19 @@ GRIDS = [(11, 7.0), (9, 7.0), (7, 8.0), (5, 8.0)]
 def main():
     from gyrocal.inference.fit.estimate import linearize_all
     from gyrocal.inference.fit.likelihood import campaign_stats
-    from gyrocal.inference.noise.covariance import variances
+    from gyrocal.inference.noise.covariance import ratios_of, unit_variances
     from gyrocal.inference.sampling import noisegrid
 
     cfg = yaml.safe_load((ROOT / "config/config.yaml").read_text())
     fitted = baseline_fit(ROOT / "config/scenarios/mom.yaml", cfg)
     maneuvers, est, priors, spec = fitted.maneuvers, fitted.estimate, fitted.priors, fitted.estimate.spec
     _, noises = linearize_all(maneuvers, est)
-    ratios = est.log_sigma[1:] - est.log_sigma[0]
-    ratio_sd = noisegrid.ratio_curvature(noises, ratios, np.sqrt(2.0) * priors.log_sigma_sd[0])
+    ratios = ratios_of(est.log_sigma)
+    ratio_sd = noisegrid.ratio_curvature(noises, ratios, priors.log_ratio_sd)
     scale = np.exp(2 * est.log_sigma[0])
     rng = np.random.default_rng(0)
     points = ratios + ratio_sd * rng.uniform(-2, 2, (40, 2))
-    exact = [campaign_stats(noises, variances([0.0, r[0], r[1]])) for r in points]
+    exact = [campaign_stats(noises, unit_variances(r)) for r in points]
     offset = 2 * rng.multivariate_normal(np.zeros(len(spec)), np.linalg.inv(exact[0].A) * scale)
     print(f"noise ratios {ratios.round(3)}, their sd {ratio_sd.round(4)}; errors in log-likelihood units")
     for nodes, half_width in GRIDS:

@@ -79,10 +79,15 @@ SF_SD_PPM = 1000.0
 """Scale factors drawn N(0, 1000 ppm), as a DTG's residual after ground calibration."""
 
 
+def kind_of(index: int) -> str:
+    """Campaign ``index``'s kind: the kinds in name order, in turn."""
+    return sorted(KINDS)[index % len(KINDS)]
+
+
 def scenario_of(index: int) -> tuple:
     """Campaign ``index``'s scenario (the tiny one with a fresh truth and seed, and its kind's
     changes) and its kind."""
-    kind = sorted(KINDS)[index % len(KINDS)]
+    kind = kind_of(index)
     changes, mis_arcsec = KINDS[kind]
     scenario = yaml.safe_load(BASE_SCENARIO.read_text())
     rng = np.random.default_rng([SEED, index])
@@ -174,7 +179,7 @@ def run_battery(n: int, processes: int, out: Path, config_path: Path, kinds=None
     cfg["report"]["figures"] = False  # the battery reads verdicts and tables, which no figure changes
     out.mkdir(parents=True, exist_ok=True)
     todo = [(i, cfg, out) for i in range(n) if not (out / f"{i:04d}.json").exists()
-            and (kinds is None or scenario_of(i)[1] in kinds)]
+            and (kinds is None or kind_of(i) in kinds)]
     with Pool(processes) as pool:
         for record in pool.imap_unordered(one, todo):
             print(json.dumps(record), flush=True)

@@ -7,22 +7,11 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from gyrocal.inference.noise.covariance import GM_FRACTION_SCALE, GM_TAU_SCALE, log_sigma_of, noise_scales
+from gyrocal.inference.noise.covariance import log_sigma_of, noise_scales
 from gyrocal.io.calibration import parameter_rows
 from gyrocal.model import priorfamily
 
-__all__ = ["GM_FRACTION_LOGIT_SD", "GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDIAN", "TAU_PRIOR_CENTER_S",
-           "TAU_PRIOR_LOG_SD", "Priors", "model_priors", "posterior_spec"]
-
-
-GM_FRACTION_LOGIT_SD = GM_FRACTION_SCALE.prior_log_sd
-"""Correlated star-tracker noise: sd of the logit of its Gauss-Markov share (12 % to 88 % within one sd)."""
-
-TAU_PRIOR_CENTER_S = GM_TAU_SCALE.prior_center
-"""Correlated star-tracker noise: the prior's median correlation time (s)."""
-
-TAU_PRIOR_LOG_SD = GM_TAU_SCALE.prior_log_sd
-"""... and its log-normal sd: 4 s to 220 s within one sd, 0.5 s to 1 600 s within two."""
+__all__ = ["GROUP_SD_PRIOR_LOG_SD", "GROUP_SD_PRIOR_MEDIAN", "Priors", "model_priors", "posterior_spec"]
 
 
 @dataclass
@@ -63,9 +52,9 @@ class Priors:
         the three white scales, and the timing jitter where campaign.yaml states it, as
         `covariance.noise_knowledge` passes it on), else on their own median, with their own sd or else
         the config's ``noise_log_sd``: with correlated noise, the star tracker's Gauss-Markov share
-        logit-normal about one half (`GM_FRACTION_LOGIT_SD`), its correlation time log-normal about
-        `TAU_PRIOR_CENTER_S` (no campaign states either); the timing jitter log-normal
-        (`covariance.JITTER_SCALE`)."""
+        logit-normal about one half and its correlation time log-normal about 30 s, as
+        `covariance.GM_FRACTION_SCALE` and `covariance.GM_TAU_SCALE` declare them (no campaign states
+        either); the timing jitter log-normal (`covariance.JITTER_SCALE`)."""
         scales = noise_scales(spec.correlated_noise, spec.jitter_noise)
         center = log_sigma_of(stated_noise, spec.jitter_noise, spec.correlated_noise)
         sd = np.array([float(noise_log_sd) if s.prior_log_sd is None else s.prior_log_sd for s in scales])
