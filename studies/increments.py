@@ -1,5 +1,6 @@
 """Which noise a real trial's misfit is (issue 42), read off the gyro's increments against the
-reference's over a lag, outside the pipeline: a BROAD trial (``.mat``) or a RepoIMU one (``.csv``). Over a lag ``L`` the reference's relative rotation
+reference's over a lag, outside the pipeline: a BROAD trial (``.mat``) or a RepoIMU one (``.csv``).
+Over a lag ``L`` the reference's relative rotation
 ``R(t)^T R(t + L)`` minus the gyro's increment (corrected by one 3x3 response, a bias and a latency,
 fitted once) has three signatures:
 
@@ -241,7 +242,8 @@ def main():
             print(f"  in motion (|omega| > {MOVING_RAD_S} rad/s), lag {EXPLAIN_LAG * step:.3f} s: RMS per axis left by")
             for name, rms in left.items():
                 print(f"    {name:48s} {rms:6.0f} arcsec")
-            n, moving, share, before, after = glitches(rate, quat, valid, step, corrected_rate(rate, step, response, bias, latency))
+            corrected = corrected_rate(rate, step, response, bias, latency)
+            n, moving, share, before, after = glitches(rate, quat, valid, step, corrected)
             print(f"    reference glitches (one-sample steps off the gyro's by > {GLITCH_OFF:.0%} along it): {n} of {moving} "
                   f"moving steps, {share:.0%} of the one-sample error along the axis; the {EXPLAIN_LAG * step:.3f}-s error "
                   f"{before:.0f} arcsec, {after:.0f} without the lags that end on them")
