@@ -8,8 +8,9 @@ npz = maneuver_files(i.preprocessed, p.maneuvers)
 
 
 def run():
-    posterior.run(npz, i.point, o, PosteriorSettings(**p.settings))
-    calibrate.run(npz, i.point, o.summary, o.calibration, o.correction)
+    settings = PosteriorSettings(**p.settings)
+    posterior.run(npz, i.point, o, settings)
+    calibrate.run(npz, i.point, o.summary, o.calibration, o.correction, settings.plugins)
 
 
 common.variant_step(p.refusal, model, "posterior", run, o)

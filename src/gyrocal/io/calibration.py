@@ -13,7 +13,8 @@ from gyrocal.model import channels as ch
 from gyrocal.model.combinations import COMBINATION_NAMES, scale_combinations
 from gyrocal.model.spec import ModelSpec
 
-__all__ = ["COLUMNS", "calibration_table", "combination_rows", "core_rows", "parameter_rows", "posterior_mean_params"]
+__all__ = ["COLUMNS", "calibration_table", "combination_rows", "core_rows", "parameter_rows", "posterior_mean_extras",
+           "posterior_mean_params"]
 
 COLUMNS = ["channel", "parameter", "unit", "point", "mean", "sd", "ci95_low", "ci95_high", "r_hat", "ess_bulk",
            "prior_only"]
@@ -58,3 +59,11 @@ def posterior_mean_params(spec: ModelSpec, calibration: pd.DataFrame, bias_rad_s
     theta = np.zeros(len(spec))
     theta[spec.core] = [mean[p.owner, p.name] for p in spec.parameters[spec.core]]
     return spec.channel_params(spec.to_si(theta), bias_rad_s)
+
+
+def posterior_mean_extras(spec: ModelSpec, calibration: pd.DataFrame) -> np.ndarray:
+    """The extra effects' parameters at the posterior mean (SI), in `ModelSpec.extras` order."""
+    mean = calibration.set_index(["channel", "parameter"])["mean"]
+    theta = np.zeros(len(spec))
+    theta[spec.extra] = [mean[p.owner, p.name] for p in spec.extras]
+    return spec.to_si(theta)[spec.extra]

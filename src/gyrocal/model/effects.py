@@ -82,6 +82,9 @@ class Effect:
     """A noise-model effect whose variance follows the body rate (`StJitter`), not a correlated one."""
     signature = ""
     """The residual signature whose columns are this effect's own (ranked once, under the effect)."""
+    operating_scale = False
+    """A scale factor that changes with the rate (`SfNonlinearity`): a linear onboard correction cannot
+    follow it, so the uplink takes the scale factor at the campaign's rates (`gyrocal.inference.fit.operating`)."""
 
     def channel_parameters(self, channel) -> tuple:
         """The per-channel parameters a channel carries (all of them, unless an effect says otherwise)."""
@@ -189,6 +192,7 @@ class SfNonlinearity(Effect):
     parameters = (Parameter("sf_quadratic", "ppm/(deg/s)^2", PPM / np.deg2rad(1.0) ** 2, 1e5, 1e6,
                             prior_dof=EFFECT_PRIOR_DOF),)
     signature = "rate_squared"
+    operating_scale = True
 
     def gyro(self, m):
         return {"sf_quadratic": m.rate**2 * m.increments}

@@ -74,9 +74,10 @@ def calibrate_models(paths: CampaignPaths, ids, cfg: dict, models, through="diag
             continue
 
         def sample(out=out):
-            posterior.run(npz, out.point_estimate, out, PosteriorSettings.of(cfg))
+            settings = PosteriorSettings.of(cfg)
+            posterior.run(npz, out.point_estimate, out, settings)
             if through != "posterior":
-                calibrate.run(npz, out.point_estimate, out.summary, out.calibration, out.correction)
+                calibrate.run(npz, out.point_estimate, out.summary, out.calibration, out.correction, settings.plugins)
 
         variant_step("posterior", sample)
         if through != "posterior":

@@ -59,8 +59,9 @@ def run(name: str, bases, files, maneuver_files, input_json, out, refusal_json, 
         return step
 
     def sample():
-        posterior.run(maneuver_files, out.point_estimate, out, PosteriorSettings(**settings.posterior))
-        calibrate.run(maneuver_files, out.point_estimate, out.summary, out.calibration, out.correction)
+        sampling = PosteriorSettings(**settings.posterior)
+        posterior.run(maneuver_files, out.point_estimate, out, sampling)
+        calibrate.run(maneuver_files, out.point_estimate, out.summary, out.calibration, out.correction, sampling.plugins)
 
     if variant_step("posterior", sample) is not None:
         return step

@@ -11,6 +11,7 @@ from gyrocal.criticism import extension, modelchoice, priorconflict, verdict
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.sampling.priors import posterior_spec
 from gyrocal.io.outputs import write_json, write_text
+from gyrocal.model import effects
 from gyrocal.pipeline.paths import REFERENCE_INTERVAL, maneuver_files
 from gyrocal.pipeline.settings import ReportSettings
 from gyrocal.pipeline.steps.common import compared, load_maneuvers, read_json, refusals
@@ -47,7 +48,8 @@ def run(models, files, preprocessed, maneuver_ids, input_json, comparison_csv, o
                                                "orthogonality")})
     calibrations = {m: pd.read_csv(files.calibration[models.index(m)]) for m in kept}
     maneuvers = load_maneuvers(maneuver_files(preprocessed, maneuver_ids))
-    est = PointEstimate.load(reviewed.point_estimate, linearizations=False)
+    est = PointEstimate.load(reviewed.point_estimate, effects.known(list(cfg.get("plugins") or [])),
+                             linearizations=False)
     info, diagnostics, sampler = read_json(input_json), read_json(reviewed.diagnostics), read_json(reviewed.sampler)
     effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases)
     used = posterior_spec(est.spec, cfg["priors"], cfg.get("prior_from"))

@@ -1,0 +1,42 @@
+"""The uplink at the campaign's rates. An onboard correction (paper eq. 3, `gyrocal.model.correction`)
+is linear in each channel's rate: one scale factor a direction. Where the model lets the scale factor
+change with the rate (an effect with `gyrocal.model.effects.Effect.operating_scale`, e.g.
+`sf_nonlinearity`), the scale factor to uplink is the one at the rates the campaign turned: each
+direction's ``sf`` plus the effect's change of the channel's increments over the angle turned that way,
+which leaves every rotation's end error as the model explains it. Away from those rates the linear
+correction is off by the effect's change between them."""
+
+import numpy as np
+
+from gyrocal.inference.errormodel import effect_regressors
+from gyrocal.model import channels as ch
+
+__all__ = ["operating_params", "operating_shift"]
+
+
+def operating_shift(maneuvers, spec, extras_si) -> np.ndarray:
+    """(2, n_channels): what the operating-scale effects at ``extras_si`` (`ModelSpec.extras` order, SI)
+    add to ``sf_pos`` (row 0) and ``sf_neg`` (row 1): their change of each channel's increments over
+    the angle it turned that way, over all ``maneuvers``. A symmetric model (one ``sf`` a channel) takes
+    the change over the angle turned either way in both rows. Zero without such an effect."""
+    n = len(spec.channels)
+    wanted = np.array([bool(getattr(spec.effect(p.effect), "operating_scale", False)) for p in spec.extras], dtype=bool)
+    if not wanted.any():
+        return np.zeros((2, n))
+    change, angle = np.zeros((2, n)), np.zeros((2, n))
+    for data in maneuvers:
+        gyro, _ = effect_regressors(data, spec)
+        added = gyro[:, :, wanted] @ np.asarray(extras_si, dtype=float)[wanted]
+        turned = np.asarray(data.increments, dtype=float)
+        for row, way in enumerate((turned > 0, turned < 0)):
+            change[row] += np.sum(np.where(way, added, 0.0), axis=0)
+            angle[row] += np.sum(np.where(way, turned, 0.0), axis=0)
+    if any(p.name == "sf" for p in spec.parameters[spec.core]):
+        change, angle = np.broadcast_to(change[0] - change[1], (2, n)), np.broadcast_to(angle[0] - angle[1], (2, n))
+    return np.divide(change, angle, out=np.zeros((2, n)), where=angle != 0)
+
+
+def operating_params(params: ch.ChannelParams, shift: np.ndarray) -> ch.ChannelParams:
+    """``params`` with `operating_shift`'s ``shift`` added to their scale factors."""
+    return ch.ChannelParams(params.channels, params.sf_pos + shift[0], params.sf_neg + shift[1], params.mis_rad,
+                            params.bias_rad_s)
