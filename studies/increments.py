@@ -61,6 +61,13 @@ def load(path: Path):
     return np.asarray(m["imu_gyr"], float), q, np.all(np.isfinite(q), axis=1), 1.0 / float(np.squeeze(m["sampling_rate"]))
 
 
+def specific_force(path: Path) -> np.ndarray:
+    """The accelerometer's specific force (N, 3), m/s^2, of a trial `load` reads."""
+    if path.suffix == ".csv":
+        return np.loadtxt(path, delimiter=";", skiprows=2, usecols=range(8))[:, 5:8]
+    return np.asarray(loadmat(path)["imu_acc"], float)
+
+
 def corrected_rate(rate, step_s, response, bias_rad_s, latency_s):
     """The gyro's rate corrected: ``response @ (rate(t + latency) - bias)``, rad/s."""
     t = np.arange(len(rate)) * step_s
@@ -158,9 +165,11 @@ def write_flagged(source: Path, frames: np.ndarray, out: Path):
     out.write_text("".join(lines))
 
 
-def explain(rate, quat, valid, step_s, response, bias_rad_s, latency_s, lag=EXPLAIN_LAG):
+def explain(rate, quat, valid, step_s, response, bias_rad_s, latency_s, force, lag=EXPLAIN_LAG):
     """What each candidate leaves of the increment error over ``lag`` in motion (RMS per axis, arcsec),
-    and per rate bin the error and the share of its variance along the rotation axis."""
+    and per rate bin the error and the share of its variance along the rotation axis. ``force``: the
+    specific force (N, 3), for a reference offset that follows it (`gravity_offset`, a mount that gives)
+    and a gyro bias that does (`g_sensitivity`)."""
     corrected = corrected_rate(rate, step_s, response, bias_rad_s, latency_s)
     starts, gyro, ref = increments(rate, quat, valid, step_s, lag, corrected, 3)
     error = (gyro.inv() * ref).as_rotvec()
@@ -168,6 +177,7 @@ def explain(rate, quat, valid, step_s, response, bias_rad_s, latency_s, lag=EXPL
     moving = speed > MOVING_RAD_S
     error, ref, speed, starts, gyro = error[moving], ref[moving], speed[moving], starts[moving], gyro[moving]
     window = np.floor(starts * step_s / EXPLAIN_WINDOW_S).astype(int)
+    force_turned = np.vstack([np.zeros(3), np.cumsum(0.5 * (force[1:] + force[:-1]) * step_s, axis=0)])
     one = np.zeros(len(starts), int)
     acceleration = savgol_filter(corrected, 7, 2, deriv=1, delta=step_s, axis=0)
     products = np.stack([corrected[:, 1] * corrected[:, 2], corrected[:, 0] * corrected[:, 2],
@@ -181,6 +191,9 @@ def explain(rate, quat, valid, step_s, response, bias_rad_s, latency_s, lag=EXPL
         "K x angular acceleration (9)": (_response_regressors(ref, acceleration[starts], acceleration[starts + lag]), one),
         "K x omega_i omega_j (9)": (_response_regressors(ref, products[starts], products[starts + lag]), one),
         "K x omega_i^2 (9)": (_response_regressors(ref, corrected[starts] ** 2, corrected[starts + lag] ** 2), one),
+        "K x specific force (9)": (_response_regressors(ref, force[starts], force[starts + lag]), one),
+        "G x specific force on the gyro (9)": (np.einsum("ni,jk->njki", force_turned[starts + lag] - force_turned[starts],
+                                                        np.eye(3)).reshape(len(starts), 3, 9), one),
     }
     left = {name: _left(error, regs, groups) for name, (regs, groups) in candidates.items()}
     axis = corrected[starts] + corrected[starts + lag]
@@ -238,7 +251,7 @@ def main():
             lo, hi = RATE_BINS_RAD_S[b], RATE_BINS_RAD_S[b + 1]
             print(f"  lag {lag_s:7.3f} s  |omega| {lo:4.2f}-{hi:5.2f} rad/s  RMS {rms:7.0f} arcsec per axis  ({n} lags)")
         if a.explain:
-            left, bins = explain(rate, quat, valid, step, response, bias, latency)
+            left, bins = explain(rate, quat, valid, step, response, bias, latency, specific_force(path))
             print(f"  in motion (|omega| > {MOVING_RAD_S} rad/s), lag {EXPLAIN_LAG * step:.3f} s: RMS per axis left by")
             for name, rms in left.items():
                 print(f"    {name:48s} {rms:6.0f} arcsec")
