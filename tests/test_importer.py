@@ -504,3 +504,51 @@ def test_the_walk_at_rest_is_the_white_rate_noise_times_the_root_of_the_interval
     rate = rng.normal(0.0, 0.01, (12000, 3))
     assert rests.arw_at_rest(rate, 0.01, [(0, 6000), (9000, 12000)]) == pytest.approx(0.001, rel=0.15)
     assert rests.arw_at_rest(rate, 0.01, [(0, 500)]) is None
+
+
+def test_a_maneuver_starts_at_its_first_valid_reference_sample_where_none_lies_before_and_the_report_says_so(tmp_path):
+    """Motion capture that sees the markers only after 0.5 s (NaN rows 0-49 at 100 Hz): the first
+    maneuver starts at row 50, not 0, and its start's attitude is the reference's there (it was refused:
+    no valid sample brackets the start). The second starts at the rests' cut, a valid sample, as before;
+    the end needs no sample of its own, so the NaN rows 2470-2499 leave it where it was."""
+    from scipy.io import savemat
+
+    from gyrocal.maneuvers.preprocess import slice_maneuver
+
+    savemat(tmp_path / "trial_A.mat", broad_like(missing=tuple(range(50)) + tuple(range(2470, 2500))))
+    out = tmp_path / "campaign"
+    campaign, counts = importer.import_files("broad", out, [tmp_path / "trial_A.mat"], reference_interval_s=0)
+    assert [(m.id, m.t_start, m.t_end) for m in campaign.maneuvers] == [
+        ("trial_A_1", pytest.approx(0.5), pytest.approx(12.49)), ("trial_A_2", pytest.approx(12.5), pytest.approx(24.99))]
+    assert counts["trial_A"]["trimmed"] == {"trial_A_1": 0.0}
+    text = importer.report(campaign, counts, out)
+    assert "trial_A_1 (free motion, 0.50 to 12.49 s; from its first valid reference sample, not 0.00 s)" in text
+    first = slice_maneuver(telemetry.read_campaign(out), "trial_A_1")
+    assert first.gyro_time[0] == pytest.approx(0.5)
+    start = Rotation.from_quat(pd.read_csv(out / "star_tracker.csv").iloc[50][["q1", "q2", "q3", "q4"]].to_numpy(float))
+    assert (Rotation.from_quat(first.attitude0_quat).inv() * start).magnitude() < 1e-12
+
+
+def test_a_start_between_two_kept_reference_samples_stays_where_the_rests_cut(tmp_path):
+    """At 0.1 s the kept rows are every tenth; a cut at row 1250 with row 1250 missing still has row 1240
+    within one interval before it, so the second maneuver starts at the cut."""
+    from scipy.io import savemat
+
+    savemat(tmp_path / "trial_A.mat", broad_like(missing=(1250,)))
+    campaign, counts = importer.build_campaign([tmp_path / "trial_A.mat"], importer.read_mapping("broad"), "c")
+    assert campaign.maneuver("trial_A_2").t_start == pytest.approx(12.5) and counts["trial_A"]["trimmed"] == {}
+
+
+def test_a_stretch_without_a_valid_reference_is_left_out_and_named_and_a_file_without_any_refused(tmp_path):
+    from scipy.io import savemat
+
+    savemat(tmp_path / "trial_A.mat", broad_like(missing=tuple(range(1249))))
+    campaign, counts = importer.build_campaign([tmp_path / "trial_A.mat"], importer.read_mapping("broad"), "c",
+                                               reference_interval_s=0)
+    assert [m.id for m in campaign.maneuvers] == ["trial_A_2"]
+    assert counts["trial_A"]["left_out"] == [("trial_A_1", 0.0, pytest.approx(12.49))]
+    assert "left out: trial_A_1 (0.00 to 12.49 s): fewer than two valid reference samples in it" in importer.report(
+        campaign, counts, tmp_path)
+    savemat(tmp_path / "trial_B.mat", broad_like(missing=tuple(range(2500))))
+    with pytest.raises(InputError, match=r"trial_B\.mat.*no stretch of it has two valid reference samples"):
+        importer.build_campaign([tmp_path / "trial_B.mat"], importer.read_mapping("broad"), "c", reference_interval_s=0)

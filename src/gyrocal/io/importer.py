@@ -12,6 +12,12 @@ several of its samples) can be kept only every ``reference.sample_interval_s`` s
 star tracker at a few Hz would give it, while the gyro keeps every row: the rows in between
 are left out of ``star_tracker.csv`` and counted in the import report, never dropped silently.
 
+A maneuver starts where the reference is (`referenced`): its first attitude is interpolated between
+the valid reference samples around its start. A stretch whose reference is missing at its start
+(motion capture that sees the markers only seconds into the recording) starts at its first valid
+sample instead, and the report says so; a stretch with fewer than two is left out, and the report
+names it and why.
+
 A mapping may declare the gyro's range (``gyro.range``, in the mapping's gyro unit, per second
 for increments): the report counts the samples within `RANGE_BAND` of it, where the gyro clips
 (`gyrocal.checks.saturation` refuses such a maneuver).
@@ -45,7 +51,7 @@ from gyrocal.model.channels import Channel
 __all__ = [
     "ANGLE_UNITS", "MOST_REFUSED", "ORDERS", "PRECISION_MARGIN", "RANGE_BAND", "RATE_AGREE", "RATE_UNITS", "Imported",
     "build_campaign", "declared_range_rad_s", "import_files", "maneuver_axis", "mapping_path", "printed_quantum",
-    "read_file", "read_mapping", "reference_rows", "report", "split_file"
+    "read_file", "read_mapping", "reference_rows", "referenced", "report", "split_file"
 ]
 
 RANGE_BAND = 0.01
@@ -66,6 +72,18 @@ def reference_rows(time, interval_s) -> np.ndarray:
     keep[::every] = True
     keep[-1] = True
     return keep
+
+
+def referenced(first: int, stop: int, kept_valid: np.ndarray, reach: int):
+    """Rows ``first .. stop - 1`` of a file as a maneuver's ``(first, stop)``: its start moved to its first
+    row with a kept, valid reference sample (``kept_valid``) unless one lies at most ``reach`` rows (one
+    reference interval) before it, where the start's attitude interpolates as usual; None where fewer
+    than two such rows lie in it."""
+    rows = np.flatnonzero(kept_valid[first:stop])
+    if len(rows) < 2:
+        return None
+    near = kept_valid[max(0, first - reach):first + 1].any()
+    return (first if near else first + int(rows[0])), stop
 
 
 def split_file(imp: Imported, options: dict) -> tuple:
@@ -109,16 +127,30 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
         keep = reference_rows(time, interval)
         parts.append((time, imp, keep))
         spans, found = split_file(imp, options)
+        reach = max(1, round((interval or 0.0) / float(np.median(np.diff(time)))))
+        ids, trimmed, left_out = [], {}, []
         for i, (a, b) in enumerate(spans):
+            mid = imp.stem if len(spans) == 1 else f"{imp.stem}_{i + 1}"
+            span = referenced(a, b, keep & imp.valid, reach)
+            if span is None:
+                left_out.append((mid, float(time[a]), float(time[b - 1])))
+                continue
+            if span[0] != a:
+                trimmed[mid] = float(time[a])
+            a, b = span
             piece = imp.increments[a:b]
             axis = None if direction is None else axes[int(np.argmax(np.abs(piece).sum(axis=0)))]
-            maneuvers.append(Maneuver(imp.stem if len(spans) == 1 else f"{imp.stem}_{i + 1}", axis, direction,
-                                      float(time[a]), float(time[b - 1]), noise_group=imp.stem))  # one noise level per recording
+            maneuvers.append(Maneuver(mid, axis, direction, float(time[a]), float(time[b - 1]),
+                                      noise_group=imp.stem))  # one noise level per recording
+            ids.append(mid)
+        if not ids:
+            raise TelemetryError.at(f, "no stretch of it has two valid reference samples (the reference is missing "
+                                       "throughout)", todo="check the reference columns and the mapping")
         step = float(np.median(np.diff(time)))
         rates.append(imp.rate_hz)
         if found is not None and found.arw_rad_sqrt_s is not None:
             walks.append(found.arw_rad_sqrt_s)
-        counts[imp.stem] = {"rows": len(time), "maneuvers": [m.id for m in maneuvers[-len(spans):]],
+        counts[imp.stem] = {"rows": len(time), "maneuvers": ids, "trimmed": trimmed, "left_out": left_out,
                             "reference_dropouts": int((~imp.valid[keep] & ~imp.refused[keep] & ~imp.missing[keep]).sum()),
                             "reference_missing": int((keep & imp.missing).sum()),
                             "reference_kept": int(keep.sum()), "reference_interval_s": float(interval or 0.0),
@@ -229,8 +261,12 @@ def report(campaign, counts, outdir) -> str:
         for mid in c["maneuvers"]:
             m = campaign.maneuver(mid)
             turn = "free motion" if m.axis is None else m.turn
-            turns.append(f"{m.id} ({turn}, {m.t_start:.2f} to {m.t_end:.2f} s)")
+            was = c.get("trimmed", {}).get(mid)
+            trim = f"; from its first valid reference sample, not {was:.2f} s" if was is not None else ""
+            turns.append(f"{m.id} ({turn}, {m.t_start:.2f} to {m.t_end:.2f} s{trim})")
         lines.append("    maneuvers: " + ", ".join(turns))
+        for mid, t0, t1 in c.get("left_out", []):
+            lines.append(f"    left out: {mid} ({t0:.2f} to {t1:.2f} s): fewer than two valid reference samples in it")
         if "rests_s" in c:
             found = ", ".join(f"{a:.2f} to {b:.2f} s" for a, b in c["rests_s"]) or "none"
             lines.append(f"    rests (gyro rate within {np.rad2deg(c['rest_threshold_rad_s']):.2g} deg/s of its rest "
