@@ -245,9 +245,12 @@ def test_a_latency_of_one_gyro_sample_is_a_warning(tiny, tmp_path):
     assert len(clock) >= 4, findings.warnings
 
 
-def test_a_maneuver_too_short_for_the_posteriors_blocks_is_refused_at_validation(tiny, tmp_path):
-    message = refused(tiny, tmp_path, lambda d: None, block_s=400.0)
-    assert "too short for the leave-one-block-out predictive (blocks of sampler.block_s = 400 s" in message
+def test_a_maneuver_shorter_than_the_posteriors_blocks_takes_shorter_ones_and_one_too_short_for_any_is_refused(
+        tiny, tmp_path):
+    checks.read_checked(tiny[0], block_s=400.0)
+    message = refused(tiny, tmp_path, edit_csv("star_tracker.csv", lambda f: f.__setitem__(
+        "valid", np.where((f["time"] % 200.0) < 190.0, 0, f["valid"]))), block_s=400.0)
+    assert "too short for the leave-one-block-out predictive (blocks of sampler.block_s = 400 s, halved" in message
 
 
 def test_validate_into_a_closed_pipe_ends_quietly(tiny):

@@ -383,19 +383,22 @@ def test_a_reference_too_sparse_for_the_turn_is_named_with_the_interval_it_needs
                                                        d_gyro, np.diff(st_time))) == ""
 
 
-def test_a_maneuver_too_short_for_the_leave_one_block_out_predictive_is_refused_naming_it():
-    """Each LOO block is predicted from the rest of its maneuver: a maneuver of one block (or one
-    whose rest holds a handful of samples) used to crash in a Cholesky factorisation; it is
-    refused with its span and the fix."""
+def test_a_maneuver_shorter_than_two_blocks_takes_halved_blocks_and_one_too_short_for_any_is_refused_naming_it():
+    """Each LOO block is predicted from the rest of its maneuver, which must keep 10 samples: a maneuver
+    of one 60-s block (or one whose rest holds 9) takes 30-s blocks; one of 12 samples leaves fewer than
+    10 outside its largest block down to blocks of two samples, and is refused with its span (it used to
+    crash in a Cholesky factorisation)."""
+    from gyrocal.inference.sampling.predictive import maneuver_block_s, sample_blocks
     from gyrocal.inference.sampling.refusals import check_blocks
     enough = types.SimpleNamespace(id="yaw_pos", st_time=np.arange(0.0, 70.0))
     one_block = types.SimpleNamespace(id="roll_neg", st_time=np.arange(0.0, 59.0))
     nearly = types.SimpleNamespace(id="pitch_pos", st_time=np.arange(0.0, 69.0))
-    check_blocks([enough], 60.0)
-    with pytest.raises(EstimateError, match=r"roll_neg spans 58 s \(59 samples, 0 outside.*shorter than the maneuver"):
-        check_blocks([enough, one_block], 60.0)
-    with pytest.raises(EstimateError, match=r"pitch_pos spans 68 s \(69 samples, 9 outside"):
-        check_blocks([nearly], 60.0)
+    tiny = types.SimpleNamespace(id="yaw_neg", st_time=np.arange(0.0, 12.0))
+    assert [maneuver_block_s(m.st_time, 60.0) for m in (enough, one_block, nearly, tiny)] == [60.0, 30.0, 30.0, None]
+    assert np.bincount(sample_blocks(one_block.st_time, 60.0)).tolist() == [30, 29]
+    check_blocks([enough, one_block, nearly], 60.0)
+    with pytest.raises(EstimateError, match=r"yaw_neg spans 11 s \(12 samples\).*Lengthen the maneuver"):
+        check_blocks([enough, tiny], 60.0)
 
 
 @pytest.mark.parametrize("shift_s", [0.3, -0.7])

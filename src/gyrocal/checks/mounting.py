@@ -23,7 +23,7 @@ def estimate_mounting(campaign: Campaign) -> tuple:
     common rotation of the gyro misalignments too: after it, misalignments are relative to the
     reference as the data align it. About an axis no maneuver turns across, it is not determined."""
     sensed = [sense(preprocess.slice_maneuver(campaign, m.id)) for m in campaign.maneuvers]
-    gyro, reference = np.vstack([s.d_gyro for s in sensed]), np.vstack([s.d_st for s in sensed])
+    gyro, reference = np.vstack([s.d_gyro_turned for s in sensed]), np.vstack([s.d_st for s in sensed])
     mounting, rssd, sensitivity = Rotation.align_vectors(gyro, reference, return_sensitivity=True)
     variance = rssd**2 / max(len(gyro) - 3, 1)
     return mounting, np.rad2deg(np.sqrt(np.diag(sensitivity) * variance))

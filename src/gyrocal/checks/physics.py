@@ -4,6 +4,7 @@ rotation, a unit slip's likely cause, a reference sampled too sparsely, and a gy
 import numpy as np
 
 from gyrocal.checks.sensing import (
+    MAX_TURN_BETWEEN_REFERENCE_DEG,
     Sensed,
     blocked_sums,
     consistent,
@@ -108,13 +109,13 @@ def free_rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings:
             f"(at most {np.rad2deg(st_excursion.max()):.3g} deg; a scale factor needs at least "
             f"{np.rad2deg(min_angle):.2g} deg to be told better than its prior): is the window on a hold?")
         return False
-    if consistent_any(sensed.d_gyro, sensed.d_st, sensed.dt, sf_bound, mis_bound, reference_noise_rad(sensed)):
+    if consistent_any(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, mis_bound, reference_noise_rad(sensed)):
         return True
     hint = _diagnose(campaign, sensed, None, sf_bound, mis_bound) or undersampled(sensed)
     if hint:
         findings.refuse("rotation", f"{where}: {hint}")
         return False
-    fit = response(sensed.d_gyro, sensed.d_st, sensed.dt, sf_bound, noise_rad=reference_noise_rad(sensed))
+    fit = response(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, noise_rad=reference_noise_rad(sensed))
     def vector(v):
         return "[" + ", ".join(f"{x:+.4g}" for x in v) + "]"
 
@@ -181,19 +182,16 @@ def _diagnose(campaign, sensed: Sensed, a, sf_bound, mis_bound) -> str:
     return ""
 
 
-MAX_TURN_BETWEEN_REFERENCE_DEG = 90.0
-"""The checks compare rotations between reference samples, which are ambiguous beyond half a
-turn; a clipped or mis-scaled gyro understates the turn, so they ask for half that."""
-
-
 def undersampled(sensed: Sensed) -> str:
     """Why the reference is sampled too sparsely for this maneuver's motion, or "": where the
     gyro turns more than `MAX_TURN_BETWEEN_REFERENCE_DEG` between two reference samples, the
     reference's own rotation there may be wrapped by whole turns. Asked only once the rotation
     check has failed and no unit slip explains it (a slip also makes the gyro's turn look
-    large); the answer gives the interval the gyro's peak rate needs. A gyro that turns that far
-    within one of its own samples is not told to wait for a denser reference: its own data are
-    suspect (a cumulative angle, a unit), and the generic rotation message stands."""
+    large); the answer gives the interval the gyro's peak rate needs, or, where only gaps in the
+    reference (samples flagged invalid) span such turns, names the gap: those intervals are left out
+    of the check (`sensing.comparable`), so the rest failed it. A gyro that turns that far within one
+    of its own samples is not told to wait for a denser reference: its own data are suspect (a
+    cumulative angle, a unit), and the generic rotation message stands."""
     turn_deg = np.rad2deg(np.linalg.norm(sensed.d_gyro, axis=1))
     worst = int(np.argmax(turn_deg))
     if turn_deg[worst] <= MAX_TURN_BETWEEN_REFERENCE_DEG:
@@ -202,6 +200,16 @@ def undersampled(sensed: Sensed) -> str:
     if MAX_TURN_BETWEEN_REFERENCE_DEG / peak_deg_s < np.median(sensed.data.dt):
         return ""
     beyond = int(np.sum(turn_deg > MAX_TURN_BETWEEN_REFERENCE_DEG))
+    spacing = np.diff(sensed.data.st_time)
+    step = float(np.median(spacing))
+    gap = float(spacing[worst])
+    if np.all(spacing[turn_deg > MAX_TURN_BETWEEN_REFERENCE_DEG] > 1.5 * step):  # gaps alone, not the interval
+        return (f"the gyro turns {turn_deg[worst]:.0f} deg between the reference samples at "
+                f"{sensed.data.st_time[worst]:.6g} s and {sensed.data.st_time[worst + 1]:.6g} s, {gap:.2g} s apart where "
+                f"the reference is every {step:.2g} s: its samples between are missing (flagged invalid; markers lost "
+                f"during a fast turn), and the rotation across the gap is ambiguous ({beyond} intervals beyond "
+                f"{MAX_TURN_BETWEEN_REFERENCE_DEG:.0f} deg). Left out, the rest of the maneuver still does not match "
+                "the gyros; check the channel columns, their axes and the reference's mounting")
     return (f"the gyro turns {turn_deg[worst]:.0f} deg between the reference samples at {sensed.data.st_time[worst]:.6g} s "
             f"and {sensed.data.st_time[worst + 1]:.6g} s ({beyond} intervals beyond {MAX_TURN_BETWEEN_REFERENCE_DEG:.0f} "
             "deg): the reference's rotation between samples is ambiguous there, so its rotation cannot be checked "

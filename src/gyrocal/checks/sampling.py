@@ -19,6 +19,7 @@ __all__ = [
     "SHORT_GAP_FACTOR",
     "clock_findings",
     "clock_offset_s",
+    "clock_search",
     "declared_rate_findings",
     "extreme_findings",
     "gap_findings",
@@ -197,6 +198,12 @@ def clock_offset_s(sensed: Sensed) -> float:
     motion: one common scale, and a line in time per axis (its start and drift), fitted at every
     shift; a coarse then a fine grid search of the misfit, refined by a parabola. On a single-axis
     maneuver the axes that do not turn add next to nothing."""
+    return clock_search(sensed)[0]
+
+
+def clock_search(sensed: Sensed) -> tuple:
+    """`clock_offset_s`, how much the shift lowers the misfit against none, and the misfit left at it
+    (rad^2, summed over the reference's samples and axes)."""
     data = sensed.data
     theta_gyro = np.vstack([np.zeros(3), np.cumsum(sensed.body, axis=0)])
     theta_st = np.vstack([np.zeros(3), np.cumsum(sensed.d_st, axis=0)])
@@ -233,24 +240,35 @@ def clock_offset_s(sensed: Sensed) -> float:
     c0, c1, c2 = costs[i - 1:i + 2]
     curvature = c0 - 2 * c1 + c2
     offset = 0.5 * (c0 - c2) / curvature if curvature > 0 else 0.0
-    return float(shifts[i] + step * np.clip(offset, -1, 1))
+    best = float(shifts[i] + step * np.clip(offset, -1, 1))
+    at_zero, at_best = misfit(np.array([0.0, best]))
+    return best, float(at_zero - at_best), float(at_best)
 
 
 def clock_findings(sensed: Sensed, findings: Findings):
-    """A clock offset of more than two samples (of the slower sensor) is an error. A shorter one is
+    """A clock offset of more than two samples (of the slower sensor) is an error, where it lowers the
+    misfit by `DETECTION_SD` standard errors of what the shift leaves (a maneuver that turns too little
+    does not pin the clock: a warning says it was not checked). A shorter one is
     a warning where the error it leaves over the maneuver's turning samples (the offset times the
     rate, on each) stands out of the reference's noise by `DETECTION_SD` standard errors and the
     offset is at least half a gyro sample (finer, it is within the time tags' resolution): a
     latency of one gyro sample shows over a long slew. The criticism loop should then find it (effect
     ``st_latency``)."""
     data = sensed.data
-    offset = clock_offset_s(sensed)
+    offset, gain, left = clock_search(sensed)
     limit = 2.0 * max(float(np.median(np.diff(data.st_time))), float(np.median(data.dt)))
     where = f"maneuver {data.id}: the gyro and star-tracker rotations line up best when the gyro clock is shifted by"
     if abs(offset) > limit:
+        z_fit = float(np.sqrt(max(gain, 0.0) / max(left / (3 * len(data.st_time)), np.finfo(float).tiny)))
+        if z_fit < DETECTION_SD:
+            findings.warn("clock",
+                f"{where} {offset:+.3g} s, but that shift lowers their misfit by {z_fit:.2g} sd only (the "
+                f"maneuver turns too little to pin the clock; {DETECTION_SD:g} sd would): the clocks are not checked "
+                "on it", figure=float(offset), unit="s")
+            return
         findings.refuse("clock",
-            f"{where} {offset:+.3g} s (more than two samples, {limit:.3g} s): are the two clocks "
-            "synchronised, and is each time the end of its sample?")
+            f"{where} {offset:+.3g} s (more than two samples, {limit:.3g} s; it lowers their misfit by "
+            f"{z_fit:.2g} sd): are the two clocks synchronised, and is each time the end of its sample?")
         return
     noise_rad = reference_noise_rad(sensed)
     rate = np.linalg.norm(sensed.d_st, axis=1) / sensed.dt

@@ -101,6 +101,17 @@ class Sensed:
         return f"maneuver {m.id} ({m.turn})" + (f", channels {'+'.join(m.sets[self.set_index])}" if self.set_index else "")
 
     @cached_property
+    def d_gyro_turned(self) -> np.ndarray:
+        """(M-1, 3) the gyro's rotation between star-tracker samples with its increments composed, as
+        the reference's is (rad, body axes at the earlier sample): `d_gyro` less its coning error,
+        which grows as the square of the turn per interval where the axis moves (a fast tumble: 7-13 %
+        of the turn at 0.1 s on BROAD's hand-held trials). `d_gyro` stays linear in the increments, for
+        the reinterpretations of the raw columns (a unit, a sign, a cumulative angle) to be tried on."""
+        zeros = ch.ChannelParams.zeros(self.data.channels)
+        _, _, at_st = preprocess.propagate_set(self.data, self.data.sets[self.set_index], zeros)
+        return (at_st[:-1].inv() * at_st[1:]).as_rotvec()
+
+    @cached_property
     def error(self) -> np.ndarray:
         """(M, 3) each sample's error angle between the sensors (eq. 4, nominal parameters, rad)."""
         zeros = ch.ChannelParams.zeros(self.data.channels)
@@ -139,6 +150,18 @@ def fit_rotation(d_gyro, d_st, dt, axis: int, bias=True) -> RotationFit:
 CHECK_BLOCK_S = 1.0
 """The rotation checks compare the sensors over blocks of samples at least this long: over a
 fast reference's single interval, its noise and any sub-sample timing would bias the slope."""
+
+
+MAX_TURN_BETWEEN_REFERENCE_DEG = 90.0
+"""The checks compare rotations between reference samples, which are ambiguous beyond half a
+turn; a clipped or mis-scaled gyro understates the turn, so they ask for half that."""
+
+
+def comparable(d_gyro) -> np.ndarray:
+    """Mask of the reference intervals whose rotation the gyro's can be held against: where the gyro
+    turns at most `MAX_TURN_BETWEEN_REFERENCE_DEG` (beyond, the reference's own rotation may be wrapped
+    by whole turns, as across a few samples the motion capture lost during a fast turn)."""
+    return np.rad2deg(np.linalg.norm(d_gyro, axis=1)) <= MAX_TURN_BETWEEN_REFERENCE_DEG
 
 
 def blocked_sums(dt, *series):
@@ -204,7 +227,11 @@ by more than a percent, beyond the scale bound of a DTG."""
 
 def response(d_gyro, d_st, dt, sf_bound, bias=True, noise_rad=0.0) -> Response:
     """The 3x3 `Response` of the gyros to the reference over blocks of `CHECK_BLOCK_S`, for any motion;
-    ``noise_rad``: one reference sample's noise (`reference_noise_rad`)."""
+    ``noise_rad``: one reference sample's noise (`reference_noise_rad`). The intervals the gyro turns too
+    far in to compare (`comparable`) are left out, unless all are."""
+    keep = comparable(d_gyro)
+    if keep.any():
+        dt, d_gyro, d_st = dt[keep], d_gyro[keep], d_st[keep]
     dt, d_gyro, d_st = blocked_sums(dt, d_gyro, d_st)
     _, _, vt = np.linalg.svd(d_st, full_matrices=False)
     largest = np.argmax(np.abs(vt), axis=1)

@@ -16,8 +16,8 @@ from gyrocal.inference.noise.covariance import ManeuverNoise, nuisance_design, r
 from gyrocal.inference.noise.selectedinverse import inverse_windows, recursion_bounds
 
 __all__ = [
-    "PARETO_K_MAX", "BlockConditional", "WhitenedManeuver", "block_conditionals", "block_index", "leave_block_out_loglik",
-    "residuals_body", "sample_blocks", "split_draws", "undifference_body"
+    "MIN_REST_SAMPLES", "PARETO_K_MAX", "BlockConditional", "WhitenedManeuver", "block_conditionals", "block_index",
+    "leave_block_out_loglik", "maneuver_block_s", "residuals_body", "sample_blocks", "split_draws", "undifference_body"
 ]
 
 PARETO_K_MAX = 0.7
@@ -69,9 +69,31 @@ def undifference_body(lin: Linearization, differenced: np.ndarray, nz: ManeuverN
     return inertial @ lin.st_matrix[None]
 
 
+MIN_REST_SAMPLES = 10
+"""Star-tracker samples of a maneuver that must remain when any one leave-one-block-out block is
+left out: fewer cannot pin down the maneuver's nuisance (initial attitude and biases)."""
+
+
+def maneuver_block_s(st_time, block_s) -> float | None:
+    """The block length of one maneuver: ``block_s``, halved until `MIN_REST_SAMPLES` star-tracker
+    samples lie outside its largest block (a maneuver shorter than two blocks, as the pieces of a
+    hand-held recording cut at its rests); None where no block of two samples or more leaves them."""
+    st_time = np.asarray(st_time, dtype=float)
+    step = float(np.median(np.diff(st_time))) if len(st_time) > 1 else np.inf
+    block = float(block_s)
+    while block >= 2 * step:
+        counts = np.bincount(np.floor((st_time - st_time[0]) / block).astype(int))
+        if len(st_time) - counts.max() >= MIN_REST_SAMPLES:
+            return block
+        block /= 2
+    return None
+
+
 def sample_blocks(st_time, block_s) -> np.ndarray:
-    """Block number of each star-tracker sample: ``block_s`` seconds from the maneuver's first."""
-    return np.floor((st_time - st_time[0]) / block_s).astype(int)
+    """Block number of each star-tracker sample: `maneuver_block_s` seconds from the maneuver's first
+    (``block_s`` where the maneuver is long enough for it)."""
+    block = maneuver_block_s(st_time, block_s) or float(block_s)
+    return np.floor((st_time - st_time[0]) / block).astype(int)
 
 
 def block_index(lin: Linearization, st_time, block_s) -> np.ndarray:

@@ -17,10 +17,11 @@ from gyrocal.inference.fit.estimate import PointEstimate, linearize_all
 from gyrocal.inference.fit.likelihood import maneuver_stats
 from gyrocal.inference.noise import covariance, smoothness
 from gyrocal.inference.noise.covariance import variances
+from gyrocal.inference.sampling import predictive
 from gyrocal.model import units
 from gyrocal.model.kinematics import increment_quantum_rad
 
-__all__ = ["MIN_REST_SAMPLES", "NOISE_PLAUSIBLE", "NOISE_RATIOS", "SHARE_BOUND_MARGIN", "EstimateError", "VariantSkipped",
+__all__ = ["NOISE_PLAUSIBLE", "NOISE_RATIOS", "SHARE_BOUND_MARGIN", "EstimateError", "VariantSkipped",
            "check_blocks", "check_identified", "check_noise", "check_physical", "check_representable",
            "check_variant_informed", "noise_beyond", "sampling_failed", "sampling_stopped", "share_at_bound"]
 
@@ -175,26 +176,18 @@ def check_physical(maneuvers, est: PointEstimate, bound_si):
         f"1 expected): check its data and labels (gyrocal validate) and the noise knowledge")
 
 
-MIN_REST_SAMPLES = 10
-"""Star-tracker samples of a maneuver that must remain when any one leave-one-block-out block is
-left out: fewer cannot pin down the maneuver's nuisance (initial attitude and biases)."""
-
-
 def check_blocks(maneuvers, block_s: float):
-    """Stop before sampling when a maneuver is too short for the leave-one-block-out predictive:
-    each ``block_s`` block is predicted from the rest of its maneuver alone, which must then keep
-    `MIN_REST_SAMPLES` (a single block would leave nothing, and the factorisation would fail)."""
-    short = []
-    for d in maneuvers:
-        counts = np.bincount(np.floor((d.st_time - d.st_time[0]) / block_s).astype(int))
-        if len(d.st_time) - counts.max() < MIN_REST_SAMPLES:
-            short.append(f"{d.id} spans {d.st_time[-1] - d.st_time[0]:.0f} s ({len(d.st_time)} samples, "
-                         f"{len(d.st_time) - counts.max()} outside its largest block)")
+    """Stop before sampling when a maneuver is too short for the leave-one-block-out predictive even
+    with its blocks shortened (`predictive.maneuver_block_s`): each block is predicted from the rest of
+    its maneuver alone, which must then keep `predictive.MIN_REST_SAMPLES` (a single block would leave
+    nothing, and the factorisation would fail)."""
+    short = [f"{d.id} spans {d.st_time[-1] - d.st_time[0]:.0f} s ({len(d.st_time)} samples)"
+             for d in maneuvers if predictive.maneuver_block_s(d.st_time, block_s) is None]
     if short:
         raise EstimateError(
-            f"too short for the leave-one-block-out predictive (blocks of sampler.block_s = {block_s:g} s, each "
-            f"predicted from the rest of its maneuver, which needs at least {MIN_REST_SAMPLES} star-tracker samples): "
-            f"{'; '.join(short)}. Lengthen its holds, or make sampler.block_s shorter than the maneuver")
+            f"too short for the leave-one-block-out predictive (blocks of sampler.block_s = {block_s:g} s, halved "
+            f"down to two samples, each predicted from the rest of its maneuver, which needs at least "
+            f"{predictive.MIN_REST_SAMPLES} star-tracker samples): {'; '.join(short)}. Lengthen the maneuver")
 
 
 SHARE_BOUND_MARGIN = 0.05

@@ -1,0 +1,50 @@
+"""The gyro's rotation between reference samples, for checks that hold it against the reference's:
+its increments composed, not summed, whose difference (the coning error) grows as the square of the
+turn per interval where the axis moves."""
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from gyrocal.checks import sensing
+from gyrocal.maneuvers.preprocess import ManeuverData
+from gyrocal.model.channels import Channel
+
+STEP_S, EVERY = 0.0035, 29
+"""BROAD's gyro step, and its reference kept every 29th sample (0.1 s)."""
+
+
+def coning_maneuver():
+    """A hand-held-like tumble: 3 rad/s about an axis that circles the z axis once a second, 1 rad/s
+    about z; the reference is the exact composition of the gyro's increments, every 29th sample."""
+    channels = tuple(Channel(f"gyro_{a}", None, axis) for a, axis in zip("xyz", ("roll", "pitch", "yaw")))
+    time = np.arange(0, 29 * 40 + 1) * STEP_S
+    mid = 0.5 * (time[1:] + time[:-1])
+    rate = np.column_stack([3 * np.cos(2 * np.pi * mid), 3 * np.sin(2 * np.pi * mid), np.ones_like(mid)])
+    increments = rate * STEP_S
+    attitude = [Rotation.identity()]
+    for inc in increments:
+        attitude.append(attitude[-1] * Rotation.from_rotvec(inc))
+    kept = np.arange(0, len(time), EVERY)
+    st_quat = np.array([attitude[k].as_quat() for k in kept])
+    return ManeuverData("tumble", None, None, channels, tuple(c.name for c in channels), time, increments,
+                        time[kept], st_quat, attitude[0].as_quat())
+
+
+def test_the_composed_gyro_rotation_between_reference_samples_is_the_references_and_the_sum_is_not():
+    sensed = sensing.sense(coning_maneuver())
+    turn = np.linalg.norm(sensed.d_st, axis=1)
+    assert np.max(np.abs(sensed.d_gyro_turned - sensed.d_st)) < 1e-9 * np.max(turn)
+    coning = np.linalg.norm(sensed.d_gyro - sensed.d_st, axis=1) / turn
+    assert np.median(coning) > 0.01   # a percent of the turn and more: beyond what a check may allow a DTG
+
+
+def test_the_free_motion_check_accepts_the_tumble_its_summed_increments_put_off():
+    sensed = sensing.sense(coning_maneuver())
+    sf_bound, mis_bound, _ = sensing.physical_limits(sensed.data.channels, "dtg")
+    assert sensing.consistent_any(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, mis_bound, 1e-6)
+    assert not sensing.consistent_any(sensed.d_gyro, sensed.d_st, sensed.dt, sf_bound, mis_bound, 1e-6)
+
+
+def test_intervals_the_gyro_turns_more_than_a_quarter_turn_in_are_left_out_of_the_comparison():
+    d_gyro = np.array([[0.1, 0, 0], [np.deg2rad(120), 0, 0], [0, np.deg2rad(89), 0]])
+    assert sensing.comparable(d_gyro).tolist() == [True, False, True]
