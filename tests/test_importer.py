@@ -552,3 +552,23 @@ def test_a_stretch_without_a_valid_reference_is_left_out_and_named_and_a_file_wi
     savemat(tmp_path / "trial_B.mat", broad_like(missing=tuple(range(2500))))
     with pytest.raises(InputError, match=r"trial_B\.mat.*no stretch of it has two valid reference samples"):
         importer.build_campaign([tmp_path / "trial_B.mat"], importer.read_mapping("broad"), "c", reference_interval_s=0)
+
+
+def test_a_trial_that_turns_about_one_axis_while_it_shakes_about_another_is_labelled_by_the_turns(tmp_path):
+    """Whole turns about y (1 rad/s for 10 s) while the wand shakes about x (3 rad/s at 5 Hz): the x
+    gyro's rotations add up to more (19 rad against 10), but they go back and forth; the label follows
+    the excursion (10 rad about y against 0.2 about x), the measure validate holds a label against."""
+    n, dt = 1000, 0.01
+    t = dt * np.arange(n)
+    rate = np.column_stack([3.0 * np.sin(2 * np.pi * 5.0 * t), np.ones(n), np.zeros(n)])
+    attitude = Rotation.identity()
+    quat = [attitude.as_quat()]
+    for k in range(1, n):
+        attitude = attitude * Rotation.from_rotvec(0.5 * (rate[k] + rate[k - 1]) * dt)
+        quat.append(attitude.as_quat())
+    wxyz = np.array(quat)[:, [3, 0, 1, 2]]
+    rows = np.column_stack([t, wxyz, np.full((n, 3), 9.81), rate, np.ones((n, 3))])
+    header = "Time (s);Vicon Orientation;;;;IMU Acceleration;;;IMU Gyroscope;;;IMU Magnetometer;;;\n;W;X;Y;Z;X;Y;Z;X;Y;Z;X;Y;Z;\n"
+    (tmp_path / "Shake_A.csv").write_text(header + "\n".join(";".join(f"{v:.10g}" for v in r) + ";" for r in rows) + "\n")
+    campaign, _ = importer.build_campaign([tmp_path / "Shake_A.csv"], importer.read_mapping("repoimu"), "c")
+    assert [(m.axis, m.direction) for m in campaign.maneuvers] == [("pitch", "both")]

@@ -33,7 +33,7 @@ EXPECTED = {
     "overlapping maneuvers": "overlap",
     "axis label names the wrong axis": "axis label wrong",
     "direction label is the wrong one": "opposite of the label's direction",
-    "window with no rotation": "is the window on a hold",
+    "window with no rotation": "a hold, or a motion too small to calibrate on",
     "valid=2": "column 'valid': must be 0 or 1, got 2",
     "boresight given as strings": "star_tracker.boresight_body: must be a non-zero 3-vector",
     "gyro: a scalar": "gyro: must be a mapping",

@@ -21,7 +21,7 @@ from gyrocal.io.telemetry import Campaign
 from gyrocal.model.units import AXES, AXIS_INDEX, rad_to_arcsec
 
 __all__ = [
-    "ALTERNATIVES", "MAX_TURN_BETWEEN_REFERENCE_DEG", "rotation_findings",
+    "ALTERNATIVES", "MAX_TURN_BETWEEN_REFERENCE_DEG", "rotation_findings", "too_little",
     "undersampled"
 ]
 
@@ -33,6 +33,16 @@ ALTERNATIVES = (
 """Gyro scale factors a unit slip produces, with the likely cause; rates-for-increments and
 cumulative angles are tried as well (they depend on the sample rate)."""
 
+
+
+def too_little(where: str, maneuver, turned_rad: float, min_angle_rad: float) -> str:
+    """The refusal of a maneuver that turns too little for any scale factor: how far it turns, and how
+    far it must (the reference's noise over the scale factor's prior sd)."""
+    what = ("neither the reference nor the gyros rotate" if np.rad2deg(turned_rad) < 1.0 else
+            f"the reference and the gyros turn at most {np.rad2deg(turned_rad):.3g} deg")
+    return (f"{where}: {what} in [{maneuver.t_start}, {maneuver.t_end}] s, where a scale factor needs at least "
+            f"{np.rad2deg(min_angle_rad):.2g} deg (the reference's noise over the prior's sd) to be told better than "
+            "its prior: a hold, or a motion too small to calibrate on")
 
 
 def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Findings) -> bool:
@@ -51,10 +61,7 @@ def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Find
     fit = fit_rotation(blocked_gyro, blocked_st, blocked_dt, a)
     gyro_excursion = np.ptp(np.cumsum(d_gyro, axis=0), axis=0)
     if fit.excursion_rad.max() < min_angle and gyro_excursion.max() < min_angle:
-        findings.refuse("rotation",
-            f"{where}: neither the star tracker nor the gyros rotate in [{m.t_start}, {m.t_end}] s "
-            f"(at most {np.rad2deg(fit.excursion_rad.max()):.3g} deg; a scale factor needs at least "
-            f"{np.rad2deg(min_angle):.2g} deg to be told better than its prior): is the window on a hold?")
+        findings.refuse("rotation", too_little(where, m, max(fit.excursion_rad.max(), gyro_excursion.max()), min_angle))
         return False
     if consistent(d_gyro, d_st, dt, a, sf_bound, mis_bound):
         n_errors = len(findings.errors)
@@ -104,10 +111,7 @@ def free_rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings:
     st_excursion = np.ptp(np.cumsum(sensed.d_st, axis=0), axis=0)
     gyro_excursion = np.ptp(np.cumsum(sensed.d_gyro, axis=0), axis=0)
     if st_excursion.max() < min_angle and gyro_excursion.max() < min_angle:
-        findings.refuse("rotation",
-            f"{where}: neither the reference nor the gyros rotate in [{m.t_start}, {m.t_end}] s "
-            f"(at most {np.rad2deg(st_excursion.max()):.3g} deg; a scale factor needs at least "
-            f"{np.rad2deg(min_angle):.2g} deg to be told better than its prior): is the window on a hold?")
+        findings.refuse("rotation", too_little(where, m, max(st_excursion.max(), gyro_excursion.max()), min_angle))
         return False
     if consistent_any(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, mis_bound, reference_noise_rad(sensed)):
         return True

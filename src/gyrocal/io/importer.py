@@ -138,8 +138,7 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
             if span[0] != a:
                 trimmed[mid] = float(time[a])
             a, b = span
-            piece = imp.increments[a:b]
-            axis = None if direction is None else axes[int(np.argmax(np.abs(piece).sum(axis=0)))]
+            axis = None if direction is None else maneuver_axis(imp.increments[a:b], axes)
             maneuvers.append(Maneuver(mid, axis, direction, float(time[a]), float(time[b - 1]),
                                       noise_group=imp.stem))  # one noise level per recording
             ids.append(mid)

@@ -153,8 +153,10 @@ def _unit_quaternions(path, raw, text, ref, lines) -> tuple:
                         "missing": missing}
 
 
-def maneuver_axis(imported: Imported, axes: list) -> str:
-    """The body axis a file rotates about most (the largest total gyro rotation); ``axes`` are the
-    gyro columns' axes, in their order."""
-    turned = np.abs(imported.increments).sum(axis=0)
-    return axes[int(np.argmax(turned))]
+def maneuver_axis(increments: np.ndarray, axes: list) -> str:
+    """The body axis a stretch of gyro increments rotates about most: the largest excursion of its
+    cumulative rotation (peak to peak), the measure `gyrocal validate` holds a label against, so that a
+    trial which turns whole turns about one axis while it shakes about another is labelled by the turns;
+    ``axes`` are the gyro columns' axes, in their order."""
+    excursion = np.ptp(np.cumsum(np.asarray(increments, dtype=float), axis=0), axis=0)
+    return axes[int(np.argmax(excursion))]
