@@ -235,3 +235,33 @@ def test_a_signature_a_library_effect_explains_as_well_extends_the_model_by_that
                              "sf_nonlinearity explains the same misfit (given it, the other leaders' log10 p = -0.0)")
     for lead_left, effect_left in ((-0.04, -30.0), (-30.0, -0.0)):
         assert not next_effect("baseline", BASE, doc(lead_left, effect_left), -6.0).fitted
+
+
+def test_where_every_variant_is_refused_the_loop_extends_the_first_whose_refusal_advises_a_library_effect():
+    from gyrocal.pipeline.steps.extend import advised
+    plain = {"model": "symmetric", "status": "refused", "step": "posterior", "reason": "a gap"}
+    advising = {"model": "baseline", "status": "refused", "step": "posterior", "reason": "correlated: add it",
+                "advice": "st_correlated_noise", "effects": ["scale_factor", "misalignment", "bias"]}
+    step = advised(["symmetric", "baseline"], [plain, advising])
+    assert (step.base, step.effect, step.effects, step.fitted) == (
+        "baseline", "st_correlated_noise", ["scale_factor", "misalignment", "bias", "st_correlated_noise"], True)
+    assert "every variant was refused; model baseline's refusal (posterior) advises adding st_correlated_noise" in step.why
+    assert not advised(["symmetric"], [plain]).fitted
+    unknown = {**advising, "advice": "no_such_effect"}
+    assert not advised(["baseline"], [unknown]).fitted
+
+
+def test_a_refusal_that_advises_an_effect_is_recorded_with_it_and_read_back_as_a_refusal(tmp_path):
+    from gyrocal.inference.sampling.refusals import EstimateError
+    from gyrocal.pipeline.steps import common
+
+    def refuse():
+        raise EstimateError("the fitted noise is not a noise these sensors can have", advice="st_correlated_noise",
+                            effects=("scale_factor", "misalignment", "bias"))
+
+    record = common.variant_step(tmp_path / "refused.json", "baseline", "posterior", refuse, [tmp_path / "fit.csv"])
+    assert record["advice"] == "st_correlated_noise" and record["effects"] == ["scale_factor", "misalignment", "bias"]
+    assert common.read_refusal(tmp_path / "fit.csv") == record
+    import jsonschema
+    schema = json.loads((Path(common.__file__).parents[2] / "io" / "schemas" / "refusal.schema.json").read_text())
+    jsonschema.validate(record, schema)

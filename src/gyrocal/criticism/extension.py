@@ -109,11 +109,14 @@ def before_after(steps: list, diagnostics: dict, fits: dict, comparison):
     """The loop's error before and after, a row per model of each fitted step (``steps``: (name,
     `Extension.as_dict`) pairs, the model each extends first, then the extended one): residual RMS against
     what the noise model predicts, the innovations' whiteness, the share outside the 95 % bands and
-    both leave-out elpd (``model_comparison.csv``'s); ``diagnostics`` and ``fits`` by model."""
+    both leave-out elpd (``model_comparison.csv``'s); ``diagnostics`` and ``fits`` by model. A base that
+    was refused (the loop then extends it by the effect its refusal advises) has no row of its own."""
     elpd = comparison.set_index("model")
     rows = []
     for name, step in steps:
         for model, role in ((step["base"], "before"), (name, f"after: + {step['effect']}")):
+            if model not in diagnostics:
+                continue
             d = diagnostics[model]
             rows.append({"step": name, "model": model, "": role, "misfit": bool(d["misfit"]),
                          "residual RMS (arcsec)": round(d["residual_rms_arcsec"], 2),

@@ -28,7 +28,13 @@ __all__ = ["NOISE_PLAUSIBLE", "NOISE_RATIOS", "SHARE_BOUND_MARGIN", "EstimateErr
 
 class EstimateError(InputError):
     """The point estimate is not physical: the campaign is refused before sampling; the message names
-    the parameter and the maneuver."""
+    the parameter and the maneuver. ``advice``: a library effect the message advises adding to the
+    model's ``effects`` (the loop fits it where every variant is refused: `gyrocal.pipeline.steps.extend`)."""
+
+    def __init__(self, message: str, *, advice: str = "", effects=(), **where):
+        super().__init__(message, **where)
+        self.advice = advice
+        self.effects = list(effects)
 
 
 class VariantSkipped(EstimateError):
@@ -93,11 +99,13 @@ def check_noise(maneuvers, est: PointEstimate):
                 f"{listed}. The residuals (RMS about roll, pitch, yaw, arcsec: {residuals}) are below any noise these "
                 "sensors can have: state the noise the sensors have (campaign.yaml: star_tracker and gyro), and for "
                 "data simulated without noise, the noise of the data themselves")
+        advice, effect = _correlation_advice(maneuvers, lins, est)
         raise EstimateError(
             f"point estimate of model {est.spec.model}: the fitted noise is not a noise these sensors can have: "
             f"{listed}. The residuals hold structure far above the noise that the model lacks (RMS about roll, "
-            f"pitch, yaw, arcsec: {residuals}){_correlation_advice(maneuvers, lins, est)}; validate the campaign (gyrocal "
-            "validate) and read its warnings, or add the effect they point to")
+            f"pitch, yaw, arcsec: {residuals}){advice}; validate the campaign (gyrocal "
+            "validate) and read its warnings, or add the effect they point to", advice=effect,
+            effects=est.spec.effect_names)
 
 
 def _check_resolution(maneuvers, est: PointEstimate, off):
@@ -122,21 +130,22 @@ def _check_resolution(maneuvers, est: PointEstimate, off):
             "(star_tracker: sigma_cross_arcsec, sigma_about_arcsec)")
 
 
-def _correlation_advice(maneuvers, lins, est: PointEstimate) -> str:
+def _correlation_advice(maneuvers, lins, est: PointEstimate) -> tuple:
     """Where the residuals' differences are correlated in time and the model's reference noise is
     white, say so: a reference sampled faster than its noise is white (a star tracker's slow
-    errors, motion capture at 100 Hz) collapses a white-noise fit."""
+    errors, motion capture at 100 Hz) collapses a white-noise fit. Returns the words and the effect
+    they advise adding (``st_correlated_noise``, or "")."""
     if est.spec.correlated_noise:
-        return ""
+        return "", ""
     smooth = smoothness.describe(smoothness.of_estimate(maneuvers, est, lins))
     if smooth:
-        return f". And {smooth}"
+        return f". And {smooth}", ""
     tau = noisefit.correlation_time(lins)
     if tau <= 0:
-        return ""
+        return "", ""
     return (f". They are correlated in time (correlation time about {tau:.3g} s from their differences): add "
             "st_correlated_noise to the model (white plus Gauss-Markov reference noise), or import the reference at "
-            "an interval longer than that (gyrocal import --reference-interval)")
+            "an interval longer than that (gyrocal import --reference-interval)", "st_correlated_noise")
 
 
 def check_representable(maneuvers, est: PointEstimate):

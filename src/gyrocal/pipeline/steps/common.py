@@ -104,6 +104,8 @@ VARIANT_STEPS = tuple(STEP_FILES)
 REFUSAL_KEYS = ("model", "status", "step", "reason")
 """A variant's refusal record (``refused.json``, and every later file of the variant in place of its
 results; ``gyrocal/io/schemas/refusal.schema.json``)."""
+ADVICE_KEYS = ("advice", "effects")
+"""What a refusal record may add: the library effect its reason advises adding, and the variant's effects."""
 
 
 def read_refusal(path) -> dict | None:
@@ -118,7 +120,8 @@ def read_refusal(path) -> dict | None:
     if head != b"{":  # a result: a .npz, .nc or .csv, or a JSON result other than a record
         return None
     doc = read_json(path)
-    return doc if isinstance(doc, dict) and sorted(doc) == sorted(REFUSAL_KEYS) else None
+    known = isinstance(doc, dict) and set(REFUSAL_KEYS) <= set(doc) <= set(REFUSAL_KEYS + ADVICE_KEYS)
+    return doc if known else None
 
 
 def refusals(models, files) -> dict:
@@ -163,6 +166,8 @@ def variant_step(record_path, model: str, step: str, run, outputs=()) -> dict | 
             return None
         except InputError as exc:
             record = {"model": model, "status": getattr(exc, "status", "refused"), "step": step, "reason": str(exc)}
+            if getattr(exc, "advice", ""):  # a library effect the refusal advises adding, for the loop
+                record.update(advice=exc.advice, effects=list(exc.effects))
             said = f"gyrocal: model {model} {record['status']} at step {step} (the other variants go on):\n{exc}"
             # a variant skipped (nothing for it to add: the loop with no misfit) is a decision, not a fault
             (log.info if record["status"] == "skipped" else log.warning)("%s", said)

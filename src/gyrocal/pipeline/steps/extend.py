@@ -5,11 +5,12 @@ import logging
 
 from gyrocal.criticism.extension import Extension, extension_names, next_effect
 from gyrocal.io.outputs import write_json
+from gyrocal.model.effects import LIBRARY
 from gyrocal.pipeline.paths import STEP_FILES
 from gyrocal.pipeline.settings import DiagnosticsSettings, ExtendSettings, PointEstimateSettings, PosteriorSettings
 from gyrocal.pipeline.steps import common
 
-__all__ = ["decide", "run"]
+__all__ = ["advised", "decide", "run"]
 
 log = logging.getLogger("gyrocal")
 
@@ -20,6 +21,9 @@ def decide(name: str, bases, files, settings: ExtendSettings) -> Extension:
     of ``bases`` each (``diagnostics``, ``summary``, ``elpd_blocks``, ``elpd_maneuvers``)."""
     bases = list(bases)
     if extension_names(settings.loop["depth"]).index(name) == 0:
+        records = [common.read_refusal(path) for path in files.diagnostics]
+        if all(r is not None for r in records):
+            return advised(bases, records)
         from gyrocal.pipeline.steps import compare_models
 
         table = compare_models.table(bases, files, settings.model_choice["reject_se"])
@@ -31,6 +35,19 @@ def decide(name: str, bases, files, settings: ExtendSettings) -> Extension:
             return Extension(base, "", [], f"the loop stopped at {base}: {record['reason']}")
     doc = common.read_json(files.diagnostics[bases.index(base)])
     return next_effect(base, doc["effects"], doc, settings.diagnostics["diagnostics"]["structure_log10_p_min"])
+
+
+def advised(bases, records) -> Extension:
+    """Where every variant is refused, the first step of the loop extends the first whose refusal advises
+    a library effect (``advice`` in its record: `refusals.EstimateError`) by that effect, as the reviewed
+    model's misfit would be extended by the effect that explains it; otherwise it stops with the reason."""
+    for base, record in zip(bases, records):
+        effect = record.get("advice", "")
+        if effect in LIBRARY and effect not in record["effects"]:
+            return Extension(base, effect, list(record["effects"]) + [effect],
+                             f"every variant was refused; model {base}'s refusal ({record['step']}) advises adding "
+                             f"{effect}")
+    return Extension(bases[0], "", [], "every variant was refused, and no refusal advises a library effect to add")
 
 
 def run(name: str, bases, files, maneuver_files, input_json, out, refusal_json, settings: ExtendSettings) -> Extension:

@@ -59,7 +59,7 @@ def run(models, files, preprocessed, maneuver_ids, input_json, comparison_csv, o
     # its posterior group alone (the predictive draws are 100 MB at 10x), in memory: forked processes draw
     with xr.open_dataset(reviewed.posterior, group="posterior", engine="h5netcdf") as group:
         posterior = az.InferenceData(posterior=group.load())
-    shown = {m for name, step in fitted for m in (step["base"], name)}  # each fitted step's model before and after
+    shown = {m for name, step in fitted for m in (step["base"], name) if m in kept}  # each step's model before and after
     loop = extension.before_after(fitted, {m: read_json(files.diagnostics[models.index(m)]) for m in shown},
                                   {m: pd.read_csv(files.fit[models.index(m)]) for m in shown}, table)
     disagreement = modelchoice.disagreement_table(modelchoice.typed(table), calibrations, verdict.informed_core(est.spec),
