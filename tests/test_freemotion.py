@@ -149,3 +149,17 @@ def test_two_swapped_channels_in_free_motion_are_named(tmp_path):
     write_campaign(campaign, tmp_path / "c")
     with pytest.raises(TelemetryError, match="channels dtg1_roll and dtg2_pitch look swapped"):
         read_checked(tmp_path / "c")
+
+
+@pytest.mark.parametrize("scenario", ["mom_eigen", "mom_tumble"])
+@pytest.mark.parametrize("factor, cause", [(180 / np.pi, "degrees rather than radians"), (1000.0, "1000 times too large")])
+def test_a_unit_slip_in_free_motion_is_refused_naming_the_unit(scenario, factor, cause, tmp_path):
+    """Every gyro column in degrees (or mrad) for radians: the composed rotations wrap and the response
+    scatters so widely that no direction is determined, which the response check used to take for no
+    evidence; the gyros' path over the reference's, linear in their scale, names the unit."""
+    campaign, _ = simulate.simulate(simulate.load_scenario(f"{SCENARIOS}/{scenario}.yaml"))
+    for name in campaign.gyro_columns:
+        campaign.gyro_columns[name] = campaign.gyro_columns[name] * factor
+    write_campaign(campaign, tmp_path / "c")
+    with pytest.raises(TelemetryError, match=f"the gyros' path is .* times the reference's where it turns: .*{cause}"):
+        read_checked(tmp_path / "c")

@@ -63,16 +63,19 @@ def test_import_writes_a_campaign_per_the_contract(tmp_path):
 def test_a_reference_interval_keeps_every_nth_reference_row_and_counts_the_rest(tmp_path):
     t, quat, _ = repoimu_like(tmp_path / "Trial_A.csv")
     out = tmp_path / "campaign"
-    campaign, counts = importer.import_files("repoimu", out, [tmp_path / "Trial_A.csv"], reference_interval_s=0.5)
+    campaign, counts = importer.import_files("repoimu", out, [tmp_path / "Trial_A.csv"], reference_interval_s=0.3)
     again = telemetry.read_campaign(out)
-    kept = list(range(0, 400, 50)) + [399]
+    kept = list(range(0, 400, 30)) + [399]
     assert np.allclose(again.st_time, t[kept] - t[0])
     assert len(again.gyro_time) == 400
-    assert counts["Trial_A"]["reference_kept"] == 9
-    assert counts["Trial_A"]["reference_dropouts"] == 1  # row 50 is kept, row 51 is not
+    assert counts["Trial_A"]["reference_kept"] == 15
+    assert counts["Trial_A"]["reference_dropouts"] == 0  # rows 50 and 51, the dropouts, are not kept
     valid = again.st_valid == 1
     assert np.allclose(again.st_quat[valid], quat[kept][valid], atol=1e-9)
-    assert "reference kept every 0.5 s: 9 samples, 391 left out between them" in importer.report(campaign, counts, out)
+    assert "reference kept every 0.3 s: 15 samples, 385 left out between them" in importer.report(campaign, counts, out)
+    sparse = r"Trial_A\.csv.*no stretch of it has 10 valid reference samples kept \(8 in all, of 9 kept"
+    with pytest.raises(InputError, match=sparse):
+        importer.import_files("repoimu", tmp_path / "sparse", [tmp_path / "Trial_A.csv"], reference_interval_s=0.5)
 
 
 def test_the_printed_precision_is_read_off_each_column_as_decimals_or_significant_digits():
@@ -539,18 +542,21 @@ def test_a_start_between_two_kept_reference_samples_stays_where_the_rests_cut(tm
     assert campaign.maneuver("trial_A_2").t_start == pytest.approx(12.5) and counts["trial_A"]["trimmed"] == {}
 
 
-def test_a_stretch_without_a_valid_reference_is_left_out_and_named_and_a_file_without_any_refused(tmp_path):
+def test_a_stretch_with_too_few_valid_reference_samples_is_left_out_and_named_and_a_file_without_any_refused(tmp_path):
+    """Rows 0-1244 missing: the first stretch (rows 0-1249) keeps 5 valid samples, fewer than a maneuver
+    needs (`telemetry.MIN_REFERENCE_SAMPLES`, as `slice_maneuver` asks), and is left out, not imported
+    for validate to refuse the campaign over."""
     from scipy.io import savemat
 
-    savemat(tmp_path / "trial_A.mat", broad_like(missing=tuple(range(1249))))
+    savemat(tmp_path / "trial_A.mat", broad_like(missing=tuple(range(1245))))
     campaign, counts = importer.build_campaign([tmp_path / "trial_A.mat"], importer.read_mapping("broad"), "c",
                                                reference_interval_s=0)
     assert [m.id for m in campaign.maneuvers] == ["trial_A_2"]
     assert counts["trial_A"]["left_out"] == [("trial_A_1", 0.0, pytest.approx(12.49))]
-    assert "left out: trial_A_1 (0.00 to 12.49 s): fewer than two valid reference samples in it" in importer.report(
+    assert "left out: trial_A_1 (0.00 to 12.49 s): fewer than 10 valid reference samples in it" in importer.report(
         campaign, counts, tmp_path)
     savemat(tmp_path / "trial_B.mat", broad_like(missing=tuple(range(2500))))
-    with pytest.raises(InputError, match=r"trial_B\.mat.*no stretch of it has two valid reference samples"):
+    with pytest.raises(InputError, match=r"trial_B\.mat.*no stretch of it has 10 valid reference samples kept \(0 in all"):
         importer.build_campaign([tmp_path / "trial_B.mat"], importer.read_mapping("broad"), "c", reference_interval_s=0)
 
 
@@ -572,3 +578,14 @@ def test_a_trial_that_turns_about_one_axis_while_it_shakes_about_another_is_labe
     (tmp_path / "Shake_A.csv").write_text(header + "\n".join(";".join(f"{v:.10g}" for v in r) + ";" for r in rows) + "\n")
     campaign, _ = importer.build_campaign([tmp_path / "Shake_A.csv"], importer.read_mapping("repoimu"), "c")
     assert [(m.axis, m.direction) for m in campaign.maneuvers] == [("pitch", "both")]
+
+
+def test_a_labelled_turn_across_a_reference_gap_is_checked_on_the_rest_and_accepted(tmp_path):
+    """A turn about x at up to 2 rad/s whose reference is missing for 2 s at its fastest (200 dropped
+    rows: the gyro turns about 220 deg across the gap, which the reference's rotation cannot show): the
+    rotation check leaves the gap out (`sensing.comparable`) on a labelled maneuver as on a free one, and
+    the gyro and reference, which agree, pass."""
+    repoimu_like(tmp_path / "Trial_A.csv", rate_rad_s=2.0, n=3000, dropouts=range(650, 850))
+    out = tmp_path / "campaign"
+    importer.import_files("repoimu", out, [tmp_path / "Trial_A.csv"], reference_interval_s=0)
+    assert cli.main(["validate", str(out)]) == 0

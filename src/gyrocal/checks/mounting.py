@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from gyrocal.checks.sensing import physical_limits, sense
+from gyrocal.checks.sensing import comparable, physical_limits, sense
 from gyrocal.finding import Finding, Status
 from gyrocal.inference.fit.identification import DETECTION_SD
 from gyrocal.io.telemetry import Campaign
@@ -18,12 +18,15 @@ __all__ = ["ALTERNATIVES", "align", "aligned", "carried", "estimate_mounting", "
 
 def estimate_mounting(campaign: Campaign) -> tuple:
     """Coarse alignment of the attitude reference: the rotation taking its frame into body axes that
-    best maps its interval rotations onto the gyros' (Wahba's problem, `Rotation.align_vectors`),
+    best maps its interval rotations onto the gyros' (Wahba's problem, `Rotation.align_vectors`; the
+    gyros' increments composed, the intervals too long to compare left out: `sensing.comparable`),
     over every maneuver, and the sd of its angle about each body axis (deg). It absorbs the
     common rotation of the gyro misalignments too: after it, misalignments are relative to the
     reference as the data align it. About an axis no maneuver turns across, it is not determined."""
     sensed = [sense(preprocess.slice_maneuver(campaign, m.id)) for m in campaign.maneuvers]
-    gyro, reference = np.vstack([s.d_gyro_turned for s in sensed]), np.vstack([s.d_st for s in sensed])
+    keep = [comparable(s.d_gyro) for s in sensed]  # a turn beyond a quarter between samples may be wrapped
+    gyro = np.vstack([s.d_gyro_turned[k] for s, k in zip(sensed, keep)])
+    reference = np.vstack([s.d_st[k] for s, k in zip(sensed, keep)])
     mounting, rssd, sensitivity = Rotation.align_vectors(gyro, reference, return_sensitivity=True)
     variance = rssd**2 / max(len(gyro) - 3, 1)
     return mounting, np.rad2deg(np.sqrt(np.diag(sensitivity) * variance))

@@ -7,6 +7,7 @@ from gyrocal.checks.sensing import (
     MAX_TURN_BETWEEN_REFERENCE_DEG,
     Sensed,
     blocked_sums,
+    comparable,
     consistent,
     consistent_any,
     fit_rotation,
@@ -21,7 +22,7 @@ from gyrocal.io.telemetry import Campaign
 from gyrocal.model.units import AXES, AXIS_INDEX, rad_to_arcsec
 
 __all__ = [
-    "ALTERNATIVES", "MAX_TURN_BETWEEN_REFERENCE_DEG", "rotation_findings", "too_little",
+    "ALTERNATIVES", "GROSS_SCALE", "MAX_TURN_BETWEEN_REFERENCE_DEG", "path_ratio", "rotation_findings", "too_little",
     "undersampled"
 ]
 
@@ -33,6 +34,24 @@ ALTERNATIVES = (
 """Gyro scale factors a unit slip produces, with the likely cause; rates-for-increments and
 cumulative angles are tried as well (they depend on the sample rate)."""
 
+
+
+GROSS_SCALE = (0.5, 2.0)
+"""How far the gyros' path may run from the reference's (`path_ratio`) before a unit is suspected, even
+where the response check passes: a fault that scales the gyros by 57 or 1000 scatters the response so
+widely (or wraps their composed rotations) that it can pass; coning and noise move the ratio by percents."""
+
+
+def path_ratio(sensed: Sensed) -> float:
+    """The gyros' path over the reference's: the summed lengths of their increments (linear in the gyros'
+    scale, never wrapped) over those of the reference's rotations, on the intervals where the reference
+    turns at least a quarter of its turn's 99th percentile (the reference alone says where: the noise
+    estimate of the two sensors' difference is the fault's, where there is one); 1 where it never turns."""
+    turn = np.linalg.norm(sensed.d_st, axis=1)
+    turning = turn >= 0.25 * np.percentile(turn, 99) if len(turn) else turn > 0
+    if not turning.any() or not turn[turning].sum():
+        return 1.0
+    return float(np.linalg.norm(sensed.d_gyro[turning], axis=1).sum() / np.linalg.norm(sensed.d_st[turning], axis=1).sum())
 
 
 def too_little(where: str, maneuver, turned_rad: float, min_angle_rad: float) -> str:
@@ -113,13 +132,23 @@ def free_rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings:
     if st_excursion.max() < min_angle and gyro_excursion.max() < min_angle:
         findings.refuse("rotation", too_little(where, m, max(st_excursion.max(), gyro_excursion.max()), min_angle))
         return False
-    if consistent_any(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, mis_bound, reference_noise_rad(sensed)):
+    keep = comparable(sensed.d_gyro)
+    ratio = path_ratio(sensed)
+    if not GROSS_SCALE[0] <= ratio <= GROSS_SCALE[1]:
+        cause = next((c for factor, c in ALTERNATIVES if abs(ratio / factor - 1.0) < 0.1),
+                     "check the gyro columns' unit in the mapping, and that they are increments")
+        findings.refuse("rotation", f"{where}: the gyros' path is {ratio:.4g} times the reference's where it turns: "
+                                    f"{cause}")
+        return False
+    if consistent_any(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, mis_bound, reference_noise_rad(sensed),
+                      keep=keep):
         return True
     hint = _diagnose(campaign, sensed, None, sf_bound, mis_bound) or undersampled(sensed)
     if hint:
         findings.refuse("rotation", f"{where}: {hint}")
         return False
-    fit = response(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, noise_rad=reference_noise_rad(sensed))
+    fit = response(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, noise_rad=reference_noise_rad(sensed),
+                   keep=keep)
     def vector(v):
         return "[" + ", ".join(f"{x:+.4g}" for x in v) + "]"
 

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from gyrocal.checks.sensing import Sensed, reference_noise_rad
+from gyrocal.checks.sensing import Sensed, comparable, reference_noise_rad
 from gyrocal.finding import Findings
 from gyrocal.inference.fit.identification import DETECTION_SD
 from gyrocal.io.telemetry import Campaign
@@ -197,7 +197,9 @@ def clock_offset_s(sensed: Sensed) -> float:
     about all three axes together (a positive shift: the gyro's time stamps are late), for any
     motion: one common scale, and a line in time per axis (its start and drift), fitted at every
     shift; a coarse then a fine grid search of the misfit, refined by a parabola. On a single-axis
-    maneuver the axes that do not turn add next to nothing."""
+    maneuver the axes that do not turn add next to nothing. An interval the gyro turns too far in for
+    the reference's rotation to show (`sensing.comparable`: a gap) takes the gyro's: it says nothing of
+    the clock, and a wrapped turn would."""
     return clock_search(sensed)[0]
 
 
@@ -206,7 +208,11 @@ def clock_search(sensed: Sensed) -> tuple:
     (rad^2, summed over the reference's samples and axes)."""
     data = sensed.data
     theta_gyro = np.vstack([np.zeros(3), np.cumsum(sensed.body, axis=0)])
-    theta_st = np.vstack([np.zeros(3), np.cumsum(sensed.d_st, axis=0)])
+    d_st = sensed.d_st.copy()
+    far = ~comparable(sensed.d_gyro)  # across a gap the reference's rotation may be wrapped: the gyro's bridges it
+    if far.any() and not far.all():
+        d_st[far] = sensed.d_gyro[far]
+    theta_st = np.vstack([np.zeros(3), np.cumsum(d_st, axis=0)])
     t = data.st_time
     span = min(MAX_CLOCK_SEARCH_S, 0.25 * (t[-1] - t[0]))
     step = 0.25 * float(np.median(np.diff(t)))

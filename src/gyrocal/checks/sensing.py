@@ -160,8 +160,16 @@ turn; a clipped or mis-scaled gyro understates the turn, so they ask for half th
 def comparable(d_gyro) -> np.ndarray:
     """Mask of the reference intervals whose rotation the gyro's can be held against: where the gyro
     turns at most `MAX_TURN_BETWEEN_REFERENCE_DEG` (beyond, the reference's own rotation may be wrapped
-    by whole turns, as across a few samples the motion capture lost during a fast turn)."""
+    by whole turns, as across a few samples the motion capture lost during a fast turn). ``d_gyro``:
+    the summed increments (`Sensed.d_gyro`), whose length is the turn, never wrapped."""
     return np.rad2deg(np.linalg.norm(d_gyro, axis=1)) <= MAX_TURN_BETWEEN_REFERENCE_DEG
+
+
+def _kept(keep, *series):
+    """``series`` on the intervals ``keep`` marks, unless it marks none (then all: the caller's
+    refusal names the sparse reference)."""
+    keep = np.asarray(keep, dtype=bool)
+    return series if not keep.any() or keep.all() else tuple(x[keep] for x in series)
 
 
 def blocked_sums(dt, *series):
@@ -174,8 +182,9 @@ def blocked_sums(dt, *series):
 def consistent(d_gyro, d_st, dt, axis, sf_bound, mis_bound) -> bool:
     """Whether the gyro's rotation matches the star tracker's within the physical bounds, with
     a bias fitted or (where a rotation at one steady rate leaves it confounded with the
-    scale) without; over blocks of `CHECK_BLOCK_S`."""
-    dt, d_gyro, d_st = blocked_sums(dt, d_gyro, d_st)
+    scale) without; over blocks of `CHECK_BLOCK_S`, the intervals the gyro turns too far in to compare
+    (`comparable`) left out."""
+    dt, d_gyro, d_st = blocked_sums(*_kept(comparable(d_gyro), dt, d_gyro, d_st))
     return any(_within(fit_rotation(d_gyro, d_st, dt, axis, bias), axis, sf_bound, mis_bound) for bias in (True, False))
 
 
@@ -202,16 +211,20 @@ class Response:
     determined: np.ndarray
     """(3,) directions along which the motion determines the response within the physical scale
     bound (`DETECTION_SD` sds) and the reference's motion stands `SIGNAL_TO_NOISE_MIN` clear of its noise."""
+    strong: np.ndarray
+    """(3,) directions along which the reference's motion stands `SIGNAL_TO_NOISE_MIN` clear of its noise,
+    determined or not: a gyro fault (a unit slip) scatters the response so widely that none is determined."""
 
     def within(self, sf_bound, mis_bound, need_determined=False) -> bool:
-        """Along every determined direction u, each body axis b of the response within what eq. 3
-        allows, ``u_b`` give or take ``sf_bound |u_b| + mis_bound sum_(c != b) |u_c|``, and
-        `DETECTION_SD` standard errors. A motion too weak to determine any direction gives no
-        evidence against the gyros (the no-rotation check stands for a window on a hold), unless
-        ``need_determined`` (a reinterpretation of the data must show it fits)."""
+        """Along every determined direction u, and every direction the reference turns clearly along,
+        each body axis b of the response within what eq. 3 allows, ``u_b`` give or take ``sf_bound |u_b| +
+        mis_bound sum_(c != b) |u_c|``, and `DETECTION_SD` standard errors: a gyro that reads 57 times the
+        reference (degrees for radians) fails however wide its scatter. A motion too weak to determine
+        any direction gives no evidence against the gyros (the no-rotation check stands for a window on a
+        hold), unless ``need_determined`` (a reinterpretation of the data must show it fits)."""
         if need_determined and not self.determined.any():
             return False
-        for k in np.flatnonzero(self.determined):
+        for k in np.flatnonzero(self.determined | self.strong):
             u = self.directions[:, k]
             allowed = sf_bound * np.abs(u) + mis_bound * (np.abs(u).sum() - np.abs(u))
             if np.any(np.abs(self.matrix[:, k] - u) > allowed + DETECTION_SD * self.sd[:, k]):
@@ -225,14 +238,19 @@ this many times the variance of its noise: below, the noise biases the slope (er
 by more than a percent, beyond the scale bound of a DTG."""
 
 
-def response(d_gyro, d_st, dt, sf_bound, bias=True, noise_rad=0.0) -> Response:
+def response(d_gyro, d_st, dt, sf_bound, bias=True, noise_rad=0.0, keep=None) -> Response:
     """The 3x3 `Response` of the gyros to the reference over blocks of `CHECK_BLOCK_S`, for any motion;
     ``noise_rad``: one reference sample's noise (`reference_noise_rad`). The intervals the gyro turns too
-    far in to compare (`comparable`) are left out, unless all are."""
-    keep = comparable(d_gyro)
-    if keep.any():
-        dt, d_gyro, d_st = dt[keep], d_gyro[keep], d_st[keep]
-    dt, d_gyro, d_st = blocked_sums(dt, d_gyro, d_st)
+    far in to compare are left out, unless all are: ``keep``, or `comparable` of ``d_gyro`` (pass the
+    mask of the summed increments where ``d_gyro`` is composed, whose length wraps)."""
+    keep = comparable(d_gyro) if keep is None else keep
+    blocked = blocked_sums(*_kept(keep, dt, d_gyro, d_st))
+    if len(blocked[0]) < 4:  # too few blocks left to fit a 3x3 response and a rate: keep every interval
+        blocked = blocked_sums(dt, d_gyro, d_st)
+    dt, d_gyro, d_st = blocked
+    if len(dt) < 3:  # the motion spans too few blocks to say anything: no direction judged
+        none = np.zeros(3, dtype=bool)
+        return Response(np.eye(3), np.eye(3), np.full((3, 3), np.inf), none, none)
     _, _, vt = np.linalg.svd(d_st, full_matrices=False)
     largest = np.argmax(np.abs(vt), axis=1)
     directions = (vt * np.sign(vt[np.arange(len(vt)), largest])[:, None]).T  # each its largest component positive
@@ -246,13 +264,15 @@ def response(d_gyro, d_st, dt, sf_bound, bias=True, noise_rad=0.0) -> Response:
     sd = np.outer(sigma, np.sqrt(np.diag(np.linalg.pinv(gram))[:3]))
     along = np.sqrt(np.einsum("bk,bk->k", directions**2, sd**2))
     signal = np.diag(gram)[:3] / len(dt) / np.maximum(noise, 1e-30) - 1.0
-    return Response(directions, coef[:3].T, sd, (DETECTION_SD * along <= sf_bound) & (signal >= SIGNAL_TO_NOISE_MIN))
+    strong = signal >= SIGNAL_TO_NOISE_MIN
+    return Response(directions, coef[:3].T, sd, (DETECTION_SD * along <= sf_bound) & strong, strong)
 
 
-def consistent_any(d_gyro, d_st, dt, sf_bound, mis_bound, noise_rad=0.0, need_determined=False) -> bool:
+def consistent_any(d_gyro, d_st, dt, sf_bound, mis_bound, noise_rad=0.0, need_determined=False, keep=None) -> bool:
     """`consistent` for any motion (free, several axes at once): the 3x3 `Response`, with a bias
-    fitted or without, within the physical bounds on every axis the motion determines."""
-    return any(response(d_gyro, d_st, dt, sf_bound, bias, noise_rad).within(sf_bound, mis_bound, need_determined)
+    fitted or without, within the physical bounds on every axis the motion determines (``keep``: as
+    `response`'s)."""
+    return any(response(d_gyro, d_st, dt, sf_bound, bias, noise_rad, keep).within(sf_bound, mis_bound, need_determined)
                for bias in (True, False))
 
 

@@ -62,7 +62,7 @@ def estimate_effect(maneuvers, spec, calibration: pd.DataFrame, biases) -> pd.Da
     """`correction_effect` of the uplink, the posterior mean of ``calibration`` with its scale factors
     at the campaign's rates (`operating_shift`), against the nominal parameters, each maneuver with its
     own estimated biases (``biases``, in its order)."""
-    shift = operating_shift(maneuvers, spec, posterior_mean_extras(spec, calibration))
+    shift = operating_shift(maneuvers, spec, posterior_mean_extras(spec, calibration), biases)
     params = [operating_params(posterior_mean_params(spec, calibration, biases[m]), shift) for m in range(len(maneuvers))]
     nominal = [spec.channel_params(np.zeros(len(spec)), biases[m]) for m in range(len(maneuvers))]
     return correction_effect(maneuvers, params, nominal)

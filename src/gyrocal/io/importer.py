@@ -15,8 +15,8 @@ are left out of ``star_tracker.csv`` and counted in the import report, never dro
 A maneuver starts where the reference is (`referenced`): its first attitude is interpolated between
 the valid reference samples around its start. A stretch whose reference is missing at its start
 (motion capture that sees the markers only seconds into the recording) starts at its first valid
-sample instead, and the report says so; a stretch with fewer than two is left out, and the report
-names it and why.
+sample instead, and the report says so; a stretch with fewer than `MIN_REFERENCE_SAMPLES` is left
+out, and the report names it and why.
 
 A mapping may declare the gyro's range (``gyro.range``, in the mapping's gyro unit, per second
 for increments): the report counts the samples within `RANGE_BAND` of it, where the gyro clips
@@ -38,6 +38,7 @@ from gyrocal.io.mapping import (
 from gyrocal.io.readers import BINARY_WORDS, printed_quantum
 from gyrocal.io.recording import MOST_REFUSED, PRECISION_MARGIN, Imported, maneuver_axis, read_file
 from gyrocal.io.telemetry import (
+    MIN_REFERENCE_SAMPLES,
     NAME_PATTERN,
     UNIT_NORM_TOL,
     Campaign,
@@ -77,12 +78,13 @@ def reference_rows(time, interval_s) -> np.ndarray:
 def referenced(first: int, stop: int, kept_valid: np.ndarray, reach: int):
     """Rows ``first .. stop - 1`` of a file as a maneuver's ``(first, stop)``: its start moved to its first
     row with a kept, valid reference sample (``kept_valid``) unless one lies at most ``reach`` rows (one
-    reference interval) before it, where the start's attitude interpolates as usual; None where fewer
-    than two such rows lie in it."""
+    reference interval) before it and another at most ``reach`` after, where the start's attitude
+    interpolates between them as usual; None where fewer than `MIN_REFERENCE_SAMPLES` such rows lie in
+    it (a maneuver needs them: `gyrocal.maneuvers.preprocess.slice_maneuver`)."""
     rows = np.flatnonzero(kept_valid[first:stop])
-    if len(rows) < 2:
+    if len(rows) < MIN_REFERENCE_SAMPLES:
         return None
-    near = kept_valid[max(0, first - reach):first + 1].any()
+    near = kept_valid[max(0, first - reach):first + 1].any() and kept_valid[first:first + reach + 1].any()
     return (first if near else first + int(rows[0])), stop
 
 
@@ -143,8 +145,10 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
                                       noise_group=imp.stem))  # one noise level per recording
             ids.append(mid)
         if not ids:
-            raise TelemetryError.at(f, "no stretch of it has two valid reference samples (the reference is missing "
-                                       "throughout)", todo="check the reference columns and the mapping")
+            usable = int((keep & imp.valid).sum())
+            raise TelemetryError.at(f, f"no stretch of it has {MIN_REFERENCE_SAMPLES} valid reference samples kept ({usable} in "
+                                       f"all, of {int(keep.sum())} kept)", todo="check the reference columns and the mapping, "
+                                       "or keep the reference more often (gyrocal import --reference-interval)")
         step = float(np.median(np.diff(time)))
         rates.append(imp.rate_hz)
         if found is not None and found.arw_rad_sqrt_s is not None:
@@ -265,7 +269,8 @@ def report(campaign, counts, outdir) -> str:
             turns.append(f"{m.id} ({turn}, {m.t_start:.2f} to {m.t_end:.2f} s{trim})")
         lines.append("    maneuvers: " + ", ".join(turns))
         for mid, t0, t1 in c.get("left_out", []):
-            lines.append(f"    left out: {mid} ({t0:.2f} to {t1:.2f} s): fewer than two valid reference samples in it")
+            lines.append(f"    left out: {mid} ({t0:.2f} to {t1:.2f} s): fewer than {MIN_REFERENCE_SAMPLES} valid reference "
+                         "samples in it")
         if "rests_s" in c:
             found = ", ".join(f"{a:.2f} to {b:.2f} s" for a, b in c["rests_s"]) or "none"
             lines.append(f"    rests (gyro rate within {np.rad2deg(c['rest_threshold_rad_s']):.2g} deg/s of its rest "

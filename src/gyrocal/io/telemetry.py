@@ -29,12 +29,14 @@ from gyrocal.io.campaign_yaml import (
     read_meta,
 )
 
-__all__ = ["NAME_PATTERN", "QUAT_COLUMNS", "UNIT_NORM_TOL", "Campaign", "Maneuver", "TelemetryError", "checksums",
-           "default_name", "read_campaign", "read_meta", "summary", "write_campaign"]
+__all__ = ["MIN_REFERENCE_SAMPLES", "NAME_PATTERN", "QUAT_COLUMNS", "UNIT_NORM_TOL", "Campaign", "Maneuver",
+           "TelemetryError", "checksums", "default_name", "read_campaign", "read_meta", "summary", "write_campaign"]
 
 QUAT_COLUMNS = ["q1", "q2", "q3", "q4"]
 UNIT_NORM_TOL = 1e-6
 """Quaternions whose norm is further than this from 1 are renormalised and counted."""
+MIN_REFERENCE_SAMPLES = 10
+"""Valid reference samples a maneuver needs: its initial attitude, its biases and something to compare."""
 
 
 READ_CSV_EXACT = {} if int(pd.__version__.split(".")[0]) >= 3 else {"float_precision": "round_trip"}

@@ -9,7 +9,7 @@ from scipy.spatial.transform import Rotation, Slerp
 
 from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP, Labelled
 from gyrocal.io.importer import reference_rows
-from gyrocal.io.telemetry import Campaign, TelemetryError
+from gyrocal.io.telemetry import MIN_REFERENCE_SAMPLES, Campaign, TelemetryError
 from gyrocal.model import channels as ch
 from gyrocal.model import kinematics
 from gyrocal.model.units import AXES, rad_to_arcsec
@@ -120,7 +120,7 @@ def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=(), ref
         thinned[usable] = reference_rows(campaign.st_time[usable], reference_interval_s)
     st_time = campaign.st_time[thinned]
     quat = campaign.st_quat[thinned]
-    if len(st_time) < 10:
+    if len(st_time) < MIN_REFERENCE_SAMPLES:
         kept = f" kept every reference_interval_s = {reference_interval_s:g} s" if reference_interval_s else ""
         raise TelemetryError(f"{campaign.source}/star_tracker.csv: maneuver {m.id} has only "
                              f"{len(st_time)} valid samples{kept}")

@@ -10,25 +10,32 @@ import numpy as np
 
 from gyrocal.inference.errormodel import effect_regressors
 from gyrocal.model import channels as ch
+from gyrocal.model.channels import MOVING_RATE_FRACTION
 
 __all__ = ["operating_params", "operating_shift"]
 
 
-def operating_shift(maneuvers, spec, extras_si) -> np.ndarray:
+def operating_shift(maneuvers, spec, extras_si, biases=None) -> np.ndarray:
     """(2, n_channels): what the operating-scale effects at ``extras_si`` (`ModelSpec.extras` order, SI)
     add to ``sf_pos`` (row 0) and ``sf_neg`` (row 1): their change of each channel's increments over
-    the angle it turned that way, over all ``maneuvers``. A symmetric model (one ``sf`` a channel) takes
-    the change over the angle turned either way in both rows. Zero without such an effect."""
+    the angle it turned that way, over the intervals where it turns (its bias-free rate beyond
+    `MOVING_RATE_FRACTION` of the maneuver's peak, so that holds, their noise and the bias weigh next to
+    nothing), each direction read off the bias-free rate as the correction applies it (``biases``: per
+    maneuver, rad/s; none: zero). A symmetric model (one ``sf`` a channel) takes the change over the angle turned either way
+    in both rows. Zero without such an effect."""
     n = len(spec.channels)
     wanted = np.array([bool(getattr(spec.effect(p.effect), "operating_scale", False)) for p in spec.extras], dtype=bool)
     if not wanted.any():
         return np.zeros((2, n))
     change, angle = np.zeros((2, n)), np.zeros((2, n))
-    for data in maneuvers:
+    for m, data in enumerate(maneuvers):
         gyro, _ = effect_regressors(data, spec)
         added = gyro[:, :, wanted] @ np.asarray(extras_si, dtype=float)[wanted]
-        turned = np.asarray(data.increments, dtype=float)
-        for row, way in enumerate((turned > 0, turned < 0)):
+        bias = np.zeros(n) if biases is None else np.asarray(biases[m], dtype=float).reshape(n)
+        turned = np.asarray(data.increments, dtype=float) - np.outer(data.dt, bias)
+        rate = np.abs(turned) / np.asarray(data.dt, dtype=float)[:, None]
+        moving = rate > MOVING_RATE_FRACTION * rate.max()
+        for row, way in enumerate((moving & (turned > 0), moving & (turned < 0))):
             change[row] += np.sum(np.where(way, added, 0.0), axis=0)
             angle[row] += np.sum(np.where(way, turned, 0.0), axis=0)
     if any(p.name == "sf" for p in spec.parameters[spec.core]):

@@ -24,7 +24,7 @@ def run(maneuver_files, point_estimate_npz, summary_csv, calibration_csv, correc
     est = PointEstimate.load(point_estimate_npz, effects.known(list(plugins)), linearizations=False)
     table = calibration_table(est.spec, est.theta, pd.read_csv(summary_csv).set_index("label"))
     write_csv(table, calibration_csv)
-    shift = operating_shift(maneuvers, est.spec, posterior_mean_extras(est.spec, table))
+    shift = operating_shift(maneuvers, est.spec, posterior_mean_extras(est.spec, table), est.biases)
     source = "posterior mean" + (", scale factors at the campaign's rates" if shift.any() else "")
     doc = campaign_correction(operating_params(posterior_mean_params(est.spec, table), shift), maneuvers, source)
     doc["gyrocal_version"] = __version__
