@@ -48,3 +48,28 @@ def test_the_free_motion_check_accepts_the_tumble_its_summed_increments_put_off(
 def test_intervals_the_gyro_turns_more_than_a_quarter_turn_in_are_left_out_of_the_comparison():
     d_gyro = np.array([[0.1, 0, 0], [np.deg2rad(120), 0, 0], [0, np.deg2rad(89), 0]])
     assert sensing.comparable(d_gyro).tolist() == [True, False, True]
+
+
+def test_a_maneuver_that_only_shakes_does_not_have_its_clocks_refused_on_a_shift_its_noise_picks():
+    """Gyro and reference each see only their own noise (no motion to line up): the best shift of the
+    clock search is the noise's, seconds off, and lowers the misfit by little: a warning at most, never
+    the refusal a real offset of seconds gets."""
+    from gyrocal.checks.sampling import clock_findings, clock_search
+    from gyrocal.finding import Findings
+
+    rng = np.random.default_rng(11)
+    channels = tuple(Channel(f"gyro_{a}", None, axis) for a, axis in zip("xyz", ("roll", "pitch", "yaw")))
+    time = np.arange(4001) * 0.01
+    increments = 1e-5 * rng.standard_normal((4000, 3))
+    kept = np.arange(0, 4001, 10)
+    st_quat = Rotation.from_rotvec(2e-5 * rng.standard_normal((len(kept), 3))).as_quat()
+    data = ManeuverData("shake", None, None, channels, tuple(c.name for c in channels), time, increments, time[kept],
+                        st_quat, st_quat[0])
+    sensed = sensing.sense(data)
+    offset, gain, left = clock_search(sensed)
+    findings = Findings()
+    clock_findings(sensed, findings)
+    assert not findings.errors
+    if abs(offset) > 0.2:
+        assert any("the clocks are not checked on it" in w for w in findings.warnings)
+    assert gain / (left / (3 * len(kept))) < 25.0
