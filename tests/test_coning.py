@@ -13,18 +13,19 @@ STEP_S, EVERY = 0.0035, 29
 """BROAD's gyro step, and its reference kept every 29th sample (0.1 s)."""
 
 
-def coning_maneuver():
-    """A hand-held-like tumble: 3 rad/s about an axis that circles the z axis once a second, 1 rad/s
-    about z; the reference is the exact composition of the gyro's increments, every 29th sample."""
+def coning_maneuver(every=EVERY, intervals=40, spin_rad_s=1.0):
+    """A hand-held-like tumble: 3 rad/s about an axis that circles the z axis once a second,
+    ``spin_rad_s`` about z; the reference is the exact composition of the gyro's increments, every
+    ``every``-th sample, over ``intervals`` of them."""
     channels = tuple(Channel(f"gyro_{a}", None, axis) for a, axis in zip("xyz", ("roll", "pitch", "yaw")))
-    time = np.arange(0, 29 * 40 + 1) * STEP_S
+    time = np.arange(0, every * intervals + 1) * STEP_S
     mid = 0.5 * (time[1:] + time[:-1])
-    rate = np.column_stack([3 * np.cos(2 * np.pi * mid), 3 * np.sin(2 * np.pi * mid), np.ones_like(mid)])
+    rate = np.column_stack([3 * np.cos(2 * np.pi * mid), 3 * np.sin(2 * np.pi * mid), np.full_like(mid, spin_rad_s)])
     increments = rate * STEP_S
     attitude = [Rotation.identity()]
     for inc in increments:
         attitude.append(attitude[-1] * Rotation.from_rotvec(inc))
-    kept = np.arange(0, len(time), EVERY)
+    kept = np.arange(0, len(time), every)
     st_quat = np.array([attitude[k].as_quat() for k in kept])
     return ManeuverData("tumble", None, None, channels, tuple(c.name for c in channels), time, increments,
                         time[kept], st_quat, attitude[0].as_quat())
@@ -73,3 +74,23 @@ def test_a_maneuver_that_only_shakes_does_not_have_its_clocks_refused_on_a_shift
     if abs(offset) > 0.2:
         assert any("the clocks are not checked on it" in w for w in findings.warnings)
     assert gain / (left / (3 * len(kept))) < 25.0
+
+
+def test_a_wobble_within_a_sparse_references_interval_is_not_taken_for_a_unit_slip():
+    """The reference every second (286 samples) on the tumble with a slow spin: the sums of increments
+    per interval are a third of the turn (the axis circles within it), so the gyros' path over the
+    reference's is far below one; the composed rotations fit, with a direction determined, and that
+    positive evidence stands (the path ratio is asked only where there is none)."""
+    from types import SimpleNamespace
+
+    from gyrocal.checks import physics
+    from gyrocal.finding import Findings
+
+    data = coning_maneuver(every=286, intervals=60, spin_rad_s=0.3)
+    sensed = sensing.sense(data)
+    assert physics.path_ratio(sensed) < physics.GROSS_SCALE[0]
+    maneuver = SimpleNamespace(id=data.id, free=True, t_start=float(data.gyro_time[0]), t_end=float(data.gyro_time[-1]))
+    campaign = SimpleNamespace(maneuver=lambda _: maneuver)
+    findings = Findings()
+    limits = sensing.physical_limits(data.channels, "mems")
+    assert physics.rotation_findings(campaign, sensed, limits, findings) and not findings.errors

@@ -589,3 +589,17 @@ def test_a_labelled_turn_across_a_reference_gap_is_checked_on_the_rest_and_accep
     out = tmp_path / "campaign"
     importer.import_files("repoimu", out, [tmp_path / "Trial_A.csv"], reference_interval_s=0)
     assert cli.main(["validate", str(out)]) == 0
+
+
+def test_a_stretch_is_imported_only_with_as_many_valid_samples_after_its_start_as_a_maneuver_needs(tmp_path):
+    """Rows 0-1239 missing at 100 Hz: the first stretch (rows 0-1249) would start at row 1240 with nine
+    valid samples after it, and `slice_maneuver` counts those after the start (the start's anchors the
+    attitude): it is left out, not imported for validate to refuse the campaign over."""
+    from scipy.io import savemat
+
+    from gyrocal.maneuvers.preprocess import slice_maneuver
+
+    savemat(tmp_path / "trial_A.mat", broad_like(missing=tuple(range(1240))))
+    campaign, counts = importer.import_files("broad", tmp_path / "c", [tmp_path / "trial_A.mat"], reference_interval_s=0)
+    assert [m.id for m in campaign.maneuvers] == ["trial_A_2"] and counts["trial_A"]["left_out"][0][0] == "trial_A_1"
+    assert len(slice_maneuver(telemetry.read_campaign(tmp_path / "c"), "trial_A_2").st_time) > 1000

@@ -25,6 +25,8 @@ def estimate_mounting(campaign: Campaign) -> tuple:
     reference as the data align it. About an axis no maneuver turns across, it is not determined."""
     sensed = [sense(preprocess.slice_maneuver(campaign, m.id)) for m in campaign.maneuvers]
     keep = [comparable(s.d_gyro) for s in sensed]  # a turn beyond a quarter between samples may be wrapped
+    if sum(int(k.sum()) for k in keep) < 3:  # too few left to align: every interval, as the rotations read
+        keep = [np.ones(len(s.d_gyro), dtype=bool) for s in sensed]
     gyro = np.vstack([s.d_gyro_turned[k] for s, k in zip(sensed, keep)])
     reference = np.vstack([s.d_st[k] for s, k in zip(sensed, keep)])
     mounting, rssd, sensitivity = Rotation.align_vectors(gyro, reference, return_sensitivity=True)

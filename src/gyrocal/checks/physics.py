@@ -4,6 +4,7 @@ rotation, a unit slip's likely cause, a reference sampled too sparsely, and a gy
 import numpy as np
 
 from gyrocal.checks.sensing import (
+    CHECK_BLOCK_S,
     MAX_TURN_BETWEEN_REFERENCE_DEG,
     Sensed,
     blocked_sums,
@@ -13,6 +14,7 @@ from gyrocal.checks.sensing import (
     fit_rotation,
     gyro_at_st,
     interval_rotations,
+    neighbour_residual,
     nominal_body_increments,
     reference_noise_rad,
     response,
@@ -37,18 +39,22 @@ cumulative angles are tried as well (they depend on the sample rate)."""
 
 
 GROSS_SCALE = (0.5, 2.0)
-"""How far the gyros' path may run from the reference's (`path_ratio`) before a unit is suspected, even
-where the response check passes: a fault that scales the gyros by 57 or 1000 scatters the response so
-widely (or wraps their composed rotations) that it can pass; coning and noise move the ratio by percents."""
+"""How far the gyros' path may run from the reference's (`path_ratio`) before a unit is suspected, where
+the response check found no positive evidence: a fault that scales the gyros by 57 or 1000 scatters the
+response so widely (or wraps their composed rotations) that no direction is determined and the check
+passes for want of evidence. Where a direction is determined and fits, the ratio is not asked: a wobble
+about a circling axis within a sparse reference's interval shortens the sums of increments by half."""
 
 
 def path_ratio(sensed: Sensed) -> float:
-    """The gyros' path over the reference's: the summed lengths of their increments (linear in the gyros'
-    scale, never wrapped) over those of the reference's rotations, on the intervals where the reference
-    turns at least a quarter of its turn's 99th percentile (the reference alone says where: the noise
-    estimate of the two sensors' difference is the fault's, where there is one); 1 where it never turns."""
+    """The gyros' path over the reference's: the lengths of their increments summed per interval (linear
+    in the gyros' scale, never wrapped) over those of the reference's rotations, on the intervals where
+    the reference turns at least a quarter of its turn's 99th percentile and ten times its own noise (the
+    reference alone says where: the noise of the two sensors' difference is the fault's, where there is
+    one); 1 where it never turns."""
     turn = np.linalg.norm(sensed.d_st, axis=1)
-    turning = turn >= 0.25 * np.percentile(turn, 99) if len(turn) else turn > 0
+    own_noise = 1.4826 * float(np.median(np.abs(neighbour_residual(sensed.d_st)))) if len(turn) > 2 else 0.0
+    turning = turn >= max(0.25 * np.percentile(turn, 99), 10.0 * np.sqrt(3.0) * own_noise) if len(turn) else turn > 0
     if not turning.any() or not turn[turning].sum():
         return 1.0
     return float(np.linalg.norm(sensed.d_gyro[turning], axis=1).sum() / np.linalg.norm(sensed.d_st[turning], axis=1).sum())
@@ -133,15 +139,21 @@ def free_rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings:
         findings.refuse("rotation", too_little(where, m, max(st_excursion.max(), gyro_excursion.max()), min_angle))
         return False
     keep = comparable(sensed.d_gyro)
+    noise = reference_noise_rad(sensed)
+    first = response(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, noise_rad=noise, keep=keep)
+    if first.short:
+        findings.warn("rotation", f"{where}: too short to hold the gyros' rotation against the reference's (fewer "
+                                  f"than three blocks of {CHECK_BLOCK_S:g} s): not checked")
+        return True
+    accepted = consistent_any(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, mis_bound, noise, keep=keep)
     ratio = path_ratio(sensed)
-    if not GROSS_SCALE[0] <= ratio <= GROSS_SCALE[1]:
+    if not (accepted and first.determined.any()) and not GROSS_SCALE[0] <= ratio <= GROSS_SCALE[1]:
         cause = next((c for factor, c in ALTERNATIVES if abs(ratio / factor - 1.0) < 0.1),
                      "check the gyro columns' unit in the mapping, and that they are increments")
         findings.refuse("rotation", f"{where}: the gyros' path is {ratio:.4g} times the reference's where it turns: "
                                     f"{cause}")
         return False
-    if consistent_any(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, mis_bound, reference_noise_rad(sensed),
-                      keep=keep):
+    if accepted:
         return True
     hint = _diagnose(campaign, sensed, None, sf_bound, mis_bound) or undersampled(sensed)
     if hint:

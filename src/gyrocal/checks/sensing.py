@@ -212,17 +212,24 @@ class Response:
     """(3,) directions along which the motion determines the response within the physical scale
     bound (`DETECTION_SD` sds) and the reference's motion stands `SIGNAL_TO_NOISE_MIN` clear of its noise."""
     strong: np.ndarray
-    """(3,) directions along which the reference's motion stands `SIGNAL_TO_NOISE_MIN` clear of its noise,
-    determined or not: a gyro fault (a unit slip) scatters the response so widely that none is determined."""
+    """(3,) directions along which the reference's motion stands `SIGNAL_TO_NOISE_MIN` clear of the noise
+    the check is given, determined or not (that noise is the two sensors' difference, which a gross gyro
+    fault inflates too: `physics.path_ratio` names such faults)."""
+    sparse: bool = False
+    """Every interval was kept though some turn too far to compare, or too few blocks were left without
+    them: only a determined direction counts as evidence then."""
+    short: bool = False
+    """Fewer than three blocks: the motion says nothing, and no direction is judged."""
 
     def within(self, sf_bound, mis_bound, need_determined=False) -> bool:
         """Along every determined direction u, and every direction the reference turns clearly along,
         each body axis b of the response within what eq. 3 allows, ``u_b`` give or take ``sf_bound |u_b| +
         mis_bound sum_(c != b) |u_c|``, and `DETECTION_SD` standard errors: a gyro that reads 57 times the
-        reference (degrees for radians) fails however wide its scatter. A motion too weak to determine
-        any direction gives no evidence against the gyros (the no-rotation check stands for a window on a
-        hold), unless ``need_determined`` (a reinterpretation of the data must show it fits)."""
-        if need_determined and not self.determined.any():
+        reference fails where its scatter is narrow enough to say so. A motion too weak to determine any
+        direction gives no evidence against the gyros (the no-rotation check stands for a window on a
+        hold), unless ``need_determined`` (a reinterpretation of the data must show it fits) or the
+        response had to keep intervals it could not compare (`sparse`)."""
+        if (need_determined or self.sparse) and not self.determined.any():
             return False
         for k in np.flatnonzero(self.determined | self.strong):
             u = self.directions[:, k]
@@ -243,14 +250,17 @@ def response(d_gyro, d_st, dt, sf_bound, bias=True, noise_rad=0.0, keep=None) ->
     ``noise_rad``: one reference sample's noise (`reference_noise_rad`). The intervals the gyro turns too
     far in to compare are left out, unless all are: ``keep``, or `comparable` of ``d_gyro`` (pass the
     mask of the summed increments where ``d_gyro`` is composed, whose length wraps)."""
-    keep = comparable(d_gyro) if keep is None else keep
+    keep = np.asarray(comparable(d_gyro) if keep is None else keep, dtype=bool)
     blocked = blocked_sums(*_kept(keep, dt, d_gyro, d_st))
+    sparse = not keep.all()
     if len(blocked[0]) < 4:  # too few blocks left to fit a 3x3 response and a rate: keep every interval
         blocked = blocked_sums(dt, d_gyro, d_st)
+    elif keep.any():
+        sparse = False
     dt, d_gyro, d_st = blocked
     if len(dt) < 3:  # the motion spans too few blocks to say anything: no direction judged
         none = np.zeros(3, dtype=bool)
-        return Response(np.eye(3), np.eye(3), np.full((3, 3), np.inf), none, none)
+        return Response(np.eye(3), np.eye(3), np.full((3, 3), np.inf), none, none, sparse, short=True)
     _, _, vt = np.linalg.svd(d_st, full_matrices=False)
     largest = np.argmax(np.abs(vt), axis=1)
     directions = (vt * np.sign(vt[np.arange(len(vt)), largest])[:, None]).T  # each its largest component positive
@@ -265,7 +275,7 @@ def response(d_gyro, d_st, dt, sf_bound, bias=True, noise_rad=0.0, keep=None) ->
     along = np.sqrt(np.einsum("bk,bk->k", directions**2, sd**2))
     signal = np.diag(gram)[:3] / len(dt) / np.maximum(noise, 1e-30) - 1.0
     strong = signal >= SIGNAL_TO_NOISE_MIN
-    return Response(directions, coef[:3].T, sd, (DETECTION_SD * along <= sf_bound) & strong, strong)
+    return Response(directions, coef[:3].T, sd, (DETECTION_SD * along <= sf_bound) & strong, strong, sparse)
 
 
 def consistent_any(d_gyro, d_st, dt, sf_bound, mis_bound, noise_rad=0.0, need_determined=False, keep=None) -> bool:

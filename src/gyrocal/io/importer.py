@@ -79,13 +79,17 @@ def referenced(first: int, stop: int, kept_valid: np.ndarray, reach: int):
     """Rows ``first .. stop - 1`` of a file as a maneuver's ``(first, stop)``: its start moved to its first
     row with a kept, valid reference sample (``kept_valid``) unless one lies at most ``reach`` rows (one
     reference interval) before it and another at most ``reach`` after, where the start's attitude
-    interpolates between them as usual; None where fewer than `MIN_REFERENCE_SAMPLES` such rows lie in
-    it (a maneuver needs them: `gyrocal.maneuvers.preprocess.slice_maneuver`)."""
+    interpolates between them as usual; None where fewer than `MIN_REFERENCE_SAMPLES` such rows lie after
+    its start (the start's sample anchors its attitude; `gyrocal.maneuvers.preprocess.slice_maneuver`
+    counts those after it)."""
     rows = np.flatnonzero(kept_valid[first:stop])
-    if len(rows) < MIN_REFERENCE_SAMPLES:
+    if not len(rows):
         return None
     near = kept_valid[max(0, first - reach):first + 1].any() and kept_valid[first:first + reach + 1].any()
-    return (first if near else first + int(rows[0])), stop
+    start = first if near else first + int(rows[0])
+    if np.count_nonzero(kept_valid[start + 1:stop]) < MIN_REFERENCE_SAMPLES:
+        return None
+    return start, stop
 
 
 def split_file(imp: Imported, options: dict) -> tuple:
