@@ -132,14 +132,14 @@ def free_rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings:
     sf_bound, mis_bound, sf_sd = limits
     where = sensed.where
     m = campaign.maneuver(sensed.data.id)
-    min_angle = reference_noise_rad(sensed) / sf_sd
+    noise = reference_noise_rad(sensed)
+    min_angle = noise / sf_sd
     st_excursion = np.ptp(np.cumsum(sensed.d_st, axis=0), axis=0)
     gyro_excursion = np.ptp(np.cumsum(sensed.d_gyro, axis=0), axis=0)
     if st_excursion.max() < min_angle and gyro_excursion.max() < min_angle:
         findings.refuse("rotation", too_little(where, m, max(st_excursion.max(), gyro_excursion.max()), min_angle))
         return False
     keep = comparable(sensed.d_gyro)
-    noise = reference_noise_rad(sensed)
     first = response(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, noise_rad=noise, keep=keep)
     if first.short:
         findings.warn("rotation", f"{where}: too short to hold the gyros' rotation against the reference's (fewer "
@@ -159,13 +159,11 @@ def free_rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings:
     if hint:
         findings.refuse("rotation", f"{where}: {hint}")
         return False
-    fit = response(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, noise_rad=reference_noise_rad(sensed),
-                   keep=keep)
     def vector(v):
         return "[" + ", ".join(f"{x:+.4g}" for x in v) + "]"
 
-    rows = "; ".join(f"per unit about {vector(fit.directions[:, k])}: {vector(fit.matrix[:, k])}"
-                     for k in np.flatnonzero(fit.determined))
+    rows = "; ".join(f"per unit about {vector(first.directions[:, k])}: {vector(first.matrix[:, k])}"
+                     for k in np.flatnonzero(first.determined))
     findings.refuse("rotation",
         f"{where}: the gyros' rotation, body axes, "
         f"{f'({rows})' if rows else 'determined along no direction of the motion'} (physical: the direction "

@@ -52,7 +52,7 @@ from gyrocal.model.channels import Channel
 __all__ = [
     "ANGLE_UNITS", "MOST_REFUSED", "ORDERS", "PRECISION_MARGIN", "RANGE_BAND", "RATE_AGREE", "RATE_UNITS", "Imported",
     "build_campaign", "declared_range_rad_s", "import_files", "maneuver_axis", "mapping_path", "printed_quantum",
-    "read_file", "read_mapping", "reference_rows", "referenced", "report", "split_file"
+    "read_file", "read_mapping", "reference_rows", "referenced", "report", "rows_per_reference", "split_file"
 ]
 
 RANGE_BAND = 0.01
@@ -60,17 +60,21 @@ RANGE_BAND = 0.01
 `gyrocal.checks.saturation.FLAT_BAND`)."""
 
 
+def rows_per_reference(time, interval_s) -> int:
+    """How many rows one reference interval spans: ``round(interval_s / median step)``, at least one;
+    one where the reference is kept every row (``0`` or ``None``)."""
+    return max(1, round(interval_s / float(np.median(np.diff(time))))) if interval_s else 1
+
+
 def reference_rows(time, interval_s) -> np.ndarray:
     """Which rows of one file keep their reference sample when it is wanted only every
-    ``interval_s`` seconds: the first row, then every row ``round(interval_s / median step)``
-    after it, and the last row (so the reference spans the whole maneuver). ``0`` or ``None``:
-    every row."""
+    ``interval_s`` seconds: the first row, then every `rows_per_reference` rows after it, and the
+    last row (so the reference spans the whole maneuver). ``0`` or ``None``: every row."""
     keep = np.ones(len(time), dtype=bool)
     if not interval_s:
         return keep
-    every = max(1, round(interval_s / float(np.median(np.diff(time)))))
     keep[:] = False
-    keep[::every] = True
+    keep[::rows_per_reference(time, interval_s)] = True
     keep[-1] = True
     return keep
 
@@ -133,7 +137,7 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
         keep = reference_rows(time, interval)
         parts.append((time, imp, keep))
         spans, found = split_file(imp, options)
-        reach = max(1, round((interval or 0.0) / float(np.median(np.diff(time)))))
+        reach = rows_per_reference(time, interval)
         ids, trimmed, left_out = [], {}, []
         for i, (a, b) in enumerate(spans):
             mid = imp.stem if len(spans) == 1 else f"{imp.stem}_{i + 1}"

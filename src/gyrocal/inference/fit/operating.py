@@ -21,8 +21,8 @@ def operating_shift(maneuvers, spec, extras_si, biases=None) -> np.ndarray:
     the angle it turned that way, over the intervals where it turns (its bias-free rate beyond
     `MOVING_RATE_FRACTION` of the maneuver's peak, so that holds, their noise and the bias weigh next to
     nothing), each direction read off the bias-free rate as the correction applies it (``biases``: per
-    maneuver, rad/s; none: zero). A symmetric model (one ``sf`` a channel) takes the change over the angle turned either way
-    in both rows. Zero without such an effect."""
+    maneuver, rad/s; none: zero). A symmetric model (one ``sf`` a channel) takes the change over the angle
+    turned either way in both rows. Zero without such an effect."""
     n = len(spec.channels)
     wanted = np.array([bool(getattr(spec.effect(p.effect), "operating_scale", False)) for p in spec.extras], dtype=bool)
     if not wanted.any():

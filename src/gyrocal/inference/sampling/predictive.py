@@ -82,18 +82,21 @@ def maneuver_block_s(st_time, block_s) -> float | None:
     step = float(np.median(np.diff(st_time))) if len(st_time) > 1 else np.inf
     block = float(block_s)
     while block >= 2 * step:
-        counts = np.bincount(np.floor((st_time - st_time[0]) / block).astype(int))
-        if len(st_time) - counts.max() >= MIN_REST_SAMPLES:
+        if len(st_time) - np.bincount(_block_numbers(st_time, block)).max() >= MIN_REST_SAMPLES:
             return block
         block /= 2
     return None
 
 
+def _block_numbers(st_time, block_s) -> np.ndarray:
+    """Block number of each sample, blocks of ``block_s`` seconds from the first."""
+    return np.floor((st_time - st_time[0]) / block_s).astype(int)
+
+
 def sample_blocks(st_time, block_s) -> np.ndarray:
     """Block number of each star-tracker sample: `maneuver_block_s` seconds from the maneuver's first
     (``block_s`` where the maneuver is long enough for it)."""
-    block = maneuver_block_s(st_time, block_s) or float(block_s)
-    return np.floor((st_time - st_time[0]) / block).astype(int)
+    return _block_numbers(st_time, maneuver_block_s(st_time, block_s) or float(block_s))
 
 
 def block_index(lin: Linearization, st_time, block_s) -> np.ndarray:
