@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from gyrocal.inference.fit.operating import operating_params, operating_shift
+from gyrocal.inference.fit.operating import flown_intervals, operating_map, operating_params, operating_shift
 from gyrocal.maneuvers.preprocess import ManeuverData
 from gyrocal.model import effects
 from gyrocal.model.channels import MOVING_RATE_FRACTION, Channel
@@ -104,3 +104,47 @@ def test_holds_noise_and_a_bias_do_not_move_the_scale_factor_at_the_campaigns_ra
     spec = nonlinear_spec(data.channels)
     shift = operating_shift([data], spec, np.full(len(spec.extras), Q_SI), [np.full(3, bias)])
     assert shift[0, 0] == pytest.approx(Q_SI * (rate + bias) ** 3 / rate, rel=0.01)
+
+
+def test_the_uplinked_intervals_are_each_draws_scale_factor_at_the_campaigns_rates(maneuvers):
+    """Each draw's scale factor plus the growth its own coefficients give over the angle turned
+    (`operating_shift` of that draw, one by one), its 2.5 and 97.5 % quantiles: the same numbers."""
+    spec = nonlinear_spec(maneuvers[0].channels)
+    rng = np.random.default_rng(5)
+    values = rng.normal(0.0, 1.0, (2, 12, len(spec))) * np.where(np.arange(len(spec)) < spec.n_core, 300.0, 0.0)
+    values[..., spec.extra] = rng.normal(50.0, 20.0, (2, 12, len(spec.extras))) * (Q_SI / spec.si_per_unit[spec.extra])
+    table = flown_intervals(values, spec, operating_map(maneuvers, spec)).set_index(["channel", "parameter"])
+    flat = values.reshape(-1, len(spec))
+    shifts = np.array([operating_shift(maneuvers, spec, spec.to_si(v)[spec.extra]) for v in flat])
+    sf = [(j, p) for j, p in enumerate(spec.parameters[:spec.n_core]) if p.name in ("sf_pos", "sf_neg")]
+    assert len(table) == len(sf) == 2 * len(spec.channels)
+    for j, p in sf:
+        c = [ch.name for ch in spec.channels].index(p.owner)
+        by_hand = flat[:, j] + shifts[:, int(p.name == "sf_neg"), c] / PPM
+        row = table.loc[(p.owner, p.name)]
+        assert row["mean"] == pytest.approx(by_hand.mean(), rel=1e-9, abs=1e-9)
+        assert [row["ci95_low"], row["ci95_high"]] == pytest.approx(np.quantile(by_hand, [0.025, 0.975]), rel=1e-9)
+
+
+def test_one_rate_leaves_the_intercept_wide_and_the_uplinked_scale_factor_narrow(maneuvers):
+    """Draws where the intercept and the growth trade off along the one rate flown (what a campaign at
+    one rate leaves): the intercept's interval spans thousands of ppm, the uplinked one the few left."""
+    spec = nonlinear_spec(maneuvers[0].channels)
+    shift_map = operating_map(maneuvers, spec)
+    rng = np.random.default_rng(8)
+    q = rng.normal(0.0, 4000.0, 4000)[:, None] * Q_SI / 50.0   # sd 4000 ppm per (deg/s)^2: 1000 ppm at 0.5 deg/s
+    values = np.zeros((4000, len(spec)))
+    values[:, spec.extra] = q / spec.si_per_unit[spec.extra]
+    growth = shift_map @ np.ones(len(spec.extras))            # (2, n): per unit coefficient on every channel
+    noise = rng.normal(0.0, 10.0, (4000, spec.n_core))
+    for j, p in enumerate(spec.parameters[:spec.n_core]):
+        c = [ch.name for ch in spec.channels].index(p.owner)
+        if p.name in ("sf_pos", "sf_neg"):
+            values[:, j] = -q[:, 0] * growth[int(p.name == "sf_neg"), c] / PPM + noise[:, j]
+    table = flown_intervals(values, spec, shift_map)
+    rotated = table[table["mean"].abs() < 5.0]
+    assert len(rotated) == len(table)
+    width = (table["ci95_high"] - table["ci95_low"]).to_numpy()
+    intercept = np.array([np.ptp(np.quantile(values[:, spec.index(f"{r.channel}.{r.parameter}")], [0.025, 0.975]))
+                          for r in table.itertuples()])
+    assert np.all(width < 45.0) and np.all(intercept > 10 * width)

@@ -58,6 +58,21 @@ def test_the_widest_interval_relative_to_its_limit_is_the_figure():
     assert check.why == "too wide: dtg1_roll.sf_pos (250.0 ppm)" and check.action
 
 
+def test_a_rate_dependent_scale_factor_is_judged_at_the_campaigns_rates_as_uplinked():
+    """Intercepts 2000 ppm wide, as one rate leaves them, pass where the scale factors at the flown
+    rates are 120 ppm wide; a flown interval over the limit fails, named with its width."""
+    wide = calibration(width=(2000.0, 2000.0, 25.0, 10.0))
+    flown = pd.DataFrame({"channel": "dtg1_roll", "parameter": ["sf_pos", "sf_neg"], "unit": "ppm",
+                          "mean": [10.0, 20.0], "ci95_low": [-50.0, -40.0], "ci95_high": [70.0, 80.0]})
+    assert not verdict.interval_check(wide, SPEC, CFG["report"]).passed
+    check = verdict.interval_check(wide, SPEC, CFG["report"], flown)
+    assert check.passed and "at the campaign's rates" in check.why
+    assert (check.figure, check.where) == (25.0, "dtg1_roll.mis_pitch")
+    check = verdict.interval_check(wide, SPEC, CFG["report"], flown.assign(ci95_high=[70.0, 230.0]))
+    assert not check.passed and check.why.endswith("dtg1_roll.sf_neg (270.0 ppm)")
+    assert verdict.interval_check(wide, SPEC, CFG["report"], flown.iloc[:0]).passed is False
+
+
 def test_convergence_and_bounds_name_their_worst_term_against_the_threshold():
     table = calibration(mean=(-25000.0, -1000.0, 20.0, -5.0))
     table.loc[2, "r_hat"] = 1.02

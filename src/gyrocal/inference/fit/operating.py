@@ -4,46 +4,85 @@ change with the rate (an effect with `gyrocal.model.effects.Effect.operating_sca
 `sf_nonlinearity`), the scale factor to uplink is the one at the rates the campaign turned: each
 direction's ``sf`` plus the effect's change of the channel's increments over the angle turned that way,
 which leaves every rotation's end error as the model explains it. Away from those rates the linear
-correction is off by the effect's change between them."""
+correction is off by the effect's change between them. The change is linear in the effect's
+parameters (`operating_map`), so the uplinked scale factors' posterior is the draws' image under it
+(`flown_intervals`)."""
 
 import numpy as np
+import pandas as pd
 
 from gyrocal.inference.errormodel import effect_regressors
 from gyrocal.model import channels as ch
 from gyrocal.model.channels import MOVING_RATE_FRACTION
 
-__all__ = ["operating_params", "operating_shift"]
+__all__ = ["FLOWN_CI_PROB", "flown_intervals", "operating_map", "operating_params", "operating_shift"]
 
 
-def operating_shift(maneuvers, spec, extras_si, biases=None) -> np.ndarray:
-    """(2, n_channels): what the operating-scale effects at ``extras_si`` (`ModelSpec.extras` order, SI)
-    add to ``sf_pos`` (row 0) and ``sf_neg`` (row 1): their change of each channel's increments over
-    the angle it turned that way, over the intervals where it turns (its bias-free rate beyond
-    `MOVING_RATE_FRACTION` of the maneuver's peak, so that holds, their noise and the bias weigh next to
-    nothing), each direction read off the bias-free rate as the correction applies it (``biases``: per
-    maneuver, rad/s; none: zero). A symmetric model (one ``sf`` a channel) takes the change over the angle
-    turned either way in both rows. Zero without such an effect."""
-    n = len(spec.channels)
-    wanted = np.array([bool(getattr(spec.effect(p.effect), "operating_scale", False)) for p in spec.extras], dtype=bool)
+def _operating(spec) -> np.ndarray:
+    """Which of ``spec``'s extra parameters belong to an operating-scale effect."""
+    return np.array([bool(getattr(spec.effect(p.effect), "operating_scale", False)) for p in spec.extras], dtype=bool)
+
+
+def operating_map(maneuvers, spec, biases=None) -> np.ndarray:
+    """(2, n_channels, E): what each extra parameter (`ModelSpec.extras` order, per unit SI) of an
+    operating-scale effect adds to ``sf_pos`` (row 0) and ``sf_neg`` (row 1): its change of each
+    channel's increments over the angle the channel turned that way, over the intervals where it turns
+    (its bias-free rate beyond `MOVING_RATE_FRACTION` of the maneuver's peak, so that holds, their noise
+    and the bias weigh next to nothing), each direction read off the bias-free rate as the correction
+    applies it (``biases``: per maneuver, rad/s; none: zero). A symmetric model (one ``sf`` a channel)
+    takes the change over the angle turned either way in both rows. Zero for every other parameter."""
+    n, wanted = len(spec.channels), _operating(spec)
+    change, angle = np.zeros((2, n, len(wanted))), np.zeros((2, n))
     if not wanted.any():
-        return np.zeros((2, n))
-    change, angle = np.zeros((2, n)), np.zeros((2, n))
+        return change
     for m, data in enumerate(maneuvers):
         gyro, _ = effect_regressors(data, spec)
-        added = gyro[:, :, wanted] @ np.asarray(extras_si, dtype=float)[wanted]
+        gyro[:, :, ~wanted] = 0.0
         bias = np.zeros(n) if biases is None else np.asarray(biases[m], dtype=float).reshape(n)
         turned = np.asarray(data.increments, dtype=float) - np.outer(data.dt, bias)
         rate = np.abs(turned) / np.asarray(data.dt, dtype=float)[:, None]
         moving = rate > MOVING_RATE_FRACTION * rate.max()
         for row, way in enumerate((moving & (turned > 0), moving & (turned < 0))):
-            change[row] += np.sum(np.where(way, added, 0.0), axis=0)
+            change[row] += np.sum(np.where(way[:, :, None], gyro, 0.0), axis=0)
             angle[row] += np.sum(np.where(way, turned, 0.0), axis=0)
     if any(p.name == "sf" for p in spec.parameters[spec.core]):
-        change, angle = np.broadcast_to(change[0] - change[1], (2, n)), np.broadcast_to(angle[0] - angle[1], (2, n))
-    return np.divide(change, angle, out=np.zeros((2, n)), where=angle != 0)
+        change = np.broadcast_to(change[0] - change[1], change.shape)
+        angle = np.broadcast_to(angle[0] - angle[1], angle.shape)
+    return np.divide(change, angle[:, :, None], out=np.zeros(change.shape), where=angle[:, :, None] != 0)
+
+
+def operating_shift(maneuvers, spec, extras_si, biases=None) -> np.ndarray:
+    """(2, n_channels): what the operating-scale effects at ``extras_si`` (`ModelSpec.extras` order, SI)
+    add to ``sf_pos`` (row 0) and ``sf_neg`` (row 1), `operating_map` applied; zero without such an effect."""
+    return operating_map(maneuvers, spec, biases) @ np.asarray(extras_si, dtype=float)
 
 
 def operating_params(params: ch.ChannelParams, shift: np.ndarray) -> ch.ChannelParams:
     """``params`` with `operating_shift`'s ``shift`` added to their scale factors."""
     return ch.ChannelParams(params.channels, params.sf_pos + shift[0], params.sf_neg + shift[1], params.mis_rad,
                             params.bias_rad_s)
+
+
+FLOWN_CI_PROB = 0.95
+"""The central interval `flown_intervals` gives, as ``calibration.csv``'s."""
+
+
+def flown_intervals(values, spec, shift_map: np.ndarray) -> pd.DataFrame:
+    """Each scale-factor term's posterior as uplinked, at the campaign's rates: ``values`` (draws, len(spec))
+    are posterior draws in the parameters' units, ``shift_map`` `operating_map`'s. Returns one row a
+    scale-factor term (channel, parameter, unit, mean, ci95_low, ci95_high), the term's draws plus what
+    each draw's operating-scale parameters add to it; a symmetric ``sf`` takes row 0's change."""
+    values = np.asarray(values, dtype=float).reshape(-1, len(spec))
+    extras_si = spec.to_si(values)[:, spec.extra]
+    shift = np.einsum("rce,de->drc", shift_map, extras_si)
+    index = {c.name: i for i, c in enumerate(spec.channels)}
+    tail = (1.0 - FLOWN_CI_PROB) / 2.0
+    rows = []
+    for j, p in enumerate(spec.parameters[spec.core]):
+        if p.name not in ("sf", "sf_pos", "sf_neg"):
+            continue
+        flown = values[:, j] + shift[:, 1 if p.name == "sf_neg" else 0, index[p.owner]] / spec.si_per_unit[j]
+        low, high = np.quantile(flown, [tail, 1.0 - tail])
+        rows.append({"channel": p.owner, "parameter": p.name, "unit": p.unit, "mean": float(flown.mean()),
+                     "ci95_low": float(low), "ci95_high": float(high)})
+    return pd.DataFrame(rows, columns=["channel", "parameter", "unit", "mean", "ci95_low", "ci95_high"])

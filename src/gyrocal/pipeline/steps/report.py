@@ -54,11 +54,12 @@ def run(models, files, preprocessed, maneuver_ids, input_json, comparison_csv, o
     effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases)
     used = posterior_spec(est.spec, cfg["priors"], cfg.get("prior_from"))
     conflict = priorconflict.conflict_check(priorconflict.conflict_table(used, est.theta, est.cov, calibrations[model]))
-    findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg, conflict,
-                              info["gyro"].get("sensor_class"))
     # its posterior group alone (the predictive draws are 100 MB at 10x), in memory: forked processes draw
     with xr.open_dataset(reviewed.posterior, group="posterior", engine="h5netcdf") as group:
         posterior = az.InferenceData(posterior=group.load())
+    flown = verdict.uplinked_intervals(maneuvers, est.spec, posterior, est.biases)
+    findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg, conflict,
+                              info["gyro"].get("sensor_class"), flown)
     shown = {m for name, step in fitted for m in (step["base"], name) if m in kept}  # each step's model before and after
     loop = extension.before_after(fitted, {m: read_json(files.diagnostics[models.index(m)]) for m in shown},
                                   {m: pd.read_csv(files.fit[models.index(m)]) for m in shown}, table)
