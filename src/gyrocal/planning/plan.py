@@ -5,12 +5,13 @@ No noise is drawn and nothing is sampled. The plan's campaign is the simulator's
 parameters sit at their prior mean; the preprocessing, the linearised model (`errormodel`), the
 noise model (`noise`) and the likelihood (`likelihood`) are gyrocal's own, so the information is
 the one the WLS and the posterior use, with the nuisance (initial attitude error, biases)
-integrated out, at the stated noise. From it: each parameter's predicted posterior sd and its
-Cramér-Rao bound without the prior, the same for each channel's identifiable combinations
-(``sf_mean``, ``sf_asym``: `combinations`) and whether each will be resolved, the pairs the plan
-cannot separate, and for each library effect the model lacks, the smallest magnitude the
-diagnostics' structure test (`diagnostics.rank`, `diagnostics.misfit_checks`) would detect
-`DETECTION_POWER` of the time.
+integrated out, at the stated noise: where the scenario's star tracker has a Gauss-Markov part,
+the correlated model's (`markov`), as a run whose model has ``st_correlated_noise`` would fit it.
+From it: each parameter's predicted posterior sd and its Cramér-Rao bound without the prior, the
+same for each channel's identifiable combinations (``sf_mean``, ``sf_asym``: `combinations`) and
+whether each will be resolved, the pairs the plan cannot separate, and for each library effect the
+model lacks, the smallest magnitude the diagnostics' structure test (`diagnostics.rank`,
+`diagnostics.misfit_checks`) would detect `DETECTION_POWER` of the time.
 """
 
 import copy
@@ -28,6 +29,7 @@ from gyrocal.inference.fit import identification
 from gyrocal.inference.fit.identification import CORRELATION_MAX, confounded_pairs
 from gyrocal.inference.fit.likelihood import Stats, campaign_stats
 from gyrocal.inference.noise import covariance
+from gyrocal.io.scenario import STAR_TRACKER_GM
 from gyrocal.io.yamlfile import load_yaml
 from gyrocal.maneuvers import preprocess
 from gyrocal.model import combinations, effects
@@ -55,7 +57,8 @@ def quiet(scenario: dict) -> dict:
     out = copy.deepcopy(scenario)
     out["truth"] = {}
     out["gyro"].update(arw_deg_sqrt_h=0.0, pulse_arcsec=0.0, bias_sd_deg_h=0.0)
-    out["star_tracker"].update(sigma_cross_arcsec=0.0, sigma_about_arcsec=0.0, invalid_fraction=0.0)
+    out["star_tracker"].update(sigma_cross_arcsec=0.0, sigma_about_arcsec=0.0, invalid_fraction=0.0,
+                               **dict.fromkeys(STAR_TRACKER_GM, 0.0))
     out["maneuver_defaults"]["uncontrolled_rate_deg_s"] = 0.0
     out["effects"] = dict.fromkeys(out["effects"], 0.0)
     return out
@@ -68,17 +71,31 @@ def planned_maneuvers(scenario: dict) -> list:
 
 
 def stated_noise(scenario: dict, noise_defaults: dict) -> dict:
-    """The noise knowledge a run would be given: the scenario's, as its campaign.yaml states it."""
-    return covariance.noise_knowledge({"star_tracker": scenario["star_tracker"], "gyro": scenario["gyro"]}, noise_defaults)
+    """The noise knowledge a run would be given: the scenario's, as its campaign.yaml states it. Where its
+    star tracker has a Gauss-Markov part (``gm_sigma_cross_arcsec``, ``gm_sigma_about_arcsec`` over
+    ``gm_tau_s``), that of the correlated model: each sd the white and Gauss-Markov parts' total, the
+    Gauss-Markov share of the variance (``st_gm_fraction``, one for both axes: the parts' variances
+    summed across and about the boresight) and ``st_gm_tau_s``."""
+    st = scenario["star_tracker"]
+    stated = covariance.noise_knowledge({"star_tracker": st, "gyro": scenario["gyro"]}, noise_defaults)
+    gm_cross, gm_about, tau_s = (float(st.get(k) or 0.0) for k in STAR_TRACKER_GM)
+    if tau_s > 0 and gm_cross**2 + gm_about**2 > 0:
+        cross2, about2 = stated["sigma_cross_arcsec"] ** 2 + gm_cross**2, stated["sigma_about_arcsec"] ** 2 + gm_about**2
+        stated.update({"sigma_cross_arcsec": float(np.sqrt(cross2)), "sigma_about_arcsec": float(np.sqrt(about2)),
+                       covariance.GM_FRACTION_SCALE.key: (gm_cross**2 + gm_about**2) / (cross2 + about2),
+                       covariance.GM_TAU_SCALE.key: tau_s})
+    return stated
 
 
 def information(maneuvers, spec: ModelSpec, stated: dict) -> Stats:
-    """The campaign's `Stats` at the prior mean and the stated noise; ``A`` is the Fisher
-    information of the spec's parameters (SI) with each maneuver's nuisance integrated out."""
+    """The campaign's `Stats` at the prior mean and the stated noise (`stated_noise`: with a Gauss-Markov
+    part where it has one); ``A`` is the Fisher information of the spec's parameters (SI) with each
+    maneuver's nuisance integrated out."""
     zeros = np.zeros(len(spec.channels))
     lins = [errormodel.linearize(d, spec, spec.prior_mean_si, zeros) for d in maneuvers]
-    noises = [covariance.build(lin, stated["boresight_body"]) for lin in lins]
-    return campaign_stats(noises, covariance.variances(covariance.log_sigma_of(stated)))
+    tau_s = float(stated.get(covariance.GM_TAU_SCALE.key, 0.0))
+    noises = [covariance.build(lin, stated["boresight_body"], tau_s) for lin in lins]
+    return campaign_stats(noises, covariance.variances(covariance.log_sigma_of(stated, correlated=tau_s > 0)))
 
 
 def predicted_covariance(A: np.ndarray, prior_sd_si: np.ndarray) -> np.ndarray:
@@ -144,6 +161,19 @@ class Plan:
     detection: pd.DataFrame
     information: np.ndarray | None = None
     """The Fisher information of the spec's parameters (SI), prior-only columns zeroed."""
+    noise: dict | None = None
+    """The noise it assumed (`stated_noise`), in the contract's units."""
+
+    def noise_line(self) -> str:
+        """The assumed noise in one line: the reference's sds, with their Gauss-Markov share and tau where
+        it has one, and the ARW."""
+        n = self.noise or {}
+        if not n:
+            return ""
+        gm = (f", {n[covariance.GM_FRACTION_SCALE.key]:.0%} of its variance Gauss-Markov over "
+              f"{n[covariance.GM_TAU_SCALE.key]:g} s" if covariance.GM_TAU_SCALE.key in n else ", white")
+        return (f"-- noise: reference {n['sigma_cross_arcsec']:.3g} arcsec across and {n['sigma_about_arcsec']:.3g} "
+                f"about the boresight{gm}; ARW {n['arw_deg_sqrt_h']:.3g} deg/sqrt(h)")
 
     def mounting_separability(self) -> pd.DataFrame:
         """`combinations.mounting_separability` of the predicted covariance: what an estimated
@@ -279,7 +309,8 @@ def plan(scenario: dict, cfg: dict, model: str = "baseline", name: str = "") -> 
     cov = predicted_covariance(A[:n, :n], spec.prior_sd_si)
     return Plan(name or scenario["name"], spec, cov, crlb_sd(A[:n, :n], spec.free, spec.prior_sd_si),
                 confounded_pairs(cov, spec.free, spec.labels),
-                detection_table(A, spec, augmented, skipped, cfg["diagnostics"]["structure_log10_p_min"]), A[:n, :n])
+                detection_table(A, spec, augmented, skipped, cfg["diagnostics"]["structure_log10_p_min"]), A[:n, :n],
+                stated)
 
 
 CONFIG_SECTIONS = ("models", "priors", "noise", "diagnostics")
@@ -378,6 +409,7 @@ def report(plans, threshold: float = CORRELATION_MAX) -> str:
         out += [f"== plan {p.name}, model {p.spec.model}: predicted posterior sd (crlb_sd: without the prior; "
                 f"sf_mean = (sf_pos + sf_neg) / 2, sf_asym = sf_pos - sf_neg; resolved: sd_over_prior <= "
                 f"{combinations.RESOLVED_RATIO_MAX:g})",
+                *([p.noise_line()] if p.noise else []),
                 table.to_string(index=False, float_format=lambda v: f"{v:.4g}")]
         pairs = [f"  {a} ~ {b}: correlation {r:+.3f}" for a, b, r in p.pairs]
         out += [f"-- pairs the plan cannot separate (|correlation| > {threshold:g}):"] + (pairs or ["  none"])
