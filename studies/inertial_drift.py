@@ -22,6 +22,7 @@ For each maneuver, on the in-loop channel set:
 
 import argparse
 import itertools
+import json
 from pathlib import Path
 
 import numpy as np
@@ -32,11 +33,15 @@ from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.maneuvers.preprocess import ManeuverData
 from gyrocal.model import effects
 from gyrocal.model.units import rad_to_arcsec
+from gyrocal.pipeline.paths import maneuver_files
 
 REST_RAD_S = 0.02
 """Below this body rate a reference sample is at rest."""
 
 TRAVELLED_EDGES_RAD = (0.0, 0.01, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0, 1000.0)
+
+MAX_PAIRED_SAMPLES = 3000
+"""`travelled_table` pairs at most this many reference samples (evenly spaced): every pair of 10^4 is 1 GB."""
 
 
 def rest_runs(at_rest) -> list:
@@ -65,10 +70,12 @@ def travelled_table(data, body_error) -> list:
     """Per bin of angle turned between two reference samples: pairs, RMS of the change of the body
     error (arcsec), median time apart (s)."""
     turned = np.concatenate([[0.0], np.cumsum(np.linalg.norm(data.increments, axis=1))])
-    theta = np.interp(data.st_time, data.gyro_time, turned)
+    kept = np.unique(np.linspace(0, len(data.st_time) - 1, min(len(data.st_time), MAX_PAIRED_SAMPLES)).astype(int))
+    time, error = data.st_time[kept], np.asarray(body_error)[kept]
+    theta = np.interp(time, data.gyro_time, turned)
     i, j = np.triu_indices(len(theta), 1)
-    travelled, apart = theta[j] - theta[i], data.st_time[j] - data.st_time[i]
-    change = np.sum((body_error[j] - body_error[i]) ** 2, axis=1) / 3.0
+    travelled, apart = theta[j] - theta[i], time[j] - time[i]
+    change = np.sum((error[j] - error[i]) ** 2, axis=1) / 3.0
     rows = []
     for lo, hi in itertools.pairwise(TRAVELLED_EDGES_RAD):
         k = (travelled >= lo) & (travelled < hi)
@@ -92,12 +99,14 @@ def frame_offsets(data, body_error) -> tuple:
 
 
 def main():
+    """Print each maneuver's figures, in the campaign's order (``input.json``, as the fit's biases are)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("run", type=Path, help="a run's results/<campaign> folder")
     parser.add_argument("--model", default="baseline")
     parser.add_argument("--plugins", nargs="*", default=[])
     args = parser.parse_args()
-    maneuvers = [ManeuverData.load(p) for p in sorted((args.run / "preprocess").glob("*.npz"))]
+    ids = json.loads((args.run / "input.json").read_text())["maneuvers"]
+    maneuvers = [ManeuverData.load(p) for p in maneuver_files(args.run / "preprocess", ids)]
     est = PointEstimate.load(args.run / args.model / "point_estimate.npz", effects.known(args.plugins))
     for m, data in enumerate(maneuvers):
         lin = errormodel.linearize(data, est.spec, est.theta, est.biases[m])

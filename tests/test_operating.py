@@ -1,11 +1,14 @@
 """The uplink at the campaign's rates: a linear onboard correction takes the scale factor a
 rate-dependent one has at the rates the campaign turned (`gyrocal.inference.fit.operating`)."""
 
+import arviz as az
 import numpy as np
+import pandas as pd
 import pytest
 from scipy.spatial.transform import Rotation
 
-from gyrocal.inference.fit.operating import flown_intervals, operating_map, operating_params, operating_shift
+from gyrocal.criticism.uplinked import at_uplink, flown_intervals, uplinked_intervals
+from gyrocal.inference.fit.operating import operating_map, operating_params, operating_shift
 from gyrocal.maneuvers.preprocess import ManeuverData
 from gyrocal.model import effects
 from gyrocal.model.channels import MOVING_RATE_FRACTION, Channel
@@ -117,13 +120,19 @@ def test_the_uplinked_intervals_are_each_draws_scale_factor_at_the_campaigns_rat
     flat = values.reshape(-1, len(spec))
     shifts = np.array([operating_shift(maneuvers, spec, spec.to_si(v)[spec.extra]) for v in flat])
     sf = [(j, p) for j, p in enumerate(spec.parameters[:spec.n_core]) if p.name in ("sf_pos", "sf_neg")]
-    assert len(table) == len(sf) == 2 * len(spec.channels)
+    assert len(table) == len(sf) + 2 * len(spec.channels)   # each channel's sf_mean and sf_asym too
+    flown = {}
     for j, p in sf:
         c = [ch.name for ch in spec.channels].index(p.owner)
-        by_hand = flat[:, j] + shifts[:, int(p.name == "sf_neg"), c] / PPM
+        flown[p.owner, p.name] = by_hand = flat[:, j] + shifts[:, int(p.name == "sf_neg"), c] / PPM
         row = table.loc[(p.owner, p.name)]
         assert row["mean"] == pytest.approx(by_hand.mean(), rel=1e-9, abs=1e-9)
+        assert row["sd"] == pytest.approx(by_hand.std(ddof=1), rel=1e-9)
         assert [row["ci95_low"], row["ci95_high"]] == pytest.approx(np.quantile(by_hand, [0.025, 0.975]), rel=1e-9)
+    for c in spec.channels:
+        pos, neg = flown[c.name, "sf_pos"], flown[c.name, "sf_neg"]
+        assert table.loc[(c.name, "sf_mean"), "sd"] == pytest.approx(np.std((pos + neg) / 2, ddof=1), rel=1e-9)
+        assert table.loc[(c.name, "sf_asym"), "mean"] == pytest.approx(np.mean(pos - neg), rel=1e-9, abs=1e-9)
 
 
 def test_one_rate_leaves_the_intercept_wide_and_the_uplinked_scale_factor_narrow(maneuvers):
@@ -142,9 +151,37 @@ def test_one_rate_leaves_the_intercept_wide_and_the_uplinked_scale_factor_narrow
         if p.name in ("sf_pos", "sf_neg"):
             values[:, j] = -q[:, 0] * growth[int(p.name == "sf_neg"), c] / PPM + noise[:, j]
     table = flown_intervals(values, spec, shift_map)
+    table = table[table["parameter"].isin(["sf_pos", "sf_neg"])]
     rotated = table[table["mean"].abs() < 5.0]
     assert len(rotated) == len(table)
     width = (table["ci95_high"] - table["ci95_low"]).to_numpy()
     intercept = np.array([np.ptp(np.quantile(values[:, spec.index(f"{r.channel}.{r.parameter}")], [0.025, 0.975]))
                           for r in table.itertuples()])
     assert np.all(width < 45.0) and np.all(intercept > 10 * width)
+
+
+def test_the_review_reads_the_uplinked_posterior_off_the_inferencedata_and_replaces_only_those_rows(maneuvers):
+    """`uplinked_intervals` of an InferenceData's ``channel_param`` (chain, draw, parameter) is
+    `flown_intervals` of its draws; a model whose scale factor does not change with the rate gets None,
+    and `at_uplink` leaves its calibration as it is; otherwise it replaces the scale factors' summary
+    and nothing else."""
+    spec = nonlinear_spec(maneuvers[0].channels)
+    rng = np.random.default_rng(2)
+    values = rng.normal(0.0, 100.0, (2, 30, len(spec)))
+    posterior = az.from_dict(posterior={"channel_param": values}, coords={"parameter": spec.labels},
+                             dims={"channel_param": ["parameter"]})
+    table = uplinked_intervals(maneuvers, spec, posterior, np.zeros((len(maneuvers), len(spec.channels))))
+    expected = flown_intervals(values, spec, operating_map(maneuvers, spec))
+    pd.testing.assert_frame_equal(table, expected)
+    assert uplinked_intervals(maneuvers, baseline(spec.channels), posterior, None) is None
+    calibration = pd.DataFrame({"channel": [p.owner for p in spec.parameters], "parameter": [p.name for p in spec.parameters],
+                                "unit": spec.units, "mean": 1.0, "sd": 2.0, "ci95_low": -3.0, "ci95_high": 5.0,
+                                "r_hat": 1.0})
+    assert at_uplink(calibration, None) is calibration
+    moved = at_uplink(calibration, table).set_index(["channel", "parameter"])
+    for r in expected.itertuples():
+        if (r.channel, r.parameter) in moved.index:
+            assert moved.loc[(r.channel, r.parameter), "ci95_high"] == r.ci95_high
+    untouched = moved.drop(index=[(r.channel, r.parameter) for r in expected.itertuples()], errors="ignore")
+    assert len(untouched) and (untouched["mean"] == 1.0).all() and (moved["r_hat"] == 1.0).all()
+    assert list(at_uplink(calibration, table).columns) == list(calibration.columns)

@@ -46,43 +46,64 @@ def test_predicted_crlb_equals_the_wls_sd_of_a_simulated_campaign_of_the_same_pl
     np.testing.assert_allclose(np.sqrt(np.diag(predicted.cov)), predicted.crlb_sd, rtol=1e-3)
 
 
-def gauss_markov_tiny(tau_s=30.0, hold_s=60.0):
-    """tiny.yaml's campaign with a Gauss-Markov part as large as its white star-tracker noise (5 / 20
-    arcsec over ``tau_s``), as the verdict battery's Gauss-Markov kinds fly it."""
+def gauss_markov_tiny(tau_s=30.0, hold_s=60.0, gm_arcsec=(5.0, 20.0)):
+    """tiny.yaml's campaign with a Gauss-Markov part (``gm_arcsec`` across and about the boresight; by
+    default as large as its white noise, 5 / 20 arcsec) over ``tau_s``, as the verdict battery's
+    Gauss-Markov kinds fly it."""
     scenario = simulate.load_scenario(DATA / "tiny.yaml")
-    scenario["star_tracker"].update(gm_sigma_cross_arcsec=5.0, gm_sigma_about_arcsec=20.0, gm_tau_s=tau_s)
+    scenario["star_tracker"].update(gm_sigma_cross_arcsec=gm_arcsec[0], gm_sigma_about_arcsec=gm_arcsec[1],
+                                    gm_tau_s=tau_s)
     scenario["maneuver_defaults"]["hold_s"] = hold_s
     return scenario
 
 
 def test_with_gauss_markov_reference_noise_the_crlb_is_the_correlated_models_wls_sd(cfg):
-    """A star tracker with a Gauss-Markov part: the plan's bound is the WLS sd of the model with
-    st_correlated_noise at the same noise (each sd the parts' total, half of it Gauss-Markov, tau 30 s)
-    on noisy data of the plan, and twice to five times the white plan's, as the battery's posteriors are."""
+    """A star tracker with a Gauss-Markov part as large as its white one: the plan's bound is the WLS sd
+    of the model with st_correlated_noise at that noise (each sd the parts' total, half of it
+    Gauss-Markov, tau 30 s) on noisy data of the plan, and twice to five times the white plan's, as the
+    battery's posteriors are."""
     scenario = gauss_markov_tiny()
     predicted = plan.plan(scenario, cfg)
     stated = plan.stated_noise(scenario, cfg["noise"])
-    assert stated["sigma_cross_arcsec"] == pytest.approx(np.sqrt(50.0)) and stated["st_gm_fraction"] == 0.5
-    assert stated["st_gm_tau_s"] == 30.0 and "-- noise: reference 7.07 arcsec across" in plan.report([predicted])
+    assert "; Gauss-Markov 5 / 20 arcsec over 30 s;" in plan.report([predicted])
     campaign, truth = simulate.simulate(scenario)
     maneuvers = [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
     names = ["scale_factor", "misalignment", "bias", "st_correlated_noise"]
     spec = ModelSpec.build("correlated", effects.resolve("correlated", names, {}), campaign.channels)
     theta0 = spec.core_vector(truth_vector(campaign.channels, truth))
-    log_sigma = covariance.log_sigma_of(stated, correlated=True)  # the stated noise: the WLS alone, no REML
-    est = wls(maneuvers, spec, stated, log_sigma, theta0, correlation_time_s=stated["st_gm_tau_s"])
+    total = {**stated, "sigma_cross_arcsec": np.sqrt(50.0), "sigma_about_arcsec": np.sqrt(800.0),
+             "st_gm_fraction": 0.5, "st_gm_tau_s": 30.0}
+    log_sigma = covariance.log_sigma_of(total, correlated=True)  # the stated noise: the WLS alone, no REML
+    est = wls(maneuvers, spec, total, log_sigma, theta0, correlation_time_s=30.0)
     np.testing.assert_allclose(predicted.crlb_sd, np.sqrt(np.diag(est.cov)), rtol=0.02)
     white = plan.plan(simulate.load_scenario(DATA / "tiny.yaml"), cfg)
     assert np.all((predicted.crlb_sd > 2 * white.crlb_sd) & (predicted.crlb_sd < 5 * white.crlb_sd))
 
 
+def test_a_gauss_markov_part_on_one_axis_is_planned_on_that_axis_alone(cfg):
+    """Gauss-Markov noise across the boresight only, or about it only, enters as that axis's variance
+    (not one share of the total for both), and each bound lies between the white plan's and the plan
+    with both (a covariance component added never adds information)."""
+    tau_s, variances = plan.noise_variances(plan.stated_noise(gauss_markov_tiny(gm_arcsec=(5.0, 0.0)), cfg["noise"]))
+    assert tau_s == 30.0 and variances["gm_about"] == 0.0
+    assert variances["gm_cross"] == pytest.approx(np.deg2rad(5.0 / 3600.0) ** 2, rel=1e-12)
+    assert variances["cross"] == pytest.approx(np.deg2rad(5.0 / 3600.0) ** 2, rel=1e-12)
+    white = plan.plan(simulate.load_scenario(DATA / "tiny.yaml"), cfg).crlb_sd
+    both = plan.plan(gauss_markov_tiny(), cfg).crlb_sd
+    for one_axis in ((5.0, 0.0), (0.0, 20.0)):
+        sd = plan.plan(gauss_markov_tiny(gm_arcsec=one_axis), cfg).crlb_sd
+        assert np.all((sd >= white * (1 - 1e-9)) & (sd <= both * (1 + 1e-9))) and np.any(sd > 1.05 * white)
+
+
 def test_longer_holds_narrow_what_gauss_markov_noise_widens_and_the_plan_flies_no_noise(cfg):
     """Holds ten correlation times long give the bound back much of what tau = 30 s takes; the plan's
-    trajectory carries no Gauss-Markov error (its star tracker is the truth's attitude)."""
+    trajectory is the same with the Gauss-Markov part as without: its reference carries none of it."""
     short, long = (plan.plan(gauss_markov_tiny(hold_s=h), cfg).crlb_sd for h in (60.0, 300.0))
     assert np.all(long < 0.5 * short)
-    quiet = plan.quiet(gauss_markov_tiny())
-    assert all(quiet["star_tracker"][k] == 0.0 for k in ("gm_sigma_cross_arcsec", "gm_sigma_about_arcsec", "gm_tau_s"))
+    with_gm = plan.planned_maneuvers(gauss_markov_tiny())
+    without = plan.planned_maneuvers(simulate.load_scenario(DATA / "tiny.yaml"))
+    for a, b in zip(with_gm, without):
+        np.testing.assert_array_equal(a.st_quat, b.st_quat)
 
 
 def test_one_rate_per_direction_cannot_detect_a_rate_squared_scale_factor_two_rates_can(cfg):

@@ -63,7 +63,7 @@ def test_a_rate_dependent_scale_factor_is_judged_at_the_campaigns_rates_as_uplin
     rates are 120 ppm wide; a flown interval over the limit fails, named with its width."""
     wide = calibration(width=(2000.0, 2000.0, 25.0, 10.0))
     flown = pd.DataFrame({"channel": "dtg1_roll", "parameter": ["sf_pos", "sf_neg"], "unit": "ppm",
-                          "mean": [10.0, 20.0], "ci95_low": [-50.0, -40.0], "ci95_high": [70.0, 80.0]})
+                          "mean": [10.0, 20.0], "sd": [30.6, 30.6], "ci95_low": [-50.0, -40.0], "ci95_high": [70.0, 80.0]})
     assert not verdict.interval_check(wide, SPEC, CFG["report"]).passed
     check = verdict.interval_check(wide, SPEC, CFG["report"], flown)
     assert check.passed and "at the campaign's rates" in check.why

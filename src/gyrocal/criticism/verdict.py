@@ -11,9 +11,10 @@ import numpy as np
 import pandas as pd
 
 from gyrocal.criticism import modelchoice
+from gyrocal.criticism.uplinked import at_uplink
 from gyrocal.finding import Finding
 from gyrocal.inference.fit.classic import hold_windows
-from gyrocal.inference.fit.operating import flown_intervals, operating_map, operating_params, operating_shift
+from gyrocal.inference.fit.operating import operating_params, operating_shift
 from gyrocal.io.calibration import core_rows, posterior_mean_extras, posterior_mean_params
 from gyrocal.maneuvers import preprocess
 from gyrocal.model import sensorclass
@@ -21,7 +22,7 @@ from gyrocal.model.units import AXES, rad_to_arcsec
 
 __all__ = ["RANKED_SHOWN", "bounds_check", "checks", "convergence_check", "correction_check", "correction_effect",
            "estimate_effect", "informed_check", "informed_core", "interval_check", "misfit_check", "physical_bounds",
-           "uplinked_intervals", "verdict", "width_limits"]
+           "verdict", "width_limits"]
 
 
 def width_limits(rcfg: dict, spec) -> dict:
@@ -66,16 +67,6 @@ def estimate_effect(maneuvers, spec, calibration: pd.DataFrame, biases) -> pd.Da
     params = [operating_params(posterior_mean_params(spec, calibration, biases[m]), shift) for m in range(len(maneuvers))]
     nominal = [spec.channel_params(np.zeros(len(spec)), biases[m]) for m in range(len(maneuvers))]
     return correction_effect(maneuvers, params, nominal)
-
-
-def uplinked_intervals(maneuvers, spec, posterior, biases) -> pd.DataFrame | None:
-    """The scale factors' intervals at the campaign's rates (`flown_intervals`) of the posterior draws
-    (an InferenceData's ``channel_param``), where the model's scale factor changes with the rate
-    (`operating_map` not all zero); None where it does not."""
-    shift_map = operating_map(maneuvers, spec, biases)
-    if not shift_map.any():
-        return None
-    return flown_intervals(posterior.posterior["channel_param"].values, spec, shift_map)
 
 
 def convergence_check(calibration: pd.DataFrame, spec, sampler: dict, conv: dict) -> Finding:
@@ -143,17 +134,13 @@ def informed_check(spec) -> Finding:
 
 def interval_check(calibration: pd.DataFrame, spec, rcfg: dict, flown: pd.DataFrame | None = None) -> Finding:
     """Every informed channel-model term's 95 % interval, as uplinked, is narrower than the limit of its
-    unit; the figure is the widest interval relative to its limit. ``flown`` (`uplinked_intervals`, for a
-    model whose scale factor changes with the rate) holds the scale factors at the campaign's rates: the
-    uplink is made of those, not of the zero-rate intercepts, which such a model leaves wide where the
-    campaign turned at one rate."""
+    unit; the figure is the widest interval relative to its limit. ``flown``
+    (`gyrocal.criticism.uplinked.uplinked_intervals`, for a model whose scale factor changes with the
+    rate) holds the scale factors at the campaign's rates: the uplink is made of those, not of the
+    zero-rate intercepts, which such a model leaves wide where the campaign turned at one rate."""
     labels, limits = informed_core(spec), width_limits(rcfg, spec)
     at_rates = flown is not None and not flown.empty
-    if at_rates:
-        keys = ["channel", "parameter"]
-        calibration = calibration.set_index(keys)
-        calibration.update(flown.set_index(keys)[["ci95_low", "ci95_high"]])
-        calibration = calibration.reset_index()
+    calibration = at_uplink(calibration, flown)
     widths = modelchoice.interval_widths(calibration, labels, limits)
     wide = [w for w in widths if w["width"] > w["limit"]]
     which = " (the scale factors at the campaign's rates, as uplinked)" if at_rates else ""
@@ -235,7 +222,7 @@ def checks(model: str, calibrations: dict, spec, sampler: dict, diagnostics: dic
     reviewed model's `gyrocal.criticism.priorconflict.conflict_check` (after the misfit check);
     ``sensor_class`` the campaign's gyro class (``campaign.yaml``), whose limits bound the estimates;
     ``flown`` the reviewed model's scale factors at the campaign's rates where they change with the rate
-    (`uplinked_intervals`), whose intervals the precision check judges.
+    (`gyrocal.criticism.uplinked.uplinked_intervals`), whose intervals the precision check judges.
     """
     calibration, rcfg = calibrations[model], cfg["report"]
     classified = modelchoice.typed(comparison)

@@ -5,8 +5,8 @@ No noise is drawn and nothing is sampled. The plan's campaign is the simulator's
 parameters sit at their prior mean; the preprocessing, the linearised model (`errormodel`), the
 noise model (`noise`) and the likelihood (`likelihood`) are gyrocal's own, so the information is
 the one the WLS and the posterior use, with the nuisance (initial attitude error, biases)
-integrated out, at the stated noise: where the scenario's star tracker has a Gauss-Markov part,
-the correlated model's (`markov`), as a run whose model has ``st_correlated_noise`` would fit it.
+integrated out, at the stated noise: where the scenario's star tracker has a Gauss-Markov part, with
+it (`markov`), as a run whose model has ``st_correlated_noise`` would fit it.
 From it: each parameter's predicted posterior sd and its Cramér-Rao bound without the prior, the
 same for each channel's identifiable combinations (``sf_mean``, ``sf_asym``: `combinations`) and
 whether each will be resolved, the pairs the plan cannot separate, and for each library effect the
@@ -34,13 +34,30 @@ from gyrocal.io.yamlfile import load_yaml
 from gyrocal.maneuvers import preprocess
 from gyrocal.model import combinations, effects
 from gyrocal.model.spec import ModelSpec
-from gyrocal.model.units import AXES
+from gyrocal.model.units import AXES, arcsec_to_rad
 from gyrocal.simulation import simulate
 
 __all__ = [
-    "CONFIG_SECTIONS", "DETECTION_POWER", "NULL_FRACTION", "Plan", "comparison", "crlb_sd", "detectable_noncentrality",
-    "detection_table", "figure", "information", "noncentrality", "plan", "planned_maneuvers", "predicted_covariance",
-    "quiet", "read_config", "read_scenario", "report", "stated_noise"
+    "CONFIG_SECTIONS",
+    "DETECTION_POWER",
+    "NULL_FRACTION",
+    "Plan",
+    "comparison",
+    "crlb_sd",
+    "detectable_noncentrality",
+    "detection_table",
+    "figure",
+    "information",
+    "noise_variances",
+    "noncentrality",
+    "plan",
+    "planned_maneuvers",
+    "predicted_covariance",
+    "quiet",
+    "read_config",
+    "read_scenario",
+    "report",
+    "stated_noise"
 ]
 
 DETECTION_POWER = 0.9
@@ -71,31 +88,38 @@ def planned_maneuvers(scenario: dict) -> list:
 
 
 def stated_noise(scenario: dict, noise_defaults: dict) -> dict:
-    """The noise knowledge a run would be given: the scenario's, as its campaign.yaml states it. Where its
-    star tracker has a Gauss-Markov part (``gm_sigma_cross_arcsec``, ``gm_sigma_about_arcsec`` over
-    ``gm_tau_s``), that of the correlated model: each sd the white and Gauss-Markov parts' total, the
-    Gauss-Markov share of the variance (``st_gm_fraction``, one for both axes: the parts' variances
-    summed across and about the boresight) and ``st_gm_tau_s``."""
+    """The noise knowledge a run would be given: the scenario's, as its campaign.yaml states it; where its
+    star tracker has a Gauss-Markov part, its sds across and about the boresight and its correlation
+    time too (the scenario's ``gm_sigma_cross_arcsec``, ``gm_sigma_about_arcsec``, ``gm_tau_s``)."""
     st = scenario["star_tracker"]
     stated = covariance.noise_knowledge({"star_tracker": st, "gyro": scenario["gyro"]}, noise_defaults)
-    gm_cross, gm_about, tau_s = (float(st.get(k) or 0.0) for k in STAR_TRACKER_GM)
-    if tau_s > 0 and gm_cross**2 + gm_about**2 > 0:
-        cross2, about2 = stated["sigma_cross_arcsec"] ** 2 + gm_cross**2, stated["sigma_about_arcsec"] ** 2 + gm_about**2
-        stated.update({"sigma_cross_arcsec": float(np.sqrt(cross2)), "sigma_about_arcsec": float(np.sqrt(about2)),
-                       covariance.GM_FRACTION_SCALE.key: (gm_cross**2 + gm_about**2) / (cross2 + about2),
-                       covariance.GM_TAU_SCALE.key: tau_s})
+    gm = {k: float(st.get(k) or 0.0) for k in STAR_TRACKER_GM}
+    if gm["gm_tau_s"] > 0 and gm["gm_sigma_cross_arcsec"] ** 2 + gm["gm_sigma_about_arcsec"] ** 2 > 0:
+        stated.update(gm)
     return stated
 
 
+def noise_variances(stated: dict) -> tuple:
+    """``(tau_s, variances)``: the covariance components' variances (SI, `covariance.variances`' keys) of
+    `stated_noise`'s noise, with the Gauss-Markov part's across and about the boresight each its own
+    (a run's correlated model takes one share for both; the plan takes the scenario's noise as it is);
+    ``tau_s`` 0 without one."""
+    variances = covariance.variances(covariance.log_sigma_of(stated))
+    tau_s = float(stated.get("gm_tau_s", 0.0))
+    if tau_s > 0:
+        variances.update(gm_cross=float(arcsec_to_rad(stated["gm_sigma_cross_arcsec"])) ** 2,
+                         gm_about=float(arcsec_to_rad(stated["gm_sigma_about_arcsec"])) ** 2)
+    return tau_s, variances
+
+
 def information(maneuvers, spec: ModelSpec, stated: dict) -> Stats:
-    """The campaign's `Stats` at the prior mean and the stated noise (`stated_noise`: with a Gauss-Markov
-    part where it has one); ``A`` is the Fisher information of the spec's parameters (SI) with each
-    maneuver's nuisance integrated out."""
+    """The campaign's `Stats` at the prior mean and the stated noise (`noise_variances`: with its
+    Gauss-Markov part where it has one, `markov`); ``A`` is the Fisher information of the spec's
+    parameters (SI) with each maneuver's nuisance integrated out."""
     zeros = np.zeros(len(spec.channels))
     lins = [errormodel.linearize(d, spec, spec.prior_mean_si, zeros) for d in maneuvers]
-    tau_s = float(stated.get(covariance.GM_TAU_SCALE.key, 0.0))
-    noises = [covariance.build(lin, stated["boresight_body"], tau_s) for lin in lins]
-    return campaign_stats(noises, covariance.variances(covariance.log_sigma_of(stated, correlated=tau_s > 0)))
+    tau_s, variances = noise_variances(stated)
+    return campaign_stats([covariance.build(lin, stated["boresight_body"], tau_s) for lin in lins], variances)
 
 
 def predicted_covariance(A: np.ndarray, prior_sd_si: np.ndarray) -> np.ndarray:
@@ -165,15 +189,15 @@ class Plan:
     """The noise it assumed (`stated_noise`), in the contract's units."""
 
     def noise_line(self) -> str:
-        """The assumed noise in one line: the reference's sds, with their Gauss-Markov share and tau where
-        it has one, and the ARW."""
+        """The assumed noise in one line: the reference's white sds, its Gauss-Markov part's and their
+        correlation time where it has one, and the ARW."""
         n = self.noise or {}
         if not n:
             return ""
-        gm = (f", {n[covariance.GM_FRACTION_SCALE.key]:.0%} of its variance Gauss-Markov over "
-              f"{n[covariance.GM_TAU_SCALE.key]:g} s" if covariance.GM_TAU_SCALE.key in n else ", white")
-        return (f"-- noise: reference {n['sigma_cross_arcsec']:.3g} arcsec across and {n['sigma_about_arcsec']:.3g} "
-                f"about the boresight{gm}; ARW {n['arw_deg_sqrt_h']:.3g} deg/sqrt(h)")
+        gm = (f"; Gauss-Markov {n['gm_sigma_cross_arcsec']:.3g} / {n['gm_sigma_about_arcsec']:.3g} arcsec over "
+              f"{n['gm_tau_s']:g} s" if n.get("gm_tau_s") else "")
+        return (f"-- noise: reference {n['sigma_cross_arcsec']:.3g} / {n['sigma_about_arcsec']:.3g} arcsec white "
+                f"across / about the boresight{gm}; ARW {n['arw_deg_sqrt_h']:.3g} deg/sqrt(h)")
 
     def mounting_separability(self) -> pd.DataFrame:
         """`combinations.mounting_separability` of the predicted covariance: what an estimated

@@ -57,6 +57,9 @@ class ReviewInputs:
     """The model disagreement behind the sensitivity check (`gyrocal.criticism.modelchoice.disagreement_table`)."""
     orthogonality: pd.DataFrame = field(default_factory=pd.DataFrame)
     """The model's ``orthogonality.csv``: each channel set's non-orthogonality (`gyrocal.model.orthogonality`)."""
+    flown: pd.DataFrame | None = None
+    """The scale factors as uplinked, at the campaign's rates, where the model's changes with the rate
+    (`gyrocal.criticism.uplinked.uplinked_intervals`); None where it does not."""
 
 
 @dataclass(frozen=True)
@@ -113,6 +116,8 @@ class ReviewContext:
     """Per channel its terms and combinations against their priors (`gyrocal.report.resolution`)."""
     resolution_sentences: list
     """One sentence per channel: what is resolved, what is not, and which maneuver would resolve it."""
+    resolution_uplinked: bool
+    """Whether the resolution's scale factors are the uplinked ones, at the campaign's rates (`ReviewInputs.flown`)."""
     resolved_ratio_max: float
     prior_directions: pd.DataFrame
     """The directions of the channel parameters left to the prior."""

@@ -21,6 +21,7 @@ from markupsafe import Markup
 from gyrocal import __version__
 from gyrocal.criticism import modelchoice
 from gyrocal.criticism import verdict as judge
+from gyrocal.criticism.uplinked import at_uplink
 from gyrocal.inference.fit import identification
 from gyrocal.io import telemetry
 from gyrocal.model import combinations
@@ -179,7 +180,8 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
     draws = inputs.posterior.posterior["channel_param"].sel(parameter=list(spec.labels)).to_numpy()
     cov = np.cov(draws.reshape(-1, len(spec)).T)
     pairs = identification.confounded_pairs(cov, spec.free, spec.labels)
-    resolved = resolution.resolution_table(spec, calibration, judge.width_limits(inputs.config["report"], spec))
+    resolved = resolution.resolution_table(spec, at_uplink(calibration, inputs.flown),
+                                           judge.width_limits(inputs.config["report"], spec))
     accounting = pd.DataFrame([{"maneuver": d.id, **d.counts} for d in maneuvers])
     accounting.loc[len(accounting)] = {"maneuver": "campaign files", "st_read": info["rows"]["star_tracker"],
                                        "st_invalid": info["rows"]["star_tracker_invalid"],
@@ -200,6 +202,7 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         resolution=resolved.round({"mean": 1, "sd": 1, "ci95_low": 1, "ci95_high": 1, "prior_sd": 1, "sd_over_prior": 3,
                                    "ci95_width": 1}),
         resolution_sentences=resolution.channel_sentences(spec, resolved, maneuvers),
+        resolution_uplinked=inputs.flown is not None,
         resolved_ratio_max=combinations.RESOLVED_RATIO_MAX, prior_directions=resolution.prior_directions(spec, cov),
         mounting_separability=resolution.mounting_table(spec, cov, info["mounting"]),
         orthogonality=inputs.orthogonality[[c for c in ORTHOGONALITY_SHOWN if c in inputs.orthogonality]].round(

@@ -6,16 +6,15 @@ direction's ``sf`` plus the effect's change of the channel's increments over the
 which leaves every rotation's end error as the model explains it. Away from those rates the linear
 correction is off by the effect's change between them. The change is linear in the effect's
 parameters (`operating_map`), so the uplinked scale factors' posterior is the draws' image under it
-(`flown_intervals`)."""
+(`gyrocal.criticism.uplinked`)."""
 
 import numpy as np
-import pandas as pd
 
 from gyrocal.inference.errormodel import effect_regressors
 from gyrocal.model import channels as ch
 from gyrocal.model.channels import MOVING_RATE_FRACTION
 
-__all__ = ["FLOWN_CI_PROB", "flown_intervals", "operating_map", "operating_params", "operating_shift"]
+__all__ = ["operating_map", "operating_params", "operating_shift"]
 
 
 def _operating(spec) -> np.ndarray:
@@ -61,28 +60,3 @@ def operating_params(params: ch.ChannelParams, shift: np.ndarray) -> ch.ChannelP
     """``params`` with `operating_shift`'s ``shift`` added to their scale factors."""
     return ch.ChannelParams(params.channels, params.sf_pos + shift[0], params.sf_neg + shift[1], params.mis_rad,
                             params.bias_rad_s)
-
-
-FLOWN_CI_PROB = 0.95
-"""The central interval `flown_intervals` gives, as ``calibration.csv``'s."""
-
-
-def flown_intervals(values, spec, shift_map: np.ndarray) -> pd.DataFrame:
-    """Each scale-factor term's posterior as uplinked, at the campaign's rates: ``values`` (draws, len(spec))
-    are posterior draws in the parameters' units, ``shift_map`` `operating_map`'s. Returns one row a
-    scale-factor term (channel, parameter, unit, mean, ci95_low, ci95_high), the term's draws plus what
-    each draw's operating-scale parameters add to it; a symmetric ``sf`` takes row 0's change."""
-    values = np.asarray(values, dtype=float).reshape(-1, len(spec))
-    extras_si = spec.to_si(values)[:, spec.extra]
-    shift = np.einsum("rce,de->drc", shift_map, extras_si)
-    index = {c.name: i for i, c in enumerate(spec.channels)}
-    tail = (1.0 - FLOWN_CI_PROB) / 2.0
-    rows = []
-    for j, p in enumerate(spec.parameters[spec.core]):
-        if p.name not in ("sf", "sf_pos", "sf_neg"):
-            continue
-        flown = values[:, j] + shift[:, 1 if p.name == "sf_neg" else 0, index[p.owner]] / spec.si_per_unit[j]
-        low, high = np.quantile(flown, [tail, 1.0 - tail])
-        rows.append({"channel": p.owner, "parameter": p.name, "unit": p.unit, "mean": float(flown.mean()),
-                     "ci95_low": float(low), "ci95_high": float(high)})
-    return pd.DataFrame(rows, columns=["channel", "parameter", "unit", "mean", "ci95_low", "ci95_high"])

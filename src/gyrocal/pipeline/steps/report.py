@@ -8,6 +8,7 @@ import pandas as pd
 import xarray as xr
 
 from gyrocal.criticism import extension, modelchoice, priorconflict, verdict
+from gyrocal.criticism.uplinked import uplinked_intervals
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.sampling.priors import posterior_spec
 from gyrocal.io.outputs import write_json, write_text
@@ -57,7 +58,7 @@ def run(models, files, preprocessed, maneuver_ids, input_json, comparison_csv, o
     # its posterior group alone (the predictive draws are 100 MB at 10x), in memory: forked processes draw
     with xr.open_dataset(reviewed.posterior, group="posterior", engine="h5netcdf") as group:
         posterior = az.InferenceData(posterior=group.load())
-    flown = verdict.uplinked_intervals(maneuvers, est.spec, posterior, est.biases)
+    flown = uplinked_intervals(maneuvers, est.spec, posterior, est.biases)
     findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg, conflict,
                               info["gyro"].get("sensor_class"), flown)
     shown = {m for name, step in fitted for m in (step["base"], name) if m in kept}  # each step's model before and after
@@ -75,6 +76,6 @@ def run(models, files, preprocessed, maneuver_ids, input_json, comparison_csv, o
         truth=read_json(truth_json)["parameters"] if truth_json else None, refused=refused,
         reference_interval=read_json(interval) if (interval := Path(preprocessed, REFERENCE_INTERVAL)).exists() else None,
         loop=loop, loop_steps=[step for _, step in steps], disagreement=disagreement,
-        orthogonality=pd.read_csv(reviewed.orthogonality))
+        orthogonality=pd.read_csv(reviewed.orthogonality), flown=flown)
     write_text(review.render(review.build_context(inputs, processes)), out_html)
     write_json(verdict.verdict(info["campaign"], model, findings), out_verdict)
