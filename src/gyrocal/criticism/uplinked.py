@@ -31,6 +31,8 @@ def flown_intervals(values, spec, shift_map: np.ndarray) -> pd.DataFrame:
     index = {c.name: i for i, c in enumerate(spec.channels)}
     flown = values.copy()
     terms = [(j, p) for j, p in enumerate(spec.parameters[spec.core]) if p.name in SCALE_FACTORS]
+    if not terms:
+        return pd.DataFrame(columns=COLUMNS)
     for j, p in terms:
         flown[:, j] += shift_si[:, int(p.name == "sf_neg"), index[p.owner]] / spec.si_per_unit[j]
     combos = comb.scale_combinations(spec)

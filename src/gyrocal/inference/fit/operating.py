@@ -35,14 +35,13 @@ def operating_map(maneuvers, spec, biases=None) -> np.ndarray:
     if not wanted.any():
         return change
     for m, data in enumerate(maneuvers):
-        gyro, _ = effect_regressors(data, spec)
-        gyro[:, :, ~wanted] = 0.0
+        gyro = effect_regressors(data, spec)[0][:, :, wanted]
         bias = np.zeros(n) if biases is None else np.asarray(biases[m], dtype=float).reshape(n)
         turned = np.asarray(data.increments, dtype=float) - np.outer(data.dt, bias)
         rate = np.abs(turned) / np.asarray(data.dt, dtype=float)[:, None]
         moving = rate > MOVING_RATE_FRACTION * rate.max()
         for row, way in enumerate((moving & (turned > 0), moving & (turned < 0))):
-            change[row] += np.sum(np.where(way[:, :, None], gyro, 0.0), axis=0)
+            change[row][:, wanted] += np.sum(np.where(way[:, :, None], gyro, 0.0), axis=0)
             angle[row] += np.sum(np.where(way, turned, 0.0), axis=0)
     if any(p.name == "sf" for p in spec.parameters[spec.core]):
         change = np.broadcast_to(change[0] - change[1], change.shape)
