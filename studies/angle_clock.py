@@ -1,0 +1,86 @@
+"""Does a real run's error decorrelate with time, or with the angle turned? (issue 42). Reads a finished
+run (``results/<campaign>``) and one model's point estimate, and fits only noise: the REML of
+`gyrocal.inference.fit.noisefit` at that estimate, for the white model, for the Gauss-Markov model of
+``st_correlated_noise``, and for that model with its clock run on the angle turned as well as on time.
+
+The Gauss-Markov part's factor between two reference samples is ``exp(-dt / tau)``. Here ``dt`` becomes
+``dt + kappa * dtheta``, ``dtheta`` the angle the body turns between the two samples (from the run's
+propagated attitudes) and ``kappa`` (s/rad) tried on a grid: at ``kappa`` 0 it is the library's model; at
+large ``kappa`` the error holds while the body rests and changes as it turns, with a correlation angle
+``tau / kappa`` (rad). An error of the reference that depends on the pose (an optical tracker's fit of
+its markers, seen from other cameras as the body turns) would decorrelate so, and so would one of the
+gyro that follows the angle turned. The markov filter takes any steps, so nothing else changes.
+
+Prints, per ``kappa``, the negative REML log-likelihood (lower is better; differences are log-likelihood
+ratios of models with the same number of scales), the scales (sigma_cross and sigma_about in arcsec, ARW
+in deg/sqrt(h), the Gauss-Markov share, tau in effective seconds) and the correlation angle.
+
+    python studies/angle_clock.py results/<campaign> [--model baseline] [--plugins FILE ...] [--kappa 0 1 10 100 300]
+"""
+
+import argparse
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from gyrocal.inference.fit import noisefit
+from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.inference.noise import covariance
+from gyrocal.maneuvers.preprocess import ManeuverData
+from gyrocal.model import effects
+from gyrocal.pipeline.paths import maneuver_files
+
+TAU0_S = 1.0
+"""Where the REML's search for tau starts (it scans the whole range too)."""
+
+
+def turned_rad(lin) -> np.ndarray:
+    """(M,) the angle the body turns from each reference sample to the next (the first: 0), from the
+    linearisation's propagated attitudes."""
+    attitude = Rotation.from_matrix(lin.st_matrix)
+    return np.concatenate([[0.0], (attitude[:-1].inv() * attitude[1:]).magnitude()])
+
+
+def on_angle_clock(lins, kappa_s_per_rad: float) -> list:
+    """The linearisations with each step ``dt + kappa * dtheta``: the Gauss-Markov part's clock."""
+    return [dataclasses.replace(lin, st_dt=lin.st_dt + kappa_s_per_rad * turned_rad(lin)) for lin in lins]
+
+
+def correlated_fit(lins, boresight, log_sigma0) -> tuple:
+    """The correlated model's REML scales and its negative log-likelihood at them."""
+    log_sigma = noisefit.estimate_correlated_noise(lins, boresight, log_sigma0, TAU0_S)[0]
+    ratios = covariance.ratios_of(log_sigma)
+    noises = [covariance.build(lin, boresight, covariance.correlation_time_of(ratios)) for lin in lins]
+    return log_sigma, float(noisefit.profile_reml(noises, ratios)[0])
+
+
+def main():
+    """Print the white model's REML, then the correlated model's at each ``kappa``."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("run", type=Path, help="a run's results/<campaign> folder")
+    parser.add_argument("--model", default="baseline")
+    parser.add_argument("--plugins", nargs="*", default=[])
+    parser.add_argument("--kappa", nargs="*", type=float, default=[0.0, 1.0, 10.0, 30.0, 100.0, 300.0])
+    args = parser.parse_args()
+    ids = json.loads((args.run / "input.json").read_text())["maneuvers"]
+    maneuvers = [ManeuverData.load(p) for p in maneuver_files(args.run / "preprocess", ids)]
+    est = PointEstimate.load(args.run / args.model / "point_estimate.npz", effects.known(args.plugins))
+    lins = [est.linearize(maneuvers, m) for m in range(len(maneuvers))]
+    log_sigma0 = covariance.log_sigma_of(est.stated_noise)
+    white = [covariance.build(lin, est.boresight) for lin in lins]
+    white_sigma = noisefit.estimate_noise(white, log_sigma0)[0]
+    white_value = noisefit.profile_reml(white, covariance.ratios_of(white_sigma))[0]
+    print(f"{args.run} ({args.model}, {sum(len(lin.st_dt) for lin in lins)} reference samples)")
+    print(f"  white:            {white_value:10.1f}   scales {np.round(covariance.scales_in_units(white_sigma), 3)}")
+    for kappa in args.kappa:
+        log_sigma, value = correlated_fit(on_angle_clock(lins, kappa), est.boresight, log_sigma0)
+        scales = covariance.scales_in_units(log_sigma)
+        angle = f"{scales[-1] / kappa:.3g} rad" if kappa > 0 else "-"
+        print(f"  kappa {kappa:6.1f} s/rad: {value:10.1f}   scales {np.round(scales, 3)}   correlation angle {angle}")
+
+
+if __name__ == "__main__":
+    main()
