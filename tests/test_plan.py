@@ -227,3 +227,12 @@ def test_cli_plan_writes_under_results_plan_by_default_not_the_current_folder(tm
     assert sorted(p.name for p in (tmp_path / "results" / "plan").iterdir()) == [
         "plan.csv", "plan.png", "plan_detection.csv"]
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results"]
+
+
+def test_a_plan_refuses_a_gauss_markov_clock_on_the_angle_turned_naming_the_key(cfg):
+    """The simulator can run the Gauss-Markov part's clock on the angle turned; the planner, as the
+    library's noise model, cannot, and says so rather than plan the time clock's numbers."""
+    scenario = gauss_markov_tiny()
+    scenario["star_tracker"]["gm_clock_s_per_rad"] = 100.0
+    with pytest.raises(ValueError, match=r"star_tracker\.gm_clock_s_per_rad is 100\.0"):
+        plan.plan(scenario, cfg)

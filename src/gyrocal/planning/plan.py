@@ -95,6 +95,10 @@ def stated_noise(scenario: dict, noise_defaults: dict) -> dict:
     stated = covariance.noise_knowledge({"star_tracker": st, "gyro": scenario["gyro"]}, noise_defaults)
     gm = {k: float(st.get(k) or 0.0) for k in STAR_TRACKER_GM}
     if gm["gm_tau_s"] > 0 and gm["gm_sigma_cross_arcsec"] ** 2 + gm["gm_sigma_about_arcsec"] ** 2 > 0:
+        if float(st.get("gm_clock_s_per_rad") or 0.0) > 0:
+            raise ValueError(f"scenario {scenario.get('name', '')}: star_tracker.gm_clock_s_per_rad is "
+                             f"{st['gm_clock_s_per_rad']}: the planner's Gauss-Markov noise, as the library's, runs "
+                             "on time; plan with gm_clock_s_per_rad: 0 (an error on the angle clock is not modelled)")
         stated.update(gm)
     return stated
 

@@ -291,8 +291,9 @@ def simulate(scenario: dict, seed=None):
     true_st = kinematics.attitude_at(t0 + dt_sub * np.arange(n_gyro * n_sub + 1), attitudes_fine, increments_fine,
                                      taken)
     del attitudes_fine, increments_fine
+    turned = np.concatenate([[0.0], (true_st[:-1].inv() * true_st[1:]).magnitude()])
     noise = star_tracker_noise(len(t_st), dt_st, st_cfg, eff["st_correlation_time_s"], rng,
-                               maneuver_scale(profiles, t_st, False))
+                               maneuver_scale(profiles, t_st, False), turned)
     measured = true_st * Rotation.from_rotvec(noise)
     if eff["gravity_offset_arcsec_per_g"]:
         force_st = true_st.inv().apply([0.0, 0.0, gravity]) / STANDARD_GRAVITY_M_S2
@@ -334,6 +335,8 @@ def simulate(scenario: dict, seed=None):
     }
     if st_cfg["gm_tau_s"] and (st_cfg["gm_sigma_cross_arcsec"] or st_cfg["gm_sigma_about_arcsec"]):
         truth_out["noise"].update({k: st_cfg[k] for k in ("gm_sigma_cross_arcsec", "gm_sigma_about_arcsec", "gm_tau_s")})
+        if st_cfg.get("gm_clock_s_per_rad"):
+            truth_out["noise"]["gm_clock_s_per_rad"] = st_cfg["gm_clock_s_per_rad"]
     if any(p.noise_scale != 1.0 or p.noise_group != DEFAULT_NOISE_GROUP for p in profiles):
         truth_out["maneuver_noise"] = {p.id: {"noise_scale": p.noise_scale, "noise_group": p.noise_group}
                                        for p in profiles}
@@ -373,19 +376,51 @@ def gauss_markov(white, dt_s, tau_s) -> np.ndarray:
     """Unit-variance first-order Gauss-Markov samples every ``dt_s`` from unit white ``white``
     (rows in time): the exact AR(1) of the continuous process, x[k] = phi x[k-1] +
     sqrt(1 - phi^2) w[k] with phi = exp(-dt/tau), started from its stationary distribution, so
-    every sample has variance 1 and lag-k correlation phi^k."""
+    every sample has variance 1 and lag-k correlation phi^k. ``dt_s`` one step for every sample, or
+    one a sample (the first unused): then `gauss_markov_steps`."""
     from scipy.signal import lfilter  # 0.7 s to import, for this case alone
 
+    if np.ndim(dt_s):
+        return gauss_markov_steps(white, np.asarray(dt_s, dtype=float) / tau_s)
     phi = np.exp(-dt_s / tau_s)
     white = white.copy()
     white[0] /= np.sqrt(1 - phi**2)
     return lfilter([np.sqrt(1 - phi**2)], [1.0, -phi], white, axis=0)
 
 
-def star_tracker_noise(n, dt_s, st_cfg, correlation_time_s, rng, scale=None):
+GM_BLOCK_DECAY = 50.0
+"""`gauss_markov_steps` sums the recursion in blocks over which the decay ``sum(step / tau)`` stays
+below this, so that ``exp`` of it neither overflows nor loses the carried state."""
+
+
+def gauss_markov_steps(white, decay) -> np.ndarray:
+    """Unit-variance Gauss-Markov samples whose step k decays by ``exp(-decay[k])`` (``decay[0]`` unused:
+    the first sample is stationary), from unit white ``white`` (rows in time): x[k] = phi_k x[k-1] +
+    sqrt(1 - phi_k^2) w[k], summed in closed form within blocks (`GM_BLOCK_DECAY`), x[k] = e^(-C_k)
+    (x[start - 1] + sum_j e^(C_j) sqrt(1 - phi_j^2) w[j]) with C the decay summed from the block's start.
+    A clock that runs on the angle turned as well as on time has such steps."""
+    decay = np.minimum(np.asarray(decay, dtype=float), GM_BLOCK_DECAY)
+    decay[0] = 0.0
+    innovation = np.asarray(white, dtype=float) * np.sqrt(-np.expm1(-2.0 * decay))[:, None]
+    innovation[0] = white[0]
+    out = np.empty_like(innovation)
+    block = np.floor(np.cumsum(decay) / GM_BLOCK_DECAY)
+    starts = np.flatnonzero(np.diff(block, prepend=-1.0))
+    carried = np.zeros(innovation.shape[1:])
+    for start, stop in zip(starts, [*starts[1:], len(decay)]):
+        c = np.cumsum(decay[start:stop])[:, None]
+        out[start:stop] = np.exp(-c) * (carried + np.cumsum(np.exp(c) * innovation[start:stop], axis=0))
+        carried = out[stop - 1]
+    return out
+
+
+def star_tracker_noise(n, dt_s, st_cfg, correlation_time_s, rng, scale=None, turned_rad=None):
     """Body-frame attitude noise (rad), anisotropic about a boresight: white noise of sigma across
     and about it (AR(1) as a whole with the hidden effect ``st_correlation_time_s``), times
-    ``scale`` per sample, plus the Gauss-Markov part that ``gm_*`` declares, unscaled."""
+    ``scale`` per sample, plus the Gauss-Markov part that ``gm_*`` declares, unscaled. With
+    ``gm_clock_s_per_rad`` (kappa) that part's clock runs on the angle turned too: each step ``dt + kappa
+    dtheta`` (``turned_rad``: the body's turn from the previous sample), an error that holds while the
+    body rests and changes as it turns, over a correlation angle ``gm_tau_s / kappa``."""
     boresight = np.asarray(st_cfg["boresight_body"], dtype=float)
     boresight /= np.linalg.norm(boresight)
     helper = np.eye(3)[np.argmin(np.abs(boresight))]
@@ -405,7 +440,9 @@ def star_tracker_noise(n, dt_s, st_cfg, correlation_time_s, rng, scale=None):
         noise = noise * scale[:, None]
     gm_cross, gm_about, tau = (st_cfg.get(k, 0.0) for k in ("gm_sigma_cross_arcsec", "gm_sigma_about_arcsec", "gm_tau_s"))
     if tau > 0 and (gm_cross or gm_about):
-        noise = noise + frame(gauss_markov(rng.normal(size=(n, 3)), dt_s, tau), gm_cross, gm_about)
+        clock = st_cfg.get("gm_clock_s_per_rad", 0.0)
+        steps = dt_s + clock * np.asarray(turned_rad, dtype=float) if clock else dt_s
+        noise = noise + frame(gauss_markov(rng.normal(size=(n, 3)), steps, tau), gm_cross, gm_about)
     return noise
 
 
