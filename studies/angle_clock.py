@@ -9,13 +9,16 @@ propagated attitudes) and ``kappa`` (s/rad) tried on a grid: at ``kappa`` 0 it i
 large ``kappa`` the error holds while the body rests and changes as it turns, with a correlation angle
 ``tau / kappa`` (rad). An error of the reference that depends on the pose (an optical tracker's fit of
 its markers, seen from other cameras as the body turns) would decorrelate so, and so would one of the
-gyro that follows the angle turned. The markov filter takes any steps, so nothing else changes.
+gyro that follows the angle turned. The markov filter takes any steps; the gyro's walk keeps its own,
+and the REML's search for tau (half the median step to ten times the longest maneuver) moves with the
+clock, which the printout flags where tau ends on a bound. The best ``kappa`` of the grid is one more
+fitted number.
 
 Prints, per ``kappa``, the negative REML log-likelihood (lower is better; differences are log-likelihood
 ratios of models with the same number of scales), the scales (sigma_cross and sigma_about in arcsec, ARW
 in deg/sqrt(h), the Gauss-Markov share, tau in effective seconds) and the correlation angle.
 
-    python studies/angle_clock.py results/<campaign> [--model baseline] [--plugins FILE ...] [--kappa 0 1 10 100 300]
+    python studies/angle_clock.py results/<campaign> [--model baseline] [--plugins FILE ...] [--kappa 0 1 10 30 100 300]
 """
 
 import argparse
@@ -24,7 +27,6 @@ import json
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from gyrocal.inference.fit import noisefit
 from gyrocal.inference.fit.estimate import PointEstimate
@@ -37,16 +39,26 @@ TAU0_S = 1.0
 """Where the REML's search for tau starts (it scans the whole range too)."""
 
 
-def turned_rad(lin) -> np.ndarray:
-    """(M,) the angle the body turns from each reference sample to the next (the first: 0), from the
-    linearisation's propagated attitudes."""
-    attitude = Rotation.from_matrix(lin.st_matrix)
-    return np.concatenate([[0.0], (attitude[:-1].inv() * attitude[1:]).magnitude()])
+def turned_rad(data) -> np.ndarray:
+    """(M,) the angle the body turns from each reference sample to the previous one (the first: 0): the
+    path of the gyro's increments between them, which a net rotation would understate beyond pi."""
+    path = np.concatenate([[0.0], np.cumsum(np.linalg.norm(data.increments, axis=1))])
+    return np.diff(np.interp(data.st_time, data.gyro_time, path), prepend=0.0)
 
 
-def on_angle_clock(lins, kappa_s_per_rad: float) -> list:
-    """The linearisations with each step ``dt + kappa * dtheta``: the Gauss-Markov part's clock."""
-    return [dataclasses.replace(lin, st_dt=lin.st_dt + kappa_s_per_rad * turned_rad(lin)) for lin in lins]
+def on_angle_clock(lins, maneuvers, kappa_s_per_rad: float) -> list:
+    """The linearisations with each step ``dt + kappa * dtheta``: the Gauss-Markov part's clock. The gyro's
+    walk keeps its own steps (``walk_var``, set from ``st_dt`` where a saved file lacks it)."""
+    return [dataclasses.replace(lin, st_dt=lin.st_dt + kappa_s_per_rad * turned_rad(data),
+                                walk_var=lin.st_dt if lin.walk_var is None else lin.walk_var)
+            for lin, data in zip(lins, maneuvers)]
+
+
+def tau_bounds_s(lins) -> tuple:
+    """The tau the REML searches (`noisefit.estimate_correlated_noise`): half the median step to ten times
+    the longest maneuver, in the clock's seconds."""
+    step = noisefit.st_step(lins)
+    return 0.5 * step, 10.0 * max(float(np.sum(lin.st_dt)) for lin in lins)
 
 
 def correlated_fit(lins, boresight, log_sigma0) -> tuple:
@@ -76,10 +88,13 @@ def main():
     print(f"{args.run} ({args.model}, {sum(len(lin.st_dt) for lin in lins)} reference samples)")
     print(f"  white:            {white_value:10.1f}   scales {np.round(covariance.scales_in_units(white_sigma), 3)}")
     for kappa in args.kappa:
-        log_sigma, value = correlated_fit(on_angle_clock(lins, kappa), est.boresight, log_sigma0)
+        clocked = on_angle_clock(lins, maneuvers, kappa)
+        log_sigma, value = correlated_fit(clocked, est.boresight, log_sigma0)
         scales = covariance.scales_in_units(log_sigma)
         angle = f"{scales[-1] / kappa:.3g} rad" if kappa > 0 else "-"
-        print(f"  kappa {kappa:6.1f} s/rad: {value:10.1f}   scales {np.round(scales, 3)}   correlation angle {angle}")
+        low, high = tau_bounds_s(clocked)
+        edge = "   (tau at the search's bound)" if not 1.5 * low < scales[-1] < high / 1.5 else ""
+        print(f"  kappa {kappa:7.1f} s/rad: {value:10.1f}   scales {np.round(scales, 3)}   correlation angle {angle}{edge}")
 
 
 if __name__ == "__main__":

@@ -2,10 +2,14 @@
 time (``star_tracker.gm_clock_s_per_rad``): the recursion with a step of its own per sample, and the
 error it gives at rest and in motion."""
 
+import copy
+
 import numpy as np
 import pytest
 
-from gyrocal.simulation.simulate import gauss_markov, star_tracker_noise
+from gyrocal.simulation.simulate import gauss_markov, load_scenario, star_tracker_noise
+
+from conftest import DATA
 
 
 def by_loop(white, decay):
@@ -49,3 +53,26 @@ def test_on_the_angle_clock_the_error_holds_at_rest_and_changes_as_the_body_turn
                                  turned_rad=turned)
     assert lag1(on_time, moving) == pytest.approx(np.exp(-0.1), abs=0.01)
     assert np.std(on_angle[:, 0]) == pytest.approx(np.deg2rad(20.0 / 3600.0), rel=0.05)
+
+
+@pytest.fixture(scope="module")
+def tiny_scenario():
+    return load_scenario(DATA / "tiny.yaml")
+
+
+def test_a_scenario_with_the_clock_at_zero_simulates_the_same_bytes_and_truth_records_a_clock(tiny_scenario):
+    """The key at 0 changes nothing (the same reference samples to the bit); set, with a Gauss-Markov part,
+    it moves the reference and ``truth.json`` records it; a 1-D series keeps its shape."""
+    from gyrocal.simulation import simulate
+
+    base = simulate.simulate(tiny_scenario)[0]
+    zero = copy.deepcopy(tiny_scenario)
+    zero["star_tracker"]["gm_clock_s_per_rad"] = 0.0
+    np.testing.assert_array_equal(simulate.simulate(zero)[0].st_quat, base.st_quat)
+    clocked = copy.deepcopy(tiny_scenario)
+    clocked["star_tracker"].update(gm_sigma_cross_arcsec=5.0, gm_sigma_about_arcsec=20.0, gm_tau_s=300.0,
+                                   gm_clock_s_per_rad=300.0)
+    campaign, truth = simulate.simulate(clocked)
+    assert truth["noise"]["gm_clock_s_per_rad"] == 300.0
+    assert not np.array_equal(campaign.st_quat, base.st_quat)
+    assert gauss_markov(np.ones(5), np.ones(5), 1.0).shape == (5,)

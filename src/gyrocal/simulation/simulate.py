@@ -291,7 +291,8 @@ def simulate(scenario: dict, seed=None):
     true_st = kinematics.attitude_at(t0 + dt_sub * np.arange(n_gyro * n_sub + 1), attitudes_fine, increments_fine,
                                      taken)
     del attitudes_fine, increments_fine
-    turned = np.concatenate([[0.0], (true_st[:-1].inv() * true_st[1:]).magnitude()])
+    turned = (np.concatenate([[0.0], (true_st[:-1].inv() * true_st[1:]).magnitude()])  # net: MOM turns far less
+              if st_cfg.get("gm_clock_s_per_rad") else None)                          # than pi a sample
     noise = star_tracker_noise(len(t_st), dt_st, st_cfg, eff["st_correlation_time_s"], rng,
                                maneuver_scale(profiles, t_st, False), turned)
     measured = true_st * Rotation.from_rotvec(noise)
@@ -401,8 +402,9 @@ def gauss_markov_steps(white, decay) -> np.ndarray:
     A clock that runs on the angle turned as well as on time has such steps."""
     decay = np.minimum(np.asarray(decay, dtype=float), GM_BLOCK_DECAY)
     decay[0] = 0.0
-    innovation = np.asarray(white, dtype=float) * np.sqrt(-np.expm1(-2.0 * decay))[:, None]
-    innovation[0] = white[0]
+    white = np.asarray(white, dtype=float)
+    innovation = white.reshape(len(decay), -1) * np.sqrt(-np.expm1(-2.0 * decay))[:, None]
+    innovation[0] = white.reshape(len(decay), -1)[0]
     out = np.empty_like(innovation)
     block = np.floor(np.cumsum(decay) / GM_BLOCK_DECAY)
     starts = np.flatnonzero(np.diff(block, prepend=-1.0))
@@ -411,7 +413,7 @@ def gauss_markov_steps(white, decay) -> np.ndarray:
         c = np.cumsum(decay[start:stop])[:, None]
         out[start:stop] = np.exp(-c) * (carried + np.cumsum(np.exp(c) * innovation[start:stop], axis=0))
         carried = out[stop - 1]
-    return out
+    return out.reshape(white.shape)
 
 
 def star_tracker_noise(n, dt_s, st_cfg, correlation_time_s, rng, scale=None, turned_rad=None):
