@@ -23,17 +23,13 @@ in deg/sqrt(h), the Gauss-Markov share, tau in effective seconds) and the correl
 
 import argparse
 import dataclasses
-import json
 from pathlib import Path
 
 import numpy as np
 
 from gyrocal.inference.fit import noisefit
-from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.noise import covariance
-from gyrocal.maneuvers.preprocess import ManeuverData
-from gyrocal.model import effects
-from gyrocal.pipeline.paths import maneuver_files
+from gyrocal.pipeline.readback import load_model_run
 
 TAU0_S = 1.0
 """Where the REML's search for tau starts (it scans the whole range too)."""
@@ -77,9 +73,7 @@ def main():
     parser.add_argument("--plugins", nargs="*", default=[])
     parser.add_argument("--kappa", nargs="*", type=float, default=[0.0, 1.0, 10.0, 30.0, 100.0, 300.0])
     args = parser.parse_args()
-    ids = json.loads((args.run / "input.json").read_text())["maneuvers"]
-    maneuvers = [ManeuverData.load(p) for p in maneuver_files(args.run / "preprocess", ids)]
-    est = PointEstimate.load(args.run / args.model / "point_estimate.npz", effects.known(args.plugins))
+    maneuvers, est = load_model_run(args.run, args.model, args.plugins)
     lins = [est.linearize(maneuvers, m) for m in range(len(maneuvers))]
     log_sigma0 = covariance.log_sigma_of(est.stated_noise)
     white = [covariance.build(lin, est.boresight) for lin in lins]

@@ -22,18 +22,14 @@ For each maneuver, on the in-loop channel set:
 
 import argparse
 import itertools
-import json
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
 from gyrocal.inference import errormodel
-from gyrocal.inference.fit.estimate import PointEstimate
-from gyrocal.maneuvers.preprocess import ManeuverData
-from gyrocal.model import effects
 from gyrocal.model.units import rad_to_arcsec
-from gyrocal.pipeline.paths import maneuver_files
+from gyrocal.pipeline.readback import load_model_run
 
 REST_RAD_S = 0.02
 """Below this body rate a reference sample is at rest."""
@@ -99,15 +95,13 @@ def frame_offsets(data, body_error) -> tuple:
 
 
 def main():
-    """Print each maneuver's figures, in the campaign's order (``input.json``, as the fit's biases are)."""
+    """Print each maneuver's figures, in the campaign's order (`load_model_run`: as the fit's biases are)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("run", type=Path, help="a run's results/<campaign> folder")
     parser.add_argument("--model", default="baseline")
     parser.add_argument("--plugins", nargs="*", default=[])
     args = parser.parse_args()
-    ids = json.loads((args.run / "input.json").read_text())["maneuvers"]
-    maneuvers = [ManeuverData.load(p) for p in maneuver_files(args.run / "preprocess", ids)]
-    est = PointEstimate.load(args.run / args.model / "point_estimate.npz", effects.known(args.plugins))
+    maneuvers, est = load_model_run(args.run, args.model, args.plugins)
     for m, data in enumerate(maneuvers):
         lin = errormodel.linearize(data, est.spec, est.theta, est.biases[m])
         body, inertial = lin.body_error[:, 0], lin.z[:, 0]
