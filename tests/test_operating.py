@@ -170,10 +170,10 @@ def test_the_review_reads_the_uplinked_posterior_off_the_inferencedata_and_repla
     values = rng.normal(0.0, 100.0, (2, 30, len(spec)))
     posterior = az.from_dict(posterior={"channel_param": values}, coords={"parameter": spec.labels},
                              dims={"channel_param": ["parameter"]})
-    table = uplinked_intervals(maneuvers, spec, posterior, np.zeros((len(maneuvers), len(spec.channels))))
+    table = uplinked_intervals(posterior, spec, operating_map(maneuvers, spec, np.zeros((len(maneuvers), len(spec.channels)))))
     expected = flown_intervals(values, spec, operating_map(maneuvers, spec))
     pd.testing.assert_frame_equal(table, expected)
-    assert uplinked_intervals(maneuvers, baseline(spec.channels), posterior, None) is None
+    assert uplinked_intervals(posterior, baseline(spec.channels), operating_map(maneuvers, baseline(spec.channels))) is None
     calibration = pd.DataFrame({"channel": [p.owner for p in spec.parameters], "parameter": [p.name for p in spec.parameters],
                                 "unit": spec.units, "mean": 1.0, "sd": 2.0, "ci95_low": -3.0, "ci95_high": 5.0,
                                 "r_hat": 1.0})

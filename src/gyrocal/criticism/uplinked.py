@@ -8,7 +8,6 @@ factors plus the growth its own coefficients give, and their combinations (``sf_
 import numpy as np
 import pandas as pd
 
-from gyrocal.inference.fit.operating import operating_map
 from gyrocal.inference.sampling.inferencedata import CI_PROB
 from gyrocal.model import combinations as comb
 
@@ -23,9 +22,9 @@ SCALE_FACTORS = ("sf", "sf_pos", "sf_neg")
 def flown_intervals(values, spec, shift_map: np.ndarray) -> pd.DataFrame:
     """Each scale-factor term's posterior as uplinked, at the campaign's rates, and its combinations':
     ``values`` (..., len(spec)) are posterior draws in the parameters' units, ``shift_map``
-    `operating_map`'s. Each draw's term plus what its own operating-scale parameters add (row 1 of the
-    map for ``sf_neg``, row 0 otherwise), then ``sf_mean`` and ``sf_asym`` of those draws; mean, sd and
-    the central `CI_PROB` interval as ``calibration.csv`` computes them."""
+    `gyrocal.inference.fit.operating.operating_map`'s. Each draw's term plus what its own operating-scale
+    parameters add (row 1 of the map for ``sf_neg``, row 0 otherwise), then ``sf_mean`` and ``sf_asym`` of
+    those draws; mean, sd and the central `CI_PROB` interval as ``calibration.csv`` computes them."""
     values = np.asarray(values, dtype=float).reshape(-1, len(spec))
     shift_si = np.einsum("rce,de->drc", shift_map, spec.to_si(values)[:, spec.extra])
     index = {c.name: i for i, c in enumerate(spec.channels)}
@@ -45,11 +44,10 @@ def flown_intervals(values, spec, shift_map: np.ndarray) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=COLUMNS)
 
 
-def uplinked_intervals(maneuvers, spec, posterior, biases) -> pd.DataFrame | None:
+def uplinked_intervals(posterior, spec, shift_map: np.ndarray) -> pd.DataFrame | None:
     """`flown_intervals` of the posterior draws (an InferenceData's ``channel_param``) at the campaign's
-    rates (``biases``: each maneuver's, as the fit estimated them), where the model's scale factor changes
-    with the rate (`operating_map` not all zero); None where it does not."""
-    shift_map = operating_map(maneuvers, spec, biases)
+    rates (``shift_map``: `operating_map` of its maneuvers and the fit's biases), where the model's scale
+    factor changes with the rate (the map not all zero); None where it does not."""
     if not shift_map.any():
         return None
     return flown_intervals(posterior.posterior["channel_param"].values, spec, shift_map)

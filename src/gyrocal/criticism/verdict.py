@@ -14,7 +14,7 @@ from gyrocal.criticism import modelchoice
 from gyrocal.criticism.uplinked import at_uplink
 from gyrocal.finding import Finding
 from gyrocal.inference.fit.classic import hold_windows
-from gyrocal.inference.fit.operating import operating_params, operating_shift
+from gyrocal.inference.fit.operating import operating_params
 from gyrocal.io.calibration import core_rows, posterior_mean_extras, posterior_mean_params
 from gyrocal.maneuvers import preprocess
 from gyrocal.model import sensorclass
@@ -59,11 +59,11 @@ def correction_effect(maneuvers, params_by_maneuver, nominal_by_maneuver) -> pd.
     return pd.DataFrame(rows)
 
 
-def estimate_effect(maneuvers, spec, calibration: pd.DataFrame, biases) -> pd.DataFrame:
+def estimate_effect(maneuvers, spec, calibration: pd.DataFrame, biases, shift_map: np.ndarray) -> pd.DataFrame:
     """`correction_effect` of the uplink, the posterior mean of ``calibration`` with its scale factors
-    at the campaign's rates (`operating_shift`), against the nominal parameters, each maneuver with its
-    own estimated biases (``biases``, in its order)."""
-    shift = operating_shift(maneuvers, spec, posterior_mean_extras(spec, calibration), biases)
+    at the campaign's rates (``shift_map``: `operating_map` of these maneuvers and biases), against the
+    nominal parameters, each maneuver with its own estimated biases (``biases``, in its order)."""
+    shift = shift_map @ posterior_mean_extras(spec, calibration)
     params = [operating_params(posterior_mean_params(spec, calibration, biases[m]), shift) for m in range(len(maneuvers))]
     nominal = [spec.channel_params(np.zeros(len(spec)), biases[m]) for m in range(len(maneuvers))]
     return correction_effect(maneuvers, params, nominal)

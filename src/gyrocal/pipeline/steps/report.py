@@ -10,6 +10,7 @@ import xarray as xr
 from gyrocal.criticism import extension, modelchoice, priorconflict, verdict
 from gyrocal.criticism.uplinked import uplinked_intervals
 from gyrocal.inference.fit.estimate import PointEstimate
+from gyrocal.inference.fit.operating import operating_map
 from gyrocal.inference.sampling.priors import posterior_spec
 from gyrocal.io.outputs import write_json, write_text
 from gyrocal.model import effects
@@ -52,13 +53,14 @@ def run(models, files, preprocessed, maneuver_ids, input_json, comparison_csv, o
     est = PointEstimate.load(reviewed.point_estimate, effects.known(list(cfg.get("plugins") or [])),
                              linearizations=False)
     info, diagnostics, sampler = read_json(input_json), read_json(reviewed.diagnostics), read_json(reviewed.sampler)
-    effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases)
+    shift_map = operating_map(maneuvers, est.spec, est.biases)  # the growth at the campaign's rates, uplinked
+    effect = verdict.estimate_effect(maneuvers, est.spec, calibrations[model], est.biases, shift_map)
     used = posterior_spec(est.spec, cfg["priors"], cfg.get("prior_from"))
     conflict = priorconflict.conflict_check(priorconflict.conflict_table(used, est.theta, est.cov, calibrations[model]))
     # its posterior group alone (the predictive draws are 100 MB at 10x), in memory: forked processes draw
     with xr.open_dataset(reviewed.posterior, group="posterior", engine="h5netcdf") as group:
         posterior = az.InferenceData(posterior=group.load())
-    flown = uplinked_intervals(maneuvers, est.spec, posterior, est.biases)
+    flown = uplinked_intervals(posterior, est.spec, shift_map)
     findings = verdict.checks(model, calibrations, est.spec, sampler, diagnostics, table, effect, cfg, conflict,
                               info["gyro"].get("sensor_class"), flown)
     shown = {m for name, step in fitted for m in (step["base"], name) if m in kept}  # each step's model before and after
