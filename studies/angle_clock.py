@@ -4,15 +4,16 @@ run (``results/<campaign>``) and one model's point estimate, and fits only noise
 ``st_correlated_noise``, and for that model with its clock run on the angle turned as well as on time.
 
 The Gauss-Markov part's factor between two reference samples is ``exp(-dt / tau)``. Here ``dt`` becomes
-``dt + kappa * dtheta``, ``dtheta`` the angle the body turns between the two samples (from the run's
-propagated attitudes) and ``kappa`` (s/rad) tried on a grid: at ``kappa`` 0 it is the library's model; at
+``dt + kappa * dtheta``, ``dtheta`` the path the in-loop gyros turn between the two samples, as a
+campaign that states ``star_tracker: gm_clock_s_per_rad`` has it (`errormodel.gm_clock_steps`), and
+``kappa`` (s/rad) tried on a grid: at ``kappa`` 0 it is the time clock; at
 large ``kappa`` the error holds while the body rests and changes as it turns, with a correlation angle
 ``tau / kappa`` (rad). An error of the reference that depends on the pose (an optical tracker's fit of
 its markers, seen from other cameras as the body turns) would decorrelate so, and so would one of the
 gyro that follows the angle turned. The markov filter takes any steps; the gyro's walk keeps its own,
 and the REML's search for tau (half the median step to ten times the longest maneuver) moves with the
 clock, which the printout flags where tau ends on a bound. The best ``kappa`` of the grid is one more
-fitted number.
+fitted number, which the printout's last line says how to state.
 
 Prints, per ``kappa``, the negative REML log-likelihood (lower is better; differences are log-likelihood
 ratios of models with the same number of scales), the scales (sigma_cross and sigma_about in arcsec, ARW
@@ -35,26 +36,25 @@ TAU0_S = 1.0
 """Where the REML's search for tau starts (it scans the whole range too)."""
 
 
-def turned_rad(data) -> np.ndarray:
-    """(M,) the angle the body turns from each reference sample to the previous one (the first: 0): the
-    path of the gyro's increments between them, which a net rotation would understate beyond pi."""
-    path = np.concatenate([[0.0], np.cumsum(np.linalg.norm(data.increments, axis=1))])
-    return np.diff(np.interp(data.st_time, data.gyro_time, path), prepend=0.0)
+def angle_steps(maneuvers, est) -> list:
+    """(M,) per maneuver the path the body turns between reference samples (rad): the linearisation's clock
+    at 1 s/rad, less its time (`errormodel.gm_clock_steps`)."""
+    once = [dataclasses.replace(d, gm_clock_s_per_rad=1.0) for d in maneuvers]
+    return [lin.gm_dt - lin.st_dt for lin in (est.linearize(once, m) for m in range(len(once)))]
 
 
-def on_angle_clock(lins, maneuvers, kappa_s_per_rad: float) -> list:
-    """The linearisations with each step ``dt + kappa * dtheta``: the Gauss-Markov part's clock. The gyro's
-    walk keeps its own steps (``walk_var``, set from ``st_dt`` where a saved file lacks it)."""
-    return [dataclasses.replace(lin, st_dt=lin.st_dt + kappa_s_per_rad * turned_rad(data),
-                                walk_var=lin.st_dt if lin.walk_var is None else lin.walk_var)
-            for lin, data in zip(lins, maneuvers)]
+def on_angle_clock(lins, turned, kappa_s_per_rad: float) -> list:
+    """The linearisations with the Gauss-Markov part's clock steps ``dt + kappa dtheta``, as a campaign that
+    states ``star_tracker: gm_clock_s_per_rad`` has them; the gyro's walk keeps its steps."""
+    return [dataclasses.replace(lin, gm_dt=lin.st_dt + kappa_s_per_rad * step if kappa_s_per_rad > 0 else None)
+            for lin, step in zip(lins, turned)]
 
 
 def tau_bounds_s(lins) -> tuple:
     """The tau the REML searches (`noisefit.estimate_correlated_noise`): half the median step to ten times
     the longest maneuver, in the clock's seconds."""
     step = noisefit.st_step(lins)
-    return 0.5 * step, 10.0 * max(float(np.sum(lin.st_dt)) for lin in lins)
+    return 0.5 * step, 10.0 * max(float(np.sum(lin.gm_steps)) for lin in lins)
 
 
 def correlated_fit(lins, boresight, log_sigma0) -> tuple:
@@ -75,20 +75,25 @@ def main():
     args = parser.parse_args()
     maneuvers, est = load_model_run(args.run, args.model, args.plugins)
     lins = [est.linearize(maneuvers, m) for m in range(len(maneuvers))]
+    turned = angle_steps(maneuvers, est)
     log_sigma0 = covariance.log_sigma_of(est.stated_noise)
     white = [covariance.build(lin, est.boresight) for lin in lins]
     white_sigma = noisefit.estimate_noise(white, log_sigma0)[0]
     white_value = noisefit.profile_reml(white, covariance.ratios_of(white_sigma))[0]
     print(f"{args.run} ({args.model}, {sum(len(lin.st_dt) for lin in lins)} reference samples)")
     print(f"  white:            {white_value:10.1f}   scales {np.round(covariance.scales_in_units(white_sigma), 3)}")
+    best = (np.inf, 0.0)
     for kappa in args.kappa:
-        clocked = on_angle_clock(lins, maneuvers, kappa)
+        clocked = on_angle_clock(lins, turned, kappa)
         log_sigma, value = correlated_fit(clocked, est.boresight, log_sigma0)
+        best = min(best, (value, kappa))
         scales = covariance.scales_in_units(log_sigma)
         angle = f"{scales[-1] / kappa:.3g} rad" if kappa > 0 else "-"
         low, high = tau_bounds_s(clocked)
         edge = "   (tau at the search's bound)" if not 1.5 * low < scales[-1] < high / 1.5 else ""
         print(f"  kappa {kappa:7.1f} s/rad: {value:10.1f}   scales {np.round(scales, 3)}   correlation angle {angle}{edge}")
+    print(f"best of the grid: kappa {best[1]:g} s/rad; to fit it, campaign.yaml's star_tracker states it "
+          f"(gm_clock_s_per_rad: {best[1]:g}) and a model adds st_correlated_noise")
 
 
 if __name__ == "__main__":

@@ -291,3 +291,13 @@ def test_every_config_in_the_repo_passes_the_loader(path):
 def test_the_schemas_ship_as_json_beside_the_package():
     for name in yamlfile.SCHEMAS.values():
         assert json.loads((Path(yamlfile.__file__).parent / "schemas" / name).read_text())["$schema"].endswith("2020-12/schema")
+
+
+def test_the_reference_clock_and_jitter_keys_are_read_and_a_negative_clock_refused(tmp_path, meta_text):
+    """``star_tracker: gm_clock_s_per_rad`` and ``st_jitter_ms``, as docs/interface.md section 3 shows them,
+    are read; a clock below 0 is refused naming the key."""
+    text = meta_text.replace("star_tracker:\n", "star_tracker:\n  gm_clock_s_per_rad: 3000\n  st_jitter_ms: 2\n", 1)
+    meta = read_meta(campaign_dir(tmp_path, text))
+    assert meta["star_tracker"]["gm_clock_s_per_rad"] == 3000 and meta["star_tracker"]["st_jitter_ms"] == 2
+    bad = meta_text.replace("star_tracker:\n", "star_tracker:\n  gm_clock_s_per_rad: -1\n", 1)
+    assert "star_tracker.gm_clock_s_per_rad" in refusal(campaign_dir(tmp_path, bad, name="bad"))

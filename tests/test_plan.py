@@ -1,6 +1,7 @@
 """`gyrocal plan`: what a planned campaign predicts, against the pipeline's own estimates and tests."""
 
 import copy
+import dataclasses
 
 import numpy as np
 import pandas as pd
@@ -229,10 +230,25 @@ def test_cli_plan_writes_under_results_plan_by_default_not_the_current_folder(tm
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results"]
 
 
-def test_a_plan_refuses_a_gauss_markov_clock_on_the_angle_turned_naming_the_key(cfg):
-    """The simulator can run the Gauss-Markov part's clock on the angle turned; the planner, as the
-    library's noise model, cannot, and says so rather than plan the time clock's numbers."""
+def test_a_plan_with_the_gauss_markov_clock_on_the_angle_turned_is_the_wls_sd_on_that_clock(cfg):
+    """The scenario's clock (100 s a radian) goes to the plan's maneuvers as a campaign.yaml that states it
+    gives them: the bound is the correlated model's WLS sd on that clock within 2 %, and not the time
+    clock's; the printout names the clock."""
     scenario = gauss_markov_tiny()
     scenario["star_tracker"]["gm_clock_s_per_rad"] = 100.0
-    with pytest.raises(ValueError, match=r"star_tracker\.gm_clock_s_per_rad is 100\.0"):
-        plan.plan(scenario, cfg)
+    predicted = plan.plan(scenario, cfg)
+    assert "over 30 s on a clock of time and 100 s a radian turned;" in plan.report([predicted])
+    stated = plan.stated_noise(scenario, cfg["noise"])
+    campaign, truth = simulate.simulate(scenario)
+    maneuvers = [dataclasses.replace(preprocess.slice_maneuver(campaign, m.id), gm_clock_s_per_rad=100.0)
+                 for m in campaign.maneuvers]
+    names = ["scale_factor", "misalignment", "bias", "st_correlated_noise"]
+    spec = ModelSpec.build("correlated", effects.resolve("correlated", names, {}), campaign.channels)
+    theta0 = spec.core_vector(truth_vector(campaign.channels, truth))
+    total = {**stated, "sigma_cross_arcsec": np.sqrt(50.0), "sigma_about_arcsec": np.sqrt(800.0),
+             "st_gm_fraction": 0.5, "st_gm_tau_s": 30.0}
+    est = wls(maneuvers, spec, total, covariance.log_sigma_of(total, correlated=True), theta0, correlation_time_s=30.0)
+    np.testing.assert_allclose(predicted.crlb_sd, np.sqrt(np.diag(est.cov)), rtol=0.02)
+    on_time = plan.plan(gauss_markov_tiny(), cfg).crlb_sd
+    assert np.max(np.abs(predicted.crlb_sd / on_time - 1)) > 0.05
+

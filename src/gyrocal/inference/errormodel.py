@@ -42,9 +42,11 @@ __all__ = [
     "cumulative_at_st",
     "effect_derivatives",
     "effect_regressors",
+    "gm_clock_steps",
     "linearize",
     "residuals",
     "smoothed_columns",
+    "turned_at_st",
     "view",
     "walk_steps"
 ]
@@ -85,6 +87,14 @@ class Linearization:
     st_body_rate: np.ndarray | None = None
     """(M, 3) the body rate at the star-tracker times (rad/s, body axes, first set): what a timing
     jitter of the reference turns into attitude error (`covariance.build`); None: not kept."""
+    gm_dt: np.ndarray | None = None
+    """(M,) each step of the clock of the reference error's Gauss-Markov part (s): ``st_dt`` plus
+    ``gm_clock_s_per_rad`` times the angle the body turns over the step (`gm_clock_steps`); None: ``st_dt``."""
+
+    @property
+    def gm_steps(self) -> np.ndarray:
+        """The Gauss-Markov part's clock steps (s): `gm_dt`, or ``st_dt`` where it runs on time alone."""
+        return self.st_dt if self.gm_dt is None else self.gm_dt
 
     def random_walk(self) -> np.ndarray:
         """`shared_walk`, built from the steps' walk variances where it was not given."""
@@ -246,11 +256,28 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
         if s == 0:
             st_matrix = at_st.as_matrix()
             st_rate = phi[k] / data.dt[k, None]
+            phi_first = phi
     design[..., ~spec.free] = 0.0
     st_dt = np.diff(np.concatenate([[data.gyro_time[0]], data.st_time]))
     walk_var, shared = walk_steps(data.gyro_time, data.st_time)
+    gm_dt = (None if data.gm_clock_s_per_rad <= 0 else
+             gm_clock_steps(st_dt, turned_at_st(phi_first, k, frac), data.gm_clock_s_per_rad))
     return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, None, body, walk_var,
-                         np.concatenate([[0.0], shared]), st_rate)
+                         np.concatenate([[0.0], shared]), st_rate, gm_dt)
+
+
+def turned_at_st(phi: np.ndarray, k: np.ndarray, frac: np.ndarray) -> np.ndarray:
+    """(M,) the angle the body turns from t0 to each star-tracker sample (rad): the path of the body
+    increments ``phi`` (K, 3), not the net rotation, which a turn beyond pi would understate."""
+    return cumulative_at_st(np.linalg.norm(phi, axis=1), k, frac)
+
+
+def gm_clock_steps(st_dt_s: np.ndarray, turned_rad: np.ndarray, clock_s_per_rad: float) -> np.ndarray:
+    """(M,) the Gauss-Markov part's clock steps ``dt + kappa dtheta`` (s) between star-tracker samples, from
+    the time steps and the angle turned since t0 (`turned_at_st`), ``kappa`` in s/rad. An error that follows
+    the pose (an optical tracker fitting its markers, seen by other cameras as the body turns) forgets with
+    the angle turned as well as with time (docs/real-data.md)."""
+    return st_dt_s + clock_s_per_rad * np.diff(turned_rad, prepend=0.0)
 
 
 def _set_error(data: ManeuverData, channel_set, sub: ch.ChannelParams, regressors, extra_values, star_reg, st_rot):

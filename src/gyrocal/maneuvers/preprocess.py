@@ -41,6 +41,9 @@ class ManeuverData(Labelled):
     counts: dict = field(default_factory=dict)
     noise_group: str = DEFAULT_NOISE_GROUP
     """The maneuvers sharing one noise level (campaign.yaml's ``noise_group``)."""
+    gm_clock_s_per_rad: float = 0.0
+    """The seconds the reference error's Gauss-Markov clock runs per radian turned (campaign.yaml's
+    ``star_tracker: gm_clock_s_per_rad``; 0: time only): `errormodel.linearize` steps it."""
 
     def turned(self) -> dict:
         """``{(axis, sign): angle}``: how far the body turned about each axis each way (rad, the in-loop
@@ -76,7 +79,7 @@ class ManeuverData(Labelled):
             extra_names=list(self.extras),
             extra_values=np.array(list(self.extras.values())).reshape(len(self.extras), len(self.increments)),
             count_names=list(self.counts), count_values=np.array(list(self.counts.values()), dtype=int),
-            noise_group=self.noise_group)
+            noise_group=self.noise_group, gm_clock_s_per_rad=self.gm_clock_s_per_rad)
 
     @classmethod
     def load(cls, path):
@@ -88,7 +91,8 @@ class ManeuverData(Labelled):
                    z["st_quat"], z["attitude0_quat"],
                    {str(n): v for n, v in zip(z["extra_names"], z["extra_values"])},
                    {str(n): int(v) for n, v in zip(z["count_names"], z["count_values"])},
-                   str(z["noise_group"]) if "noise_group" in z.files else DEFAULT_NOISE_GROUP)
+                   str(z["noise_group"]) if "noise_group" in z.files else DEFAULT_NOISE_GROUP,
+                   float(z["gm_clock_s_per_rad"]) if "gm_clock_s_per_rad" in z.files else 0.0)
 
 
 def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=(), reference_interval_s: float = 0.0
@@ -131,7 +135,7 @@ def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=(), ref
               "gyro_read": int(i1 - i0 + 1), "gyro_used": int(i1 - i0)}
     return ManeuverData(m.id, m.axis, m.direction, campaign.channels, m.in_loop, g[i0:i1 + 1].copy(),
                         campaign.increments(slice(i0 + 1, i1 + 1)), st_time, quat, attitude0.as_quat(),
-                        extras, counts, m.noise_group)
+                        extras, counts, m.noise_group, float(campaign.star_tracker.get("gm_clock_s_per_rad", 0.0)))
 
 
 def noise_groups(maneuvers) -> tuple:

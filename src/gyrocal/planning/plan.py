@@ -15,6 +15,7 @@ model lacks, the smallest magnitude the diagnostics' structure test (`diagnostic
 """
 
 import copy
+import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -82,23 +83,24 @@ def quiet(scenario: dict) -> dict:
 
 
 def planned_maneuvers(scenario: dict) -> list:
-    """The plan's maneuvers as the preprocessing would cut them from its noise-free campaign."""
+    """The plan's maneuvers as the preprocessing would cut them from its noise-free campaign, with the
+    Gauss-Markov part's clock the scenario's (``star_tracker.gm_clock_s_per_rad``), as a campaign.yaml
+    that states it gives them."""
     campaign, _ = simulate.simulate(quiet(scenario))
-    return [preprocess.slice_maneuver(campaign, m.id) for m in campaign.maneuvers]
+    clock = float(scenario["star_tracker"].get(covariance.GM_CLOCK_KEY) or 0.0)
+    return [dataclasses.replace(preprocess.slice_maneuver(campaign, m.id), gm_clock_s_per_rad=clock)
+            for m in campaign.maneuvers]
 
 
 def stated_noise(scenario: dict, noise_defaults: dict) -> dict:
     """The noise knowledge a run would be given: the scenario's, as its campaign.yaml states it; where its
     star tracker has a Gauss-Markov part, its sds across and about the boresight and its correlation
-    time too (the scenario's ``gm_sigma_cross_arcsec``, ``gm_sigma_about_arcsec``, ``gm_tau_s``)."""
+    time too (the scenario's ``gm_sigma_cross_arcsec``, ``gm_sigma_about_arcsec``, ``gm_tau_s``; its clock
+    `planned_maneuvers` carries)."""
     st = scenario["star_tracker"]
     stated = covariance.noise_knowledge({"star_tracker": st, "gyro": scenario["gyro"]}, noise_defaults)
     gm = {k: float(st.get(k) or 0.0) for k in STAR_TRACKER_GM}
     if gm["gm_tau_s"] > 0 and gm["gm_sigma_cross_arcsec"] ** 2 + gm["gm_sigma_about_arcsec"] ** 2 > 0:
-        if float(st.get("gm_clock_s_per_rad") or 0.0) > 0:
-            raise ValueError(f"scenario {scenario.get('name', '')}: star_tracker.gm_clock_s_per_rad is "
-                             f"{st['gm_clock_s_per_rad']}: the planner's Gauss-Markov noise, as the library's, runs "
-                             "on time; plan with gm_clock_s_per_rad: 0 (an error on the angle clock is not modelled)")
         stated.update(gm)
     return stated
 
@@ -198,8 +200,10 @@ class Plan:
         n = self.noise or {}
         if not n:
             return ""
+        clock = (f" on a clock of time and {n[covariance.GM_CLOCK_KEY]:g} s a radian turned"
+                 if n.get(covariance.GM_CLOCK_KEY) else "")
         gm = (f"; Gauss-Markov {n['gm_sigma_cross_arcsec']:.3g} / {n['gm_sigma_about_arcsec']:.3g} arcsec over "
-              f"{n['gm_tau_s']:g} s" if n.get("gm_tau_s") else "")
+              f"{n['gm_tau_s']:g} s{clock}" if n.get("gm_tau_s") else "")
         return (f"-- noise: reference {n['sigma_cross_arcsec']:.3g} / {n['sigma_about_arcsec']:.3g} arcsec white "
                 f"across / about the boresight{gm}; ARW {n['arw_deg_sqrt_h']:.3g} deg/sqrt(h)")
 

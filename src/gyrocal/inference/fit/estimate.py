@@ -76,11 +76,13 @@ class PointEstimate:
 
     def linearization_key(self, data, m: int) -> str:
         """A digest of what maneuver ``m``'s linearisation is computed from: the maneuver (id, times,
-        gyro increments, star-tracker attitudes), the specification, ``theta`` and its biases."""
+        gyro increments, star-tracker attitudes, the Gauss-Markov clock where it has one), the specification,
+        ``theta`` and its biases."""
         digest = hashlib.sha256(self.spec.to_json().encode())
+        clock = (np.float64(data.gm_clock_s_per_rad),) if data.gm_clock_s_per_rad > 0 else ()
         for part in (data.id.encode(), data.gyro_time, data.increments, data.st_time, data.st_quat,
-                     data.attitude0_quat, self.theta, self.biases[m]):
-            digest.update(np.ascontiguousarray(part).tobytes() if isinstance(part, np.ndarray) else part)
+                     data.attitude0_quat, self.theta, self.biases[m], *clock):
+            digest.update(np.ascontiguousarray(part).tobytes() if isinstance(part, (np.ndarray, np.floating)) else part)
         return digest.hexdigest()
 
     def linearize(self, maneuvers, m: int):
@@ -316,8 +318,8 @@ def point_estimate(maneuvers, spec: ModelSpec, stated_noise: dict, theta0, estim
     index = index if len(names) > 1 else None
     if spec.correlated_noise:
         noises = None
-        tau0 = noisefit.correlation_time(lins) or noisefit.TAU_START_INTERVALS * noisefit.st_step(lins)
-        log_sigma, offsets = noisefit.estimate_correlated_noise(lins, start.boresight, log_sigma, tau0, index,
+        log_sigma, offsets = noisefit.estimate_correlated_noise(lins, start.boresight, log_sigma,
+                                                                  noisefit.tau_start_s(lins), index,
                                                                   segments.Chains.of(maneuvers))
         tau = covariance.correlation_time_of(covariance.ratios_of(log_sigma))
     elif estimate_scales:

@@ -17,7 +17,7 @@ from gyrocal.inference.noise import covariance, segments
 __all__ = [
     "GM_LOGIT_BOUND", "GROUP_ITERATIONS", "SCAN_EVALUATIONS", "SCAN_MARGIN", "SIMPLEX_STEPS", "TAU_SCAN",
     "TAU_START_INTERVALS", "campaign_level", "correlation_time", "estimate_correlated_noise", "estimate_noise", "finite_profile",
-    "profile_group_levels", "profile_reml", "st_step",
+    "profile_group_levels", "profile_reml", "st_step", "tau_start_s",
 ]
 
 
@@ -115,9 +115,19 @@ TAU_START_INTERVALS = 10.0
 correlation time at this many star-tracker intervals."""
 
 
+def tau_start_s(lins) -> float:
+    """Where the REML's descent starts tau (s of the part's clock): the residuals' `correlation_time`, or
+    `TAU_START_INTERVALS` clock steps where it finds none or the clock runs on the angle turned
+    (`errormodel.gm_clock_steps`), whose steps vary with the motion as `correlation_time` presumes they do
+    not (on a BROAD trial it gave 1e6 s, from which the descent ended with sigma_about at zero)."""
+    on_angle = any(lin.gm_dt is not None for lin in lins)
+    return (0.0 if on_angle else correlation_time(lins)) or TAU_START_INTERVALS * st_step(lins)
+
+
 def st_step(lins) -> float:
-    """The star tracker's median sampling interval over the maneuvers (s)."""
-    return float(np.median(np.concatenate([lin.st_dt[1:] for lin in lins])))
+    """The median step of the Gauss-Markov part's clock over the maneuvers (s): the star tracker's sampling
+    interval, where the clock is time (`errormodel.Linearization.gm_steps`)."""
+    return float(np.median(np.concatenate([lin.gm_steps[1:] for lin in lins])))
 
 
 def campaign_level(log_cross, noises, groups):
@@ -204,7 +214,7 @@ def estimate_correlated_noise(lins, boresight, log_sigma0, tau0_s, groups=None, 
     jitter = covariance.position(log_sigma0, covariance.JITTER_SCALE) is not None
     white0 = covariance.ratios_of(log_sigma0)
     step = st_step(lins)
-    longest = max(float(np.sum(lin.st_dt)) for lin in lins)
+    longest = max(float(np.sum(lin.gm_steps)) for lin in lins)
     log_tau_bounds = np.log([0.5 * step, 10.0 * longest])
     chained = segments.Chains.apart(len(lins)) if chained is None else chained
     groups = chained.groups(groups)

@@ -33,7 +33,9 @@ from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 __all__ = [
     "COMPONENTS",
     "CORRELATED_SCALES",
+    "GM_CLOCK_KEY",
     "GM_FRACTION_SCALE",
+    "GM_PRIOR_ANGLE_RAD",
     "GM_TAU_SCALE",
     "JITTER_FLOOR_S",
     "JITTER_SCALE",
@@ -46,6 +48,7 @@ __all__ = [
     "correlation_time_of",
     "difference",
     "filtered",
+    "gm_tau_prior_s",
     "jitter_shapes",
     "jitter_stated_ms",
     "log_sigma_of",
@@ -101,7 +104,15 @@ stay its total sd, as data sheets state it); its prior logit-normal about one ha
 
 GM_TAU_SCALE = NoiseScale("st_gm_tau_s", 1.0, prior_center=30.0, prior_log_sd=2.0, relative=False)
 """... and its correlation time (s); its prior log-normal about 30 s, sd 2: 4 s to 220 s within one
-sd, 0.5 s to 1 600 s within two."""
+sd, 0.5 s to 1 600 s within two (with a clock on the angle turned, about `gm_tau_prior_s`)."""
+
+GM_CLOCK_KEY = "gm_clock_s_per_rad"
+"""campaign.yaml's ``star_tracker`` key: the seconds the Gauss-Markov part's clock runs per radian the
+body turns, beside time (`errormodel.gm_clock_steps`); tau is then in that clock's seconds."""
+
+GM_PRIOR_ANGLE_RAD = 1.0
+"""With a clock on the angle turned, tau's prior median adds this angle's clock seconds: the error
+forgets over 30 s at rest or about a radian turned (a marker set seen by other cameras)."""
 
 CORRELATED_SCALES = NOISE_SCALES + (GM_FRACTION_SCALE, GM_TAU_SCALE)
 """The scales with correlated star-tracker noise: the white three, its share and correlation time."""
@@ -157,6 +168,16 @@ def correlation_time_of(ratios) -> float:
     return 0.0 if k is None else float(np.exp(ratios[k]))
 
 
+def gm_tau_prior_s(stated: dict) -> float:
+    """Tau's prior median (s): `GM_TAU_SCALE`'s, plus with a clock on the angle turned (`GM_CLOCK_KEY`)
+    that clock's seconds over `GM_PRIOR_ANGLE_RAD`."""
+    return GM_TAU_SCALE.prior_center + float(stated.get(GM_CLOCK_KEY, 0.0)) * GM_PRIOR_ANGLE_RAD
+
+
+def _prior_center(scale: NoiseScale, stated: dict) -> float:
+    return gm_tau_prior_s(stated) if scale is GM_TAU_SCALE else scale.prior_center
+
+
 def jitter_stated_ms(stated: dict) -> float:
     """The stated timing jitter (ms): the campaign's ``st_jitter_ms``, or `JITTER_SCALE`'s prior median."""
     return float(stated.get(JITTER_SCALE.key, JITTER_SCALE.prior_center))
@@ -169,11 +190,11 @@ def stated_si(stated: dict) -> np.ndarray:
 
 def log_sigma_of(stated: dict, jitter: bool = False, correlated: bool = False) -> np.ndarray:
     """``log_sigma`` (`noise_scales`) of noise given in the contract's units: each scale as stated, or
-    its prior's median where it has one and nothing states it (the jitter's: `jitter_stated_ms`); a
-    fraction as its logit."""
+    its prior's median where it has one and nothing states it (the jitter's: `jitter_stated_ms`; tau's:
+    `gm_tau_prior_s`); a fraction as its logit."""
     scales = noise_scales(correlated, jitter)
-    si = [(stated[s.key] if s.prior_center is None else float(stated.get(s.key, s.prior_center))) * s.si_per_unit
-          for s in scales]
+    si = [(stated[s.key] if s.prior_center is None else float(stated.get(s.key, _prior_center(s, stated))))
+          * s.si_per_unit for s in scales]
     return np.array([logit(v) if s.logit else np.log(v) for s, v in zip(scales, si)])
 
 
@@ -197,9 +218,10 @@ def noise_knowledge(info: dict, defaults: dict) -> dict:
     keys = ("sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "arw_deg_sqrt_h")
     stated = {**info["star_tracker"], **info["gyro"]}
     out = {k: stated.get(k, defaults[k]) for k in keys}
-    jitter = stated.get(JITTER_SCALE.key, defaults.get(JITTER_SCALE.key))
-    if jitter is not None:  # only where stated: the default's knowledge stays the three scales
-        out[JITTER_SCALE.key] = jitter
+    for key in (JITTER_SCALE.key, GM_CLOCK_KEY):  # only where stated: the default's knowledge stays the three scales
+        value = stated.get(key, defaults.get(key))
+        if value is not None:
+            out[key] = value
     return out
 
 
@@ -398,7 +420,7 @@ def build(lin: Linearization, boresight_body, correlation_time_s: float = 0.0, j
     nuis = nuisance_design(lin)
     n = m_samples * block
     if correlation_time_s > 0:
-        return filtered(lin.maneuver, lin.z, lin.design, nuis, lin.st_matrix, lin.random_walk(), lin.st_dt,
+        return filtered(lin.maneuver, lin.z, lin.design, nuis, lin.st_matrix, lin.random_walk(), lin.gm_steps,
                         lin.walk_lag1_or_none(), boresight_body, correlation_time_s,
                         jitter_shapes(lin) if jitter else None)
     shapes = _body_shapes(boresight_body)

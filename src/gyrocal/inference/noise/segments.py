@@ -4,7 +4,9 @@ A star tracker's slow error does not stop between maneuvers: where one follows a
 few correlation times their errors are correlated, and a likelihood that takes them as independent
 makes the intervals of the parameters both inform too narrow (docs/validation.md: 92.3 % at
 tau 30 s with 20 s gaps). Consecutive maneuvers of one noise group (`chains`) are therefore one
-series here, the Gauss-Markov filter (`markov`) running on across each gap with the gap's ``phi``.
+series here, the Gauss-Markov filter (`markov`) running on across each gap with the gap's ``phi``
+(on a clock of the angle turned too, `errormodel.gm_clock_steps`, the gap counts its time alone: the turn
+between two maneuvers is not recorded).
 
 The gyros' walk restarts at each maneuver (the propagation starts afresh from the star tracker).
 In the chained series it is taken as running on, and each channel set's difference (its walk at
@@ -92,15 +94,15 @@ def build(lins, gaps, boresight_body, correlation_time_s: float, jitter: bool = 
     nuisance = np.zeros((rows[-1], n_sets, 3, widths[-1]))
     for k, part in enumerate(parts):
         nuisance[rows[k]:rows[k + 1], ..., widths[k]:widths[k + 1]] = part
-    st_dt = np.concatenate([lin.st_dt for lin in lins])
-    st_dt[rows[1:-1]] = gaps
+    clock_s = np.concatenate([lin.gm_steps for lin in lins])  # the part's clock; across a gap, its time alone
+    clock_s[rows[1:-1]] = gaps
     lag1 = [lin.walk_lag1_or_none() for lin in lins]
     lag1 = None if all(x is None for x in lag1) else np.concatenate(
         [np.zeros(len(lin.z)) if x is None else x for lin, x in zip(lins, lag1)])
     return covariance.filtered(
         "+".join(lin.maneuver for lin in lins), np.concatenate([lin.z for lin in lins]),
         np.concatenate([lin.design for lin in lins]), nuisance, np.concatenate([lin.st_matrix for lin in lins]),
-        np.concatenate([lin.random_walk() for lin in lins]), st_dt, lag1, boresight_body, correlation_time_s,
+        np.concatenate([lin.random_walk() for lin in lins]), clock_s, lag1, boresight_body, correlation_time_s,
         np.concatenate([covariance.jitter_shapes(lin) for lin in lins]) if jitter else None)
 
 

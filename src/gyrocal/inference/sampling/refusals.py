@@ -287,8 +287,8 @@ def sampling_failed(failed, maneuvers, est: PointEstimate) -> EstimateError:
     Gauss-Markov correlation time against the maneuvers' length where the model has one: far beyond
     them, its filtered covariance is not positive definite in floating point (`markov`)."""
     advice = "Leave this model out, or fly what makes its noise identifiable"
-    if est.spec.correlated_noise:
-        longest = max(float(d.st_time[-1] - d.st_time[0]) for d in maneuvers)
+    if est.spec.correlated_noise:  # the maneuvers' length on the part's clock (time, or time and the angle turned)
+        longest = max(float(np.sum(est.linearize(maneuvers, m).gm_steps[1:])) for m in range(len(maneuvers)))
         advice = (f"Its star-tracker Gauss-Markov correlation time is {est.correlation_time_s:.4g} s, "
                   f"{est.correlation_time_s / longest:.3g} times the longest maneuver ({longest:.4g} s): a part that "
                   "slow is an offset and a walk to these data, which the model's bias and the gyro's walk already "
