@@ -4,7 +4,7 @@ run (``results/<campaign>``) and one model's point estimate, and fits only noise
 ``st_correlated_noise``, and for that model with its clock run on the angle turned as well as on time.
 
 The Gauss-Markov part's factor between two reference samples is ``exp(-dt / tau)``. Here ``dt`` becomes
-``dt + kappa * dtheta``, ``dtheta`` the path the in-loop gyros turn between the two samples, as a
+``dt + kappa * dtheta``, ``dtheta`` the net rotation of the in-loop gyros' attitude between the two samples, as a
 campaign that states ``star_tracker: gm_clock_s_per_rad`` has it (`errormodel.gm_clock_steps`), and
 ``kappa`` (s/rad) tried on a grid: at ``kappa`` 0 it is the time clock; at
 large ``kappa`` the error holds while the body rests and changes as it turns, with a correlation angle
@@ -37,7 +37,7 @@ TAU0_S = 1.0
 
 
 def angle_steps(maneuvers, est) -> list:
-    """(M,) per maneuver the path the body turns between reference samples (rad): the linearisation's clock
+    """(M,) per maneuver the angle the body turns between reference samples (rad): the linearisation's clock
     at 1 s/rad, less its time (`errormodel.gm_clock_steps`)."""
     once = [dataclasses.replace(d, gm_clock_s_per_rad=1.0) for d in maneuvers]
     return [lin.gm_dt - lin.st_dt for lin in (est.linearize(once, m) for m in range(len(once)))]

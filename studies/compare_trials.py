@@ -10,7 +10,11 @@ mountings need no turning (the misalignments themselves do: ``gyrocal compare-ca
 ``prior_part`` marks a row with a prior-only part in either run (a y-only trial leaves the
 misalignments toward pitch's neighbours' opposite terms to the prior): its z says little.
 
-    python studies/compare_trials.py results/slow/baseline results/fast/baseline
+``--point`` takes each run's point estimate instead, its WLS mean and covariance as a normal (drawn
+with a fixed seed, the channel sets from its maneuvers): what a model tells where the workflow refused
+to sample it, not a posterior.
+
+    python studies/compare_trials.py results/slow/baseline results/fast/baseline [--point]
 """
 
 import argparse
@@ -23,6 +27,7 @@ import pandas as pd
 
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.model import combinations, orthogonality
+from gyrocal.pipeline.readback import load_model_run
 
 
 def scale_factors(spec, values) -> list:
@@ -45,18 +50,35 @@ def scale_factors(spec, values) -> list:
     return rows
 
 
-def summaries(run: Path) -> pd.DataFrame:
-    """One run's (``<results>/<campaign>/<model>``) sf_pos, sf_neg, sf_mean and non-orthogonality: mean,
-    sd (from the draws) and unit, indexed by channel (or pair) and term."""
+POINT_DRAWS = 20000
+"""Draws of a point estimate's normal (`point_draws`): sd to 0.5 %."""
+
+
+def posterior_draws(run: Path) -> tuple:
+    """The spec, the channel parameters' posterior draws (in its order and units) and the channel sets."""
     draws = az.from_netcdf(run / "posterior.nc").posterior["channel_param"]
     names = [str(n) for n in draws.coords["parameter"].values]
-    flat = draws.values.reshape(-1, len(names))
     spec = PointEstimate.load(run / "point_estimate.npz", linearizations=False).spec
+    values = draws.values.reshape(-1, len(names))[:, [names.index(label) for label in spec.labels]]
+    return spec, values, [tuple(s["channels"]) for s in json.loads((run / "correction.json").read_text())["sets"]]
+
+
+def point_draws(run: Path) -> tuple:
+    """`posterior_draws` of the point estimate: its WLS ``theta`` and ``cov`` as a normal, in the spec's units."""
+    maneuvers, est = load_model_run(run.parent, run.name)
+    scale = est.spec.si_per_unit
+    values = np.random.default_rng(0).multivariate_normal(est.theta / scale, est.cov / np.outer(scale, scale),
+                                                          POINT_DRAWS)
+    return est.spec, values, [tuple(s) for s in maneuvers[0].sets]
+
+
+def summaries(run: Path, point: bool = False) -> pd.DataFrame:
+    """One run's (``<results>/<campaign>/<model>``) sf_pos, sf_neg, sf_mean and non-orthogonality: mean,
+    sd (from the draws) and unit, indexed by channel (or pair) and term; ``point``: of its point estimate."""
+    spec, values, sets = (point_draws if point else posterior_draws)(run)
     prior_only = {p.label for p in spec.parameters if p.prior_only}
-    values = flat[:, [names.index(label) for label in spec.labels]]
     rows = [{"channel": c, "term": t, "unit": "ppm", "mean": float(v.mean()), "sd": float(v.std(ddof=1)),
              "prior_part": part} for c, t, v, part in scale_factors(spec, values)]
-    sets = [tuple(s["channels"]) for s in json.loads((run / "correction.json").read_text())["sets"]]
     pairs = orthogonality.pairs(spec, sets)
     if pairs:
         values = orthogonality.pair_draws(values, spec, pairs)
@@ -80,8 +102,9 @@ def main():
     p = argparse.ArgumentParser()
     p.add_argument("a", type=Path, help="one run's model folder, results/<campaign>/<model>")
     p.add_argument("b", type=Path)
+    p.add_argument("--point", action="store_true", help="compare the point estimates (WLS mean and covariance)")
     a = p.parse_args()
-    table = compare(summaries(a.a), summaries(a.b))
+    table = compare(summaries(a.a, a.point), summaries(a.b, a.point))
     print(table.round(2).to_string())
     informed = table[~table["prior_part"]]
     print(f"largest |z| where no part is prior-only: {informed['z'].abs().max():.2f} over {len(informed)} terms; "

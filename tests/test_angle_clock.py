@@ -7,6 +7,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from gyrocal.inference import errormodel
 from gyrocal.inference.fit import noisefit
@@ -20,21 +21,32 @@ from gyrocal.simulation.simulate import simulate
 from conftest import DATA
 
 
-def test_the_clock_adds_kappa_seconds_for_each_radian_of_the_path_between_samples():
-    """Turning at 0.2 rad/s, gyros every 0.1 s and the reference at 0.55 s, 1.55 s, ...: the path to each
-    sample is 0.2 t, and each 1-s step of the clock is 1 + 0.2 kappa seconds (the first from t0, 0.55 s)."""
-    dt, rate, kappa = 0.1, 0.2, 50.0
-    phi = np.tile([rate * dt, 0.0, 0.0], (100, 1))
+def test_the_clock_adds_kappa_seconds_for_each_radian_turned_between_samples():
+    """Turning at 0.2 rad/s about x, the reference at 0.55 s, 1.55 s, ...: each turn is 0.2 rad a second
+    (the first from t0, 0.11 rad), and each 1-s step of the clock 1 + 0.2 kappa seconds."""
+    rate, kappa = 0.2, 50.0
     st_time = np.arange(0.55, 9.6, 1.0)
-    k = np.floor(st_time / dt + 1e-9).astype(int)
-    frac = st_time / dt - k
-    turned = errormodel.turned_at_st(phi, k, frac)
-    np.testing.assert_allclose(turned, rate * st_time, rtol=1e-12)
+    at_st = Rotation.from_rotvec(np.outer(rate * st_time, [1.0, 0.0, 0.0]))
+    turns = errormodel.net_turns(Rotation.identity(), at_st)
     st_dt = np.diff(st_time, prepend=0.0)
-    steps = errormodel.gm_clock_steps(st_dt, turned, kappa)
-    np.testing.assert_allclose(steps, st_dt * (1.0 + rate * kappa), rtol=1e-12)
-    back_and_forth = phi * np.where(np.arange(100) < 50, 1.0, -1.0)[:, None]   # the path, not the net turn
-    assert errormodel.turned_at_st(back_and_forth, k, frac)[-1] == pytest.approx(rate * st_time[-1])
+    np.testing.assert_allclose(turns, rate * st_dt, rtol=1e-12)
+    np.testing.assert_allclose(errormodel.gm_clock_steps(st_dt, turns, kappa), st_dt * (1.0 + rate * kappa), rtol=1e-12)
+
+
+def test_at_rest_the_clock_counts_the_gyros_noise_over_a_step_not_sample_by_sample():
+    """A MEMS gyro at rest (0.49 deg/sqrt(h), 286 Hz) seen every 0.1 s: the net turn over each step is
+    its noise over 29 samples, about sqrt(29) times less than the path of the samples (which made the
+    clock run 38 s a second at rest at 10 000 s/rad)."""
+    rng = np.random.default_rng(1)
+    dt, per_step, n_steps = 1 / 286.0, 29, 400
+    sigma = np.deg2rad(0.49) / 60.0 * np.sqrt(dt)
+    increments = rng.normal(scale=sigma, size=(per_step * n_steps, 3))
+    attitudes = Rotation.from_rotvec(np.cumsum(increments, axis=0))  # small: the sum is the rotation
+    at_st = attitudes[per_step - 1::per_step]
+    turns = errormodel.net_turns(Rotation.identity(), at_st)
+    path = np.linalg.norm(increments, axis=1).reshape(n_steps, per_step).sum(axis=1)
+    assert np.mean(turns) == pytest.approx(np.sqrt(8 / np.pi) * sigma * np.sqrt(per_step), rel=0.1)
+    assert np.mean(path) / np.mean(turns) > 4.0
 
 
 def _tiny(gm: dict, n_maneuvers: int = 3, seed: int = 3):
@@ -53,8 +65,8 @@ def _linearized(data, spec, theta, biases, kappa):
 
 
 def test_a_maneuver_with_the_clock_carries_its_steps_and_without_it_is_the_same_bits():
-    """Each tiny maneuver turns 90 deg: its clock runs kappa pi/2 s beyond time; at kappa 0 the
-    linearisation has no clock of its own and the same residuals to the bit."""
+    """Each tiny maneuver turns 90 deg: its clock runs kappa pi/2 s beyond time (to 1 %: the gyros'
+    noise); at kappa 0 the linearisation has no clock of its own and the same residuals to the bit."""
     data, spec, theta, biases, _ = _tiny({})
     assert all(d.gm_clock_s_per_rad == 0.0 for d in data)  # a campaign that states no clock
     plain = _linearized(data, spec, theta, biases, 0.0)
@@ -67,10 +79,20 @@ def test_a_maneuver_with_the_clock_carries_its_steps_and_without_it_is_the_same_
         assert np.sum(b.gm_dt - b.st_dt) / 100.0 == pytest.approx(np.pi / 2, rel=0.01)
 
 
-def test_a_maneuver_keeps_its_clock_through_its_file(tmp_path):
-    data = dataclasses.replace(_tiny({}, n_maneuvers=1)[0][0], gm_clock_s_per_rad=250.0)
+def test_a_maneuver_takes_its_clock_from_the_campaign_and_keeps_it_through_its_file(tmp_path):
+    """The preprocessing cuts a maneuver with campaign.yaml's clock; its file keeps it, and a file
+    without one (a campaign that states none: the same bytes as before the key) loads at 0."""
+    scenario = copy.deepcopy(load_scenario(DATA / "tiny.yaml"))
+    campaign, _ = simulate(scenario, 3)
+    campaign.star_tracker["gm_clock_s_per_rad"] = 250.0
+    data = preprocess.slice_maneuver(campaign, campaign.maneuvers[0].id)
+    assert data.gm_clock_s_per_rad == 250.0
     data.save(tmp_path / "m.npz")
     assert preprocess.ManeuverData.load(tmp_path / "m.npz").gm_clock_s_per_rad == 250.0
+    dataclasses.replace(data, gm_clock_s_per_rad=0.0).save(tmp_path / "none.npz")
+    with np.load(tmp_path / "none.npz") as saved:
+        assert "gm_clock_s_per_rad" not in saved.files
+    assert preprocess.ManeuverData.load(tmp_path / "none.npz").gm_clock_s_per_rad == 0.0
 
 
 GM_ANGLE = {"gm_sigma_cross_arcsec": 30.0, "gm_sigma_about_arcsec": 30.0, "gm_tau_s": 3000.0, "gm_clock_s_per_rad": 3000.0}
@@ -139,3 +161,21 @@ def test_the_remls_tau_starts_ten_clock_steps_in_on_the_angle_clock():
     assert noisefit.tau_start_s(on_time) == (noisefit.correlation_time(on_time)
                                              or noisefit.TAU_START_INTERVALS * np.median(np.concatenate(
                                                  [lin.st_dt[1:] for lin in on_time])))
+
+
+def test_maneuvers_chained_run_on_their_clock_and_a_gap_on_its_time():
+    """Two tiny maneuvers chained (`segments.build`): on the clock the covariance differs from the time
+    clock's; with the clock's steps given as time steps instead, and the gap the same, it is the same bits."""
+    from gyrocal.inference.noise import segments
+
+    data, spec, theta, biases, b = _tiny({}, n_maneuvers=2)
+    clocked = _linearized(data, spec, theta, biases, 300.0)
+    gap = np.array([data[1].st_time[0] - data[0].st_time[-1]])
+    on_clock = segments.build(clocked, gap, b, 50.0)
+    on_time = segments.build([dataclasses.replace(lin, gm_dt=None) for lin in clocked], gap, b, 50.0)
+    as_time = segments.build([dataclasses.replace(lin, st_dt=lin.gm_dt, gm_dt=None) for lin in clocked], gap, b, 50.0)
+    var = covariance.unit_variances(covariance.ratios_of(covariance.log_sigma_of(
+        {"sigma_cross_arcsec": 5.0, "sigma_about_arcsec": 20.0, "arw_deg_sqrt_h": 0.003}, correlated=True)))
+    assert not np.allclose(on_clock.covariance(var), on_time.covariance(var))
+    np.testing.assert_array_equal(on_clock.covariance(var), as_time.covariance(var))
+    np.testing.assert_array_equal(on_clock.rhs, as_time.rhs)

@@ -267,16 +267,21 @@ def _positive_number(value) -> bool:
     return _is_number(value) and value > 0
 
 
+GM_CLOCK_KEY = "gm_clock_s_per_rad"
+"""``star_tracker``'s key: the seconds the clock of the reference error's Gauss-Markov part runs per radian
+the body turns, beside time (`gyrocal.inference.errormodel.gm_clock_steps`); absent, 0."""
+
+
 def _parse_star_tracker(path, raw, line_of=lambda keys: "?") -> dict:
     allowed = {"sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "mounting", "rate_hz", "st_jitter_ms",
-               "gm_clock_s_per_rad"}
+               GM_CLOCK_KEY}
     if set(raw) - allowed:
         fail(path, f"star_tracker: unknown key(s) {sorted(set(raw) - allowed)}")
     for key in ("sigma_cross_arcsec", "sigma_about_arcsec", "rate_hz", "st_jitter_ms"):
         if key in raw and not _positive_number(raw[key]):
             fail(path, f"star_tracker.{key}: must be a positive number")
-    if "gm_clock_s_per_rad" in raw and not (_is_number(raw["gm_clock_s_per_rad"]) and raw["gm_clock_s_per_rad"] >= 0):
-        fail(path, "star_tracker.gm_clock_s_per_rad: must be a number >= 0 (seconds per radian turned; 0: time only)")
+    if GM_CLOCK_KEY in raw and not (_is_number(raw[GM_CLOCK_KEY]) and raw[GM_CLOCK_KEY] >= 0):
+        fail(path, f"star_tracker.{GM_CLOCK_KEY}: must be a number >= 0 (seconds per radian turned; 0: time only)")
     out = dict(raw)
     if "boresight_body" in raw:
         b = raw["boresight_body"]

@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation, Slerp
 
-from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP, Labelled
+from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP, GM_CLOCK_KEY, Labelled
 from gyrocal.io.importer import reference_rows
 from gyrocal.io.telemetry import MIN_REFERENCE_SAMPLES, Campaign, TelemetryError
 from gyrocal.model import channels as ch
@@ -79,7 +79,8 @@ class ManeuverData(Labelled):
             extra_names=list(self.extras),
             extra_values=np.array(list(self.extras.values())).reshape(len(self.extras), len(self.increments)),
             count_names=list(self.counts), count_values=np.array(list(self.counts.values()), dtype=int),
-            noise_group=self.noise_group, gm_clock_s_per_rad=self.gm_clock_s_per_rad)
+            noise_group=self.noise_group, **({GM_CLOCK_KEY: self.gm_clock_s_per_rad}
+                                             if self.gm_clock_s_per_rad > 0 else {}))
 
     @classmethod
     def load(cls, path):
@@ -92,7 +93,7 @@ class ManeuverData(Labelled):
                    {str(n): v for n, v in zip(z["extra_names"], z["extra_values"])},
                    {str(n): int(v) for n, v in zip(z["count_names"], z["count_values"])},
                    str(z["noise_group"]) if "noise_group" in z.files else DEFAULT_NOISE_GROUP,
-                   float(z["gm_clock_s_per_rad"]) if "gm_clock_s_per_rad" in z.files else 0.0)
+                   float(z[GM_CLOCK_KEY]) if GM_CLOCK_KEY in z.files else 0.0)
 
 
 def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=(), reference_interval_s: float = 0.0
@@ -135,7 +136,7 @@ def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=(), ref
               "gyro_read": int(i1 - i0 + 1), "gyro_used": int(i1 - i0)}
     return ManeuverData(m.id, m.axis, m.direction, campaign.channels, m.in_loop, g[i0:i1 + 1].copy(),
                         campaign.increments(slice(i0 + 1, i1 + 1)), st_time, quat, attitude0.as_quat(),
-                        extras, counts, m.noise_group, float(campaign.star_tracker.get("gm_clock_s_per_rad", 0.0)))
+                        extras, counts, m.noise_group, float(campaign.star_tracker.get(GM_CLOCK_KEY, 0.0)))
 
 
 def noise_groups(maneuvers) -> tuple:

@@ -30,6 +30,7 @@ from gyrocal.inference.fit import identification
 from gyrocal.inference.fit.identification import CORRELATION_MAX, confounded_pairs
 from gyrocal.inference.fit.likelihood import Stats, campaign_stats
 from gyrocal.inference.noise import covariance
+from gyrocal.io.campaign_yaml import GM_CLOCK_KEY
 from gyrocal.io.scenario import STAR_TRACKER_GM
 from gyrocal.io.yamlfile import load_yaml
 from gyrocal.maneuvers import preprocess
@@ -87,7 +88,7 @@ def planned_maneuvers(scenario: dict) -> list:
     Gauss-Markov part's clock the scenario's (``star_tracker.gm_clock_s_per_rad``), as a campaign.yaml
     that states it gives them."""
     campaign, _ = simulate.simulate(quiet(scenario))
-    clock = float(scenario["star_tracker"].get(covariance.GM_CLOCK_KEY) or 0.0)
+    clock = float(scenario["star_tracker"].get(GM_CLOCK_KEY) or 0.0)
     return [dataclasses.replace(preprocess.slice_maneuver(campaign, m.id), gm_clock_s_per_rad=clock)
             for m in campaign.maneuvers]
 
@@ -200,8 +201,8 @@ class Plan:
         n = self.noise or {}
         if not n:
             return ""
-        clock = (f" on a clock of time and {n[covariance.GM_CLOCK_KEY]:g} s a radian turned"
-                 if n.get(covariance.GM_CLOCK_KEY) else "")
+        clock = (f" on a clock of time and {n[GM_CLOCK_KEY]:g} s a radian turned"
+                 if n.get(GM_CLOCK_KEY) else "")
         gm = (f"; Gauss-Markov {n['gm_sigma_cross_arcsec']:.3g} / {n['gm_sigma_about_arcsec']:.3g} arcsec over "
               f"{n['gm_tau_s']:g} s{clock}" if n.get("gm_tau_s") else "")
         return (f"-- noise: reference {n['sigma_cross_arcsec']:.3g} / {n['sigma_about_arcsec']:.3g} arcsec white "

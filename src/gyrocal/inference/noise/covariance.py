@@ -28,12 +28,12 @@ from scipy.special import expit, logit
 
 from gyrocal.inference.errormodel import Linearization
 from gyrocal.inference.noise import markov
+from gyrocal.io.campaign_yaml import GM_CLOCK_KEY
 from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
 __all__ = [
     "COMPONENTS",
     "CORRELATED_SCALES",
-    "GM_CLOCK_KEY",
     "GM_FRACTION_SCALE",
     "GM_PRIOR_ANGLE_RAD",
     "GM_TAU_SCALE",
@@ -106,10 +106,6 @@ GM_TAU_SCALE = NoiseScale("st_gm_tau_s", 1.0, prior_center=30.0, prior_log_sd=2.
 """... and its correlation time (s); its prior log-normal about 30 s, sd 2: 4 s to 220 s within one
 sd, 0.5 s to 1 600 s within two (with a clock on the angle turned, about `gm_tau_prior_s`)."""
 
-GM_CLOCK_KEY = "gm_clock_s_per_rad"
-"""campaign.yaml's ``star_tracker`` key: the seconds the Gauss-Markov part's clock runs per radian the
-body turns, beside time (`errormodel.gm_clock_steps`); tau is then in that clock's seconds."""
-
 GM_PRIOR_ANGLE_RAD = 1.0
 """With a clock on the angle turned, tau's prior median adds this angle's clock seconds: the error
 forgets over 30 s at rest or about a radian turned (a marker set seen by other cameras)."""
@@ -169,8 +165,8 @@ def correlation_time_of(ratios) -> float:
 
 
 def gm_tau_prior_s(stated: dict) -> float:
-    """Tau's prior median (s): `GM_TAU_SCALE`'s, plus with a clock on the angle turned (`GM_CLOCK_KEY`)
-    that clock's seconds over `GM_PRIOR_ANGLE_RAD`."""
+    """Tau's prior median (s of the part's clock): `GM_TAU_SCALE`'s, plus with a clock on the angle turned
+    (campaign.yaml's ``star_tracker``: `GM_CLOCK_KEY`) that clock's seconds over `GM_PRIOR_ANGLE_RAD`."""
     return GM_TAU_SCALE.prior_center + float(stated.get(GM_CLOCK_KEY, 0.0)) * GM_PRIOR_ANGLE_RAD
 
 

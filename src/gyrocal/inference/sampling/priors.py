@@ -52,7 +52,8 @@ class Priors:
         the three white scales, and the timing jitter where campaign.yaml states it, as
         `covariance.noise_knowledge` passes it on), else on their own median, with their own sd or else
         the config's ``noise_log_sd``: with correlated noise, the star tracker's Gauss-Markov share
-        logit-normal about one half and its correlation time log-normal about 30 s, as
+        logit-normal about one half and its correlation time log-normal about 30 s (plus a radian's
+        seconds where campaign.yaml runs its clock on the angle turned: `covariance.gm_tau_prior_s`), as
         `covariance.GM_FRACTION_SCALE` and `covariance.GM_TAU_SCALE` declare them (no campaign states
         either); the timing jitter log-normal (`covariance.JITTER_SCALE`)."""
         scales = noise_scales(spec.correlated_noise, spec.jitter_noise)

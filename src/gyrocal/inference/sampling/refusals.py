@@ -266,8 +266,8 @@ def share_at_bound(log_sigma, measured=()) -> str:
     if words := smoothness.describe(measured):
         return f"{head}, and {words}"
     return (f"{head}, and one Gauss-Markov part may be standing in for errors on two time scales; import the "
-            "reference every few correlation times (gyrocal import --reference-interval), where its fast error "
-            "is white")
+            "reference every few correlation times (gyrocal import --reference-interval; on a clock of the angle "
+            "turned, tau is in that clock's seconds), where its fast error is white")
 
 
 def sampling_stopped(stopped, est: PointEstimate, notes: str, labels) -> EstimateError:

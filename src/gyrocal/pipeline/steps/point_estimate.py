@@ -42,7 +42,10 @@ def run(maneuver_files, input_json, out_npz, model: str, settings: PointEstimate
     est = point_estimate(maneuvers, model_spec, stated, classic.classic_start(maneuvers, model_spec),
                          settings.noise["estimate_scales"], check=_informed)
     if model_spec.correlated_noise:
-        log.info("star-tracker noise correlation time: %.2f s", est.correlation_time_s)
+        clock = maneuvers[0].gm_clock_s_per_rad
+        log.info("star-tracker noise correlation time: %.2f s%s", est.correlation_time_s,
+                 f" of a clock that runs {clock:g} s a radian turned (a correlation angle of "
+                 f"{est.correlation_time_s / clock:.3g} rad)" if clock > 0 else "")
     log.info("WLS: %s (%d evaluations); noise %s", est.message, est.nfev,
              stated_scales(est.log_sigma))
     write_with(est.save, out_npz)
