@@ -14,6 +14,7 @@ from gyrocal.inference.fit import noisefit
 from gyrocal.inference.noise import covariance
 from gyrocal.io.scenario import load_scenario
 from gyrocal.maneuvers import preprocess
+from gyrocal.model import kinematics
 from gyrocal.model.spec import baseline
 from gyrocal.model.units import deg_h_to_rad_s
 from gyrocal.simulation.simulate import simulate
@@ -27,7 +28,7 @@ def test_the_clock_adds_kappa_seconds_for_each_radian_turned_between_samples():
     rate, kappa = 0.2, 50.0
     st_time = np.arange(0.55, 9.6, 1.0)
     at_st = Rotation.from_rotvec(np.outer(rate * st_time, [1.0, 0.0, 0.0]))
-    turns = errormodel.net_turns(Rotation.identity(), at_st)
+    turns = kinematics.net_turns(Rotation.identity(), at_st)
     st_dt = np.diff(st_time, prepend=0.0)
     np.testing.assert_allclose(turns, rate * st_dt, rtol=1e-12)
     np.testing.assert_allclose(errormodel.gm_clock_steps(st_dt, turns, kappa), st_dt * (1.0 + rate * kappa), rtol=1e-12)
@@ -43,7 +44,7 @@ def test_at_rest_the_clock_counts_the_gyros_noise_over_a_step_not_sample_by_samp
     increments = rng.normal(scale=sigma, size=(per_step * n_steps, 3))
     attitudes = Rotation.from_rotvec(np.cumsum(increments, axis=0))  # small: the sum is the rotation
     at_st = attitudes[per_step - 1::per_step]
-    turns = errormodel.net_turns(Rotation.identity(), at_st)
+    turns = kinematics.net_turns(Rotation.identity(), at_st)
     path = np.linalg.norm(increments, axis=1).reshape(n_steps, per_step).sum(axis=1)
     assert np.mean(turns) == pytest.approx(np.sqrt(8 / np.pi) * sigma * np.sqrt(per_step), rel=0.1)
     assert np.mean(path) / np.mean(turns) > 4.0

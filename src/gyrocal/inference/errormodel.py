@@ -44,7 +44,6 @@ __all__ = [
     "effect_regressors",
     "gm_clock_steps",
     "linearize",
-    "net_turns",
     "residuals",
     "smoothed_columns",
     "view",
@@ -261,23 +260,14 @@ def linearize(data: ManeuverData, spec: ModelSpec, theta, bias_rad_s) -> Lineari
     st_dt = np.diff(np.concatenate([[data.gyro_time[0]], data.st_time]))
     walk_var, shared = walk_steps(data.gyro_time, data.st_time)
     gm_dt = (None if data.gm_clock_s_per_rad <= 0 else
-             gm_clock_steps(st_dt, net_turns(start_first, at_st_first), data.gm_clock_s_per_rad))
+             gm_clock_steps(st_dt, kinematics.net_turns(start_first, at_st_first), data.gm_clock_s_per_rad))
     return Linearization(data.id, sets, z, design, bias_design, st_matrix, st_dt, None, body, walk_var,
                          np.concatenate([[0.0], shared]), st_rate, gm_dt)
 
 
-def net_turns(start: Rotation, at_st: Rotation) -> np.ndarray:
-    """(M,) the angle the body turns from each star-tracker sample to the next (rad; the first from the
-    propagation's ``start``): the net rotation of the propagated attitude, as the simulator's clock takes
-    it. Not the path of the gyro increments, which at rest sums their noise sample by sample (a MEMS gyro
-    at 0.49 deg/sqrt(h) and 286 Hz: 4e-3 rad/s); over a step of N samples its noise is sqrt(N) times less."""
-    previous = Rotation.concatenate([start, at_st[:-1]]) if len(at_st) > 1 else start
-    return np.atleast_1d((previous.inv() * at_st).magnitude())
-
-
 def gm_clock_steps(st_dt_s: np.ndarray, turns_rad: np.ndarray, clock_s_per_rad: float) -> np.ndarray:
     """(M,) the Gauss-Markov part's clock steps ``dt + kappa dtheta`` (s) between star-tracker samples, from
-    the time steps and the turns over them (`net_turns`), ``kappa`` in s/rad. An error that follows
+    the time steps and the turns over them (`kinematics.net_turns`), ``kappa`` in s/rad. An error that follows
     the pose (an optical tracker fitting its markers, seen by other cameras as the body turns) forgets with
     the angle turned as well as with time (docs/real-data.md)."""
     return st_dt_s + clock_s_per_rad * turns_rad

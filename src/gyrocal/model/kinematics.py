@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 from gyrocal.model.units import rad_to_arcsec
 
 __all__ = ["attitude_at", "compose", "cumulative_compose", "error_angles_arcsec", "error_angles_rad", "increment_quantum_rad",
-           "propagate"]
+           "net_turns", "propagate"]
 
 
 def _compose_quat(p: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -105,6 +105,16 @@ def attitude_at(times: np.ndarray, attitudes: Rotation, increments_rad: np.ndarr
     k = np.clip(np.searchsorted(times, query_times, side="right") - 1, 0, len(times) - 2)
     frac = (query_times - times[k]) / (times[k + 1] - times[k])
     return compose(attitudes[k], Rotation.from_rotvec(frac[:, None] * increments_rad[k]))
+
+
+def net_turns(start: Rotation, attitudes: Rotation) -> np.ndarray:
+    """(M,) the angle turned from each attitude to the next (rad; the first from ``start``): the net
+    rotation, which the reference error's clock on the angle turned takes (the simulator's and the
+    library's, `gyrocal.inference.errormodel.gm_clock_steps`). Not the path of the gyro increments, which
+    at rest sums their noise sample by sample (a MEMS gyro at 0.49 deg/sqrt(h) and 286 Hz: 4e-3 rad/s);
+    over a step of N samples its noise is sqrt(N) times less."""
+    previous = Rotation.concatenate([start, attitudes[:-1]]) if len(attitudes) > 1 else start
+    return np.atleast_1d((previous.inv() * attitudes).magnitude())
 
 
 def error_angles_rad(model: Rotation, measured: Rotation) -> np.ndarray:

@@ -291,8 +291,7 @@ def simulate(scenario: dict, seed=None):
     true_st = kinematics.attitude_at(t0 + dt_sub * np.arange(n_gyro * n_sub + 1), attitudes_fine, increments_fine,
                                      taken)
     del attitudes_fine, increments_fine
-    turned = (np.concatenate([[0.0], (true_st[:-1].inv() * true_st[1:]).magnitude()])  # net: MOM turns far less
-              if st_cfg.get("gm_clock_s_per_rad") else None)                          # than pi a sample
+    turned = kinematics.net_turns(true_st[0], true_st) if st_cfg.get("gm_clock_s_per_rad") else None
     noise = star_tracker_noise(len(t_st), dt_st, st_cfg, eff["st_correlation_time_s"], rng,
                                maneuver_scale(profiles, t_st, False), turned)
     measured = true_st * Rotation.from_rotvec(noise)
