@@ -117,6 +117,7 @@ def _gain(gm: dict, kappa: float, n_maneuvers: int = 3) -> float:
     return values[0] - values[1]
 
 
+@pytest.mark.full  # 8 s; the fast tier keeps the clock's steps, the chained clock and the plan on the clock
 def test_the_remls_fit_gains_on_the_true_angle_clock():
     """Three tiny maneuvers whose reference error runs on the angle clock: stated, the clock gains tens of
     log-likelihood units (58-67 over three seeds) over the best the time clock fits."""

@@ -178,6 +178,7 @@ def test_a_smooth_error_seen_only_between_slews_is_still_found():
     assert interval.choose(sliced, stated).interval_s == 5.0  # as without the gaps (above)
 
 
+@pytest.mark.full  # 4 s; the fast tier keeps the smooth error found between slews and the white reference kept whole
 def test_a_stated_arw_four_times_too_low_does_not_thin_a_campaign_whose_model_is_right():
     """A 20 Hz, 0.5-arcsec tracker on 25 Hz gyros of ARW 0.5 deg/sqrt(h), stated as 0.125 (found by an
     independent review): weighed at the stated walk, the interpolated walk's shortfall was too small and

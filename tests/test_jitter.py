@@ -144,6 +144,7 @@ def _sampled(campaign, truth, names):
     return jitter, z
 
 
+@pytest.mark.full  # 7 s; the fast tier keeps the REML finding the jitter and the ranking naming it
 def test_sampled_jitter_and_the_calibrations_intervals_cover_the_truth():
     """With 5 ms of jitter the posterior's 95 % interval of sigma_t holds 5 ms (4.2-5.5 here) and every
     channel parameter lies within 3 sd of its truth; without jitter sigma_t's posterior stays far below

@@ -37,6 +37,7 @@ def drift_run(tmp_path_factory, short_chains):
     return paths.model("drift")
 
 
+@pytest.mark.full  # 7 s; the fast tier keeps the Student-t priors' unit tests (test_priorfamily, test_prior_pull)
 def test_a_ramp_four_prior_scales_out_keeps_the_likelihoods_mean_and_its_intervals_cover(drift_run):
     est = PointEstimate.load(drift_run.point_estimate, linearizations=False)
     rows = [i for i, p in enumerate(est.spec.parameters) if p.name == "bias_drift"]
