@@ -37,9 +37,10 @@ def short_chains(config):
 
 
 LONGEST_FIRST = ("test_workflow.py", "test_report.py", "test_interval.py", "test_resume.py",
-                 "test_robustness.py", "test_looexact.py", "test_pipeline.py", "test_realdata.py", "test_jitter.py",
-                 "test_spec.py", "test_freemotion.py", "test_properties.py", "test_combinations.py",
-                 "test_variants.py", "test_refusals.py", "test_degenerate.py", "test_prior_yields.py")
+                 "test_realdata.py", "test_freemotion.py", "test_robustness.py", "test_looexact.py",
+                 "test_pipeline.py", "test_properties.py", "test_spec.py", "test_refusals.py", "test_plan.py",
+                 "test_degenerate.py", "test_jitter_correlated.py", "test_joint.py", "test_combinations.py",
+                 "test_variants.py")
 """The fast tier's longest files, longest first (their times under ``--durations``): run before the
 others, so that the two xdist workers (``--dist loadfile --no-loadscope-reorder``, tests/run.sh) end
 on short files instead of one of them running a long file alone at the end."""
