@@ -124,3 +124,5 @@ def test_a_review_without_figures_says_so_in_each_ones_place(tiny_short_run):
     html = (tiny_short_run[0] / "report.html").read_text()
     assert "<img" not in html and html.count(NOT_DRAWN) >= 8
     assert "id='verdict'" in html and 'id="table1"' in html and "id='checks'" in html
+    assert '<td>sigma_cross_arcsec</td>' in html[html.index('id="noise-scales"'):]   # white noise: no clock
+    assert "id='noise-clock'" not in html

@@ -126,6 +126,10 @@ class ReviewContext:
     orthogonality: pd.DataFrame
     """Each channel set's non-orthogonality (``orthogonality.csv``), beside the channels' ``sf_mean``."""
     diagnostics: dict
+    noise: pd.DataFrame
+    """Each sampled noise scale beside the stated one (`gyrocal.report.noisemodel.noise_table`)."""
+    noise_clock: str
+    """What the correlated part's time means on its clock, in words; empty for white reference noise."""
     misfit_checks: pd.DataFrame
     ranking: pd.DataFrame
     comparison: pd.DataFrame

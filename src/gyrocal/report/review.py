@@ -27,7 +27,7 @@ from gyrocal.io import telemetry
 from gyrocal.model import combinations
 from gyrocal.model.units import PAPER_AXES, paper_term
 from gyrocal.report import figures as plots
-from gyrocal.report import resolution
+from gyrocal.report import noisemodel, resolution
 from gyrocal.report.context import CorrectionSet, ReviewContext, ReviewInputs, campaign_words
 
 __all__ = [
@@ -208,7 +208,9 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
         orthogonality=inputs.orthogonality[[c for c in ORTHOGONALITY_SHOWN if c in inputs.orthogonality]].round(
             {"mean": 1, "sd": 1, "ci95_low": 1, "ci95_high": 1}),
         correlation_max=identification.CORRELATION_MAX,
-        diagnostics=diagnostics, misfit_checks=pd.DataFrame(diagnostics["checks"]),
+        diagnostics=diagnostics, noise=noisemodel.noise_table(diagnostics).map(_significant),
+        noise_clock=noisemodel.clock_sentence(diagnostics, maneuvers[0].gm_clock_s_per_rad),
+        misfit_checks=pd.DataFrame(diagnostics["checks"]),
         ranking=pd.DataFrame(diagnostics["ranking"])[["name", "kind", "score", "chi2_drop", "df", "log10_p",
                                                       "description"]],
         comparison=inputs.comparison.round(3), comparison_figure=drawn[-1],
@@ -251,6 +253,13 @@ def fold(text: str, limit: int = FOLD_CHARS) -> Markup:
     cut = cut + 1 if cut > limit // 3 else (head.rfind(" ") if head.rfind(" ") > 0 else limit)
     return (Markup.escape(text[:cut].rstrip()) + Markup(" <details class='more'><summary>more</summary>")
             + Markup.escape(text[cut:].strip()) + Markup("</details>"))
+
+
+def _significant(value):
+    """A table cell: a number to four significant digits (blank where there is none), anything else as it is."""
+    if isinstance(value, str):
+        return value
+    return f"{value:.4g}" if np.isfinite(value) else ""
 
 
 def number(value) -> str:
