@@ -251,6 +251,29 @@ def test_where_every_variant_is_refused_the_loop_extends_the_first_whose_refusal
     assert not advised(["baseline"], [unknown]).fitted
 
 
+def test_a_later_step_whose_base_was_refused_takes_the_advice_of_its_refusal(tmp_path):
+    """BROAD's slow trial at the default variants: the first step added st_jitter, whose point estimate was
+    refused advising st_correlated_noise; the second step adds it to that model instead of stopping. A
+    refusal without advice still stops the loop with its reason."""
+    from types import SimpleNamespace
+
+    from gyrocal.pipeline.steps import extend
+
+    settings = SimpleNamespace(loop={"depth": 2})   # a later step reads the loop's depth alone
+    effects = ["scale_factor_symmetric", "misalignment", "bias", "st_jitter"]
+    refused = {"model": "extended", "status": "refused", "step": "point_estimate", "reason": "white noise cannot fit",
+               "advice": "st_correlated_noise", "effects": effects}
+    (tmp_path / "diagnostics.json").write_text(json.dumps(refused))
+    files = SimpleNamespace(diagnostics=[tmp_path / "diagnostics.json"])
+    step = extend.decide("extended_2", ["extended"], files, settings)
+    assert (step.base, step.effect, step.effects) == ("extended", "st_correlated_noise", effects + ["st_correlated_noise"])
+    assert step.why.startswith("the loop's step extended was refused; model extended's refusal (point_estimate) advises")
+    (tmp_path / "diagnostics.json").write_text(json.dumps({k: v for k, v in refused.items()
+                                                           if k not in ("advice", "effects")}))
+    step = extend.decide("extended_2", ["extended"], files, settings)
+    assert not step.fitted and step.why == "the loop stopped at extended: white noise cannot fit"
+
+
 def test_a_refusal_that_advises_an_effect_is_recorded_with_it_and_read_back_as_a_refusal(tmp_path):
     from gyrocal.inference.sampling.refusals import EstimateError
     from gyrocal.pipeline.steps import common

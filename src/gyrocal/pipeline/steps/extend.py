@@ -32,22 +32,23 @@ def decide(name: str, bases, files, settings: ExtendSettings) -> Extension:
         base = bases[0]
         record = common.read_refusal(files.diagnostics[0])
         if record is not None:
-            return Extension(base, "", [], f"the loop stopped at {base}: {record['reason']}")
+            step = advised([base], [record], f"the loop's step {base} was refused")
+            return step if step.fitted else Extension(base, "", [], f"the loop stopped at {base}: {record['reason']}")
     doc = common.read_json(files.diagnostics[bases.index(base)])
     return next_effect(base, doc["effects"], doc, settings.diagnostics["diagnostics"]["structure_log10_p_min"])
 
 
-def advised(bases, records) -> Extension:
+def advised(bases, records, why: str = "every variant was refused") -> Extension:
     """Where every variant is refused, the first step of the loop extends the first whose refusal advises
     a library effect (``advice`` in its record: `refusals.EstimateError`) by that effect, as the reviewed
-    model's misfit would be extended by the effect that explains it; otherwise it stops with the reason."""
+    model's misfit would be extended by the effect that explains it; otherwise it stops with the reason.
+    A later step whose base (the step before) was refused takes its advice the same way (``why`` says which)."""
     for base, record in zip(bases, records):
         effect = record.get("advice", "")
-        if effect in LIBRARY and effect not in record["effects"]:
+        if effect in LIBRARY and effect not in record.get("effects", []):
             return Extension(base, effect, list(record["effects"]) + [effect],
-                             f"every variant was refused; model {base}'s refusal ({record['step']}) advises adding "
-                             f"{effect}")
-    return Extension(bases[0], "", [], "every variant was refused, and no refusal advises a library effect to add")
+                             f"{why}; model {base}'s refusal ({record['step']}) advises adding {effect}")
+    return Extension(bases[0], "", [], f"{why}, and no refusal advises a library effect to add")
 
 
 def run(name: str, bases, files, maneuver_files, input_json, out, refusal_json, settings: ExtendSettings) -> Extension:
