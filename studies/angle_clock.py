@@ -13,7 +13,8 @@ its markers, seen from other cameras as the body turns) would decorrelate so, an
 gyro that follows the angle turned. The markov filter takes any steps; the gyro's walk keeps its own,
 and the REML's search for tau (half the median step to ten times the longest maneuver) moves with the
 clock, which the printout flags where tau ends on a bound. The best ``kappa`` of the grid is one more
-fitted number, which the printout's last line says how to state.
+fitted number, which the printout's last line says how to state; a campaign.yaml that states
+``gm_clock_s_per_rad: auto`` has the preprocessing choose it by the same REML (`gyrocal.inference.clock`).
 
 Prints, per ``kappa``, the negative REML log-likelihood (lower is better; differences are log-likelihood
 ratios of models with the same number of scales), the scales (sigma_cross and sigma_about in arcsec, ARW
@@ -23,31 +24,14 @@ in deg/sqrt(h), the Gauss-Markov share, tau in effective seconds) and the correl
 """
 
 import argparse
-import dataclasses
 from pathlib import Path
 
 import numpy as np
 
+from gyrocal.inference.clock import angle_steps, correlated_fit, on_angle_clock
 from gyrocal.inference.fit import noisefit
 from gyrocal.inference.noise import covariance
 from gyrocal.pipeline.readback import load_model_run
-
-TAU0_S = 1.0
-"""Where the REML's search for tau starts (it scans the whole range too)."""
-
-
-def angle_steps(maneuvers, est) -> list:
-    """(M,) per maneuver the angle the body turns between reference samples (rad): the linearisation's clock
-    at 1 s/rad, less its time (`errormodel.gm_clock_steps`)."""
-    once = [dataclasses.replace(d, gm_clock_s_per_rad=1.0) for d in maneuvers]
-    return [lin.gm_dt - lin.st_dt for lin in (est.linearize(once, m) for m in range(len(once)))]
-
-
-def on_angle_clock(lins, turned, kappa_s_per_rad: float) -> list:
-    """The linearisations with the Gauss-Markov part's clock steps ``dt + kappa dtheta``, as a campaign that
-    states ``star_tracker: gm_clock_s_per_rad`` has them; the gyro's walk keeps its steps."""
-    return [dataclasses.replace(lin, gm_dt=lin.st_dt + kappa_s_per_rad * step if kappa_s_per_rad > 0 else None)
-            for lin, step in zip(lins, turned)]
 
 
 def tau_bounds_s(lins) -> tuple:
@@ -55,14 +39,6 @@ def tau_bounds_s(lins) -> tuple:
     the longest maneuver, in the clock's seconds."""
     step = noisefit.st_step(lins)
     return 0.5 * step, 10.0 * max(float(np.sum(lin.gm_steps)) for lin in lins)
-
-
-def correlated_fit(lins, boresight, log_sigma0) -> tuple:
-    """The correlated model's REML scales and its negative log-likelihood at them."""
-    log_sigma = noisefit.estimate_correlated_noise(lins, boresight, log_sigma0, TAU0_S)[0]
-    ratios = covariance.ratios_of(log_sigma)
-    noises = [covariance.build(lin, boresight, covariance.correlation_time_of(ratios)) for lin in lins]
-    return log_sigma, float(noisefit.profile_reml(noises, ratios)[0])
 
 
 def main():

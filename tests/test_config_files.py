@@ -301,3 +301,13 @@ def test_the_reference_clock_and_jitter_keys_are_read_and_a_negative_clock_refus
     assert meta["star_tracker"]["gm_clock_s_per_rad"] == 3000 and meta["star_tracker"]["st_jitter_ms"] == 2
     bad = meta_text.replace("star_tracker:\n", "star_tracker:\n  gm_clock_s_per_rad: -1\n", 1)
     assert "star_tracker.gm_clock_s_per_rad" in refusal(campaign_dir(tmp_path, bad, name="bad"))
+
+
+def test_the_reference_clock_may_be_left_to_the_data_and_another_word_is_refused(tmp_path, meta_text):
+    """``gm_clock_s_per_rad: auto`` asks the preprocessing to choose it (`gyrocal.inference.clock`); any other
+    word is refused naming the key, the value and what it takes."""
+    text = meta_text.replace("star_tracker:\n", "star_tracker:\n  gm_clock_s_per_rad: auto\n", 1)
+    assert read_meta(campaign_dir(tmp_path, text))["star_tracker"]["gm_clock_s_per_rad"] == "auto"
+    bad = meta_text.replace("star_tracker:\n", "star_tracker:\n  gm_clock_s_per_rad: automatic\n", 1)
+    said = refusal(campaign_dir(tmp_path, bad, name="bad"))
+    assert "star_tracker.gm_clock_s_per_rad" in said and "or auto" in said and "'automatic' (line" in said

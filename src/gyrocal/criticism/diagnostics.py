@@ -17,7 +17,7 @@ from gyrocal.criticism import correlation, noiseranking, rategrowth
 from gyrocal.criticism.bands import band_findings
 from gyrocal.criticism.increments import smoothness_finding
 from gyrocal.finding import Finding
-from gyrocal.inference import errormodel
+from gyrocal.inference import clock, errormodel
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.fit.likelihood import campaign_stats, maneuver_stats, total
 from gyrocal.inference.noise import covariance, smoothness
@@ -219,11 +219,15 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
         if per_channel:
             detail[effect.name] = {extras[i].label: round(_chi2_drop(stats, n_model, [i]), 2)
                                                        for i in per_channel}
+    on_clock = maneuvers[0].gm_clock_s_per_rad > 0
     if white is not None and not estimate.spec.correlated_noise:
-        fitted = white["gauss_markov"]
+        fitted = clock.likelihood_ratio(maneuvers, estimate) if on_clock else white["gauss_markov"]
+        said = (f" (on the campaign's clock of {fitted.get('clock_s_per_rad', 0.0):g} s a radian turned: the REML's "
+                f"likelihood ratio, share {fitted['share']:.2f}, tau {fitted.get('tau_s', 0.0):.3g} clock seconds)"
+                if on_clock else correlation.caveat(fitted))
         for effect in (e for e in effects.LIBRARY.values() if e.noise and not e.rate_noise):
             ranking.append(_entry(effect.name, "effect", fitted["chi2"], correlation.GAUSS_MARKOV_DF,
-                                  effect.description + correlation.caveat(fitted)))
+                                  effect.description + said))
     if white is not None and white.get("rate_growth") and not estimate.spec.jitter_noise:
         jitter = effects.LIBRARY["st_jitter"]
         ranking.append(_entry(jitter.name, "effect", white["rate_growth"]["chi2"], rategrowth.RATE_DF,
@@ -231,8 +235,9 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
     ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
     _encompass(ranking, groups, stats, n_model)
     deterministic = {e.name: e for _, e, _ in groups}
-    for noise_effect in noiseranking.SCORES_GIVEN:
-        noiseranking.demote_explained(ranking, maneuvers, estimate, deterministic, ENCOMPASS_TOP, noise_effect)
+    for noise_effect in noiseranking.SCORES_GIVEN:  # the spectral scores given each candidate need equal steps
+        if not (on_clock and noise_effect == noiseranking.NOISE_EFFECT):
+            noiseranking.demote_explained(ranking, maneuvers, estimate, deterministic, ENCOMPASS_TOP, noise_effect)
     return ranking, detail
 
 

@@ -21,16 +21,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from gyrocal.errors import InputError
-from gyrocal.inference.fit import classic
-from gyrocal.inference.fit.estimate import point_estimate
+from gyrocal.inference.fit.pilot import pilot
 from gyrocal.inference.noise import smoothness
 from gyrocal.io.telemetry import TelemetryError
 from gyrocal.maneuvers.preprocess import error_angles, slice_maneuver
-from gyrocal.model import effects
 from gyrocal.model.channels import ChannelParams
-from gyrocal.model.spec import ModelSpec
 
-__all__ = ["AUTO", "Choice", "choose", "nominal", "pilot", "requested", "shorter", "slice_all", "sliced"]
+__all__ = ["AUTO", "Choice", "choose", "nominal", "requested", "shorter", "slice_all", "sliced"]
 
 AUTO = "auto"
 """The config value of ``reference_interval_s`` that asks for the interval to be chosen from the data."""
@@ -80,16 +77,6 @@ class Choice:
                                            "smooth": s.smooth, "knee_s": round(s.knee_s, 6),
                                            "interval_s": used_s.get(s.maneuver, self.interval_s)}
                               for s in self.measured}}
-
-
-def pilot(maneuvers, stated_noise: dict, sensor_class=None):
-    """The baseline channel model's point estimate (its noise scales estimated, as every model's are:
-    a stated ARW far below the data's would leave the walk's interpolation shortfall, `smoothness`,
-    too small), and each maneuver's linearisation about it."""
-    fx = effects.resolve("baseline", effects.BASELINE, {})
-    spec = ModelSpec.build("pilot", fx, maneuvers[0].channels).with_sensor_class(sensor_class)
-    est = point_estimate(maneuvers, spec, stated_noise, classic.classic_start(maneuvers, spec))
-    return est, [est.linearize(maneuvers, m) for m in range(len(maneuvers))]
 
 
 def nominal(data) -> smoothness.Smoothness:

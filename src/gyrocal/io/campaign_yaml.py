@@ -21,6 +21,8 @@ __all__ = [
     "CHANNEL_PATTERN",
     "DEFAULT_NOISE_GROUP",
     "DIRECTIONS",
+    "GM_CLOCK_AUTO",
+    "GM_CLOCK_KEY",
     "GYRO_KEYS",
     "NAME_MAX",
     "NAME_PATTERN",
@@ -33,6 +35,7 @@ __all__ = [
     "default_name",
     "fail",
     "read_meta",
+    "stated_clock_s_per_rad",
     "turn_name",
 ]
 
@@ -271,6 +274,16 @@ GM_CLOCK_KEY = "gm_clock_s_per_rad"
 """``star_tracker``'s key: the seconds the clock of the reference error's Gauss-Markov part runs per radian
 the body turns, beside time (`gyrocal.inference.errormodel.gm_clock_steps`); absent, 0."""
 
+GM_CLOCK_AUTO = "auto"
+"""Its value that asks for the clock to be chosen from the data (`gyrocal.inference.clock`)."""
+
+
+def stated_clock_s_per_rad(star_tracker: dict) -> float | None:
+    """The clock ``star_tracker`` states (s a radian turned; 0 where it states none), or None where it asks
+    for `GM_CLOCK_AUTO`."""
+    value = star_tracker.get(GM_CLOCK_KEY, 0.0)
+    return None if value == GM_CLOCK_AUTO else float(value)
+
 
 def _parse_star_tracker(path, raw, line_of=lambda keys: "?") -> dict:
     allowed = {"sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "mounting", "rate_hz", "st_jitter_ms",
@@ -280,8 +293,10 @@ def _parse_star_tracker(path, raw, line_of=lambda keys: "?") -> dict:
     for key in ("sigma_cross_arcsec", "sigma_about_arcsec", "rate_hz", "st_jitter_ms"):
         if key in raw and not _positive_number(raw[key]):
             fail(path, f"star_tracker.{key}: must be a positive number")
-    if GM_CLOCK_KEY in raw and not (_is_number(raw[GM_CLOCK_KEY]) and raw[GM_CLOCK_KEY] >= 0):
-        fail(path, f"star_tracker.{GM_CLOCK_KEY}: must be a number >= 0 (seconds per radian turned; 0: time only)")
+    if GM_CLOCK_KEY in raw and raw[GM_CLOCK_KEY] != GM_CLOCK_AUTO and not (
+            _is_number(raw[GM_CLOCK_KEY]) and raw[GM_CLOCK_KEY] >= 0):
+        fail(path, f"star_tracker.{GM_CLOCK_KEY}: must be a number >= 0 (seconds per radian turned; 0: time only) "
+                   f"or {GM_CLOCK_AUTO!r} (chosen from the data); got {excerpt(raw[GM_CLOCK_KEY])}")
     out = dict(raw)
     if "boresight_body" in raw:
         b = raw["boresight_body"]

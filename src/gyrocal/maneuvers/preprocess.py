@@ -7,7 +7,7 @@ import numpy as np
 import pandas as pd
 from scipy.spatial.transform import Rotation, Slerp
 
-from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP, GM_CLOCK_KEY, Labelled
+from gyrocal.io.campaign_yaml import DEFAULT_NOISE_GROUP, GM_CLOCK_KEY, Labelled, stated_clock_s_per_rad
 from gyrocal.io.importer import reference_rows
 from gyrocal.io.telemetry import MIN_REFERENCE_SAMPLES, Campaign, TelemetryError
 from gyrocal.model import channels as ch
@@ -136,7 +136,7 @@ def slice_maneuver(campaign: Campaign, maneuver_id: str, outlier_times_s=(), ref
               "gyro_read": int(i1 - i0 + 1), "gyro_used": int(i1 - i0)}
     return ManeuverData(m.id, m.axis, m.direction, campaign.channels, m.in_loop, g[i0:i1 + 1].copy(),
                         campaign.increments(slice(i0 + 1, i1 + 1)), st_time, quat, attitude0.as_quat(),
-                        extras, counts, m.noise_group, float(campaign.star_tracker.get(GM_CLOCK_KEY, 0.0)))
+                        extras, counts, m.noise_group, stated_clock_s_per_rad(campaign.star_tracker) or 0.0)
 
 
 def noise_groups(maneuvers) -> tuple:

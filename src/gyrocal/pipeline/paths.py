@@ -6,11 +6,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
-__all__ = ["CALIBRATION_FILES", "MODEL_FILES", "REFERENCE_INTERVAL", "STEP_FILES", "CampaignPaths", "ModelPaths",
+__all__ = ["CALIBRATION_FILES", "GM_CLOCK", "MODEL_FILES", "REFERENCE_INTERVAL", "STEP_FILES", "CampaignPaths", "ModelPaths",
            "maneuver_files"]
 
 REFERENCE_INTERVAL = "reference_interval.json"
 """The preprocess step's record of the reference interval it used and why, in its folder."""
+
+GM_CLOCK = "gm_clock.json"
+"""... and of the reference error's clock it chose and why, where campaign.yaml asks it to choose."""
 
 
 def maneuver_files(folder, ids, ext: str = "npz") -> list:
@@ -74,6 +77,7 @@ class CampaignPaths:
     preprocess = _under_root("preprocess", "The preprocess step's folder: ``<maneuver>.{npz,csv,png}`` each.")
     reference_interval = _under_root(f"preprocess/{REFERENCE_INTERVAL}",
                                      "The reference interval the preprocess step used, and why.")
+    gm_clock = _under_root(f"preprocess/{GM_CLOCK}", "The reference error's clock the preprocess step chose, and why.")
     comparison = _under_root("model_comparison.csv")
     comparison_figure = _under_root("model_comparison.png")
     report = _under_root("report.html")

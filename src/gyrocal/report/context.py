@@ -49,6 +49,8 @@ class ReviewInputs:
     """The refusal records (``<model>/refused.json``) of the variants refused or skipped."""
     reference_interval: dict | None = None
     """``preprocess/reference_interval.json``: the reference interval used and why; None for runs before it."""
+    gm_clock: dict | None = None
+    """``preprocess/gm_clock.json``: the reference error's clock chosen and why; None where campaign.yaml states it."""
     loop: pd.DataFrame = field(default_factory=pd.DataFrame)
     """The loop's error before and after each fitted step (`gyrocal.criticism.extension.before_after`)."""
     loop_steps: list = field(default_factory=list)

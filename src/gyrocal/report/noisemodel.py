@@ -6,7 +6,7 @@ import numpy as np
 import pandas as pd
 
 from gyrocal.inference.noise.covariance import GM_FRACTION_SCALE, GM_TAU_SCALE
-from gyrocal.io.campaign_yaml import GM_CLOCK_KEY
+from gyrocal.io.campaign_yaml import GM_CLOCK_AUTO, GM_CLOCK_KEY
 
 __all__ = ["clock_sentence", "noise_table"]
 
@@ -27,10 +27,17 @@ def noise_table(diagnostics: dict) -> pd.DataFrame:
     return pd.DataFrame(rows, columns=["scale", "stated", "mean", "ci95_low", "ci95_high", "mean / stated"])
 
 
-def clock_sentence(diagnostics: dict, clock_s_per_rad: float) -> str:
+def clock_sentence(diagnostics: dict, clock_s_per_rad: float, chosen: dict | None = None) -> str:
     """What the correlated part's time means: on the time clock, seconds; on the angle clock of
     ``clock_s_per_rad`` s/rad, the seconds it forgets over at rest or the angle it forgets over when
-    the body turns fast (tau / K rad). Empty where the model's reference noise is white."""
+    the body turns fast (tau / K rad). Where the preprocessing chose the clock (``chosen``, its
+    ``gm_clock.json``), why. Empty where the model's reference noise is white and no clock was chosen."""
+    why = (f" The clock was chosen from the data ({GM_CLOCK_KEY}: {GM_CLOCK_AUTO}): {chosen['reason']}."
+           if chosen else "")
+    return (_time_sentence(diagnostics, clock_s_per_rad) + why).strip()
+
+
+def _time_sentence(diagnostics: dict, clock_s_per_rad: float) -> str:
     posterior = diagnostics.get("noise_posterior", {})
     if TAU_KEY not in posterior:
         return ""

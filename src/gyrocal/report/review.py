@@ -209,7 +209,7 @@ def build_context(inputs: ReviewInputs, processes: int = 1) -> ReviewContext:
             {"mean": 1, "sd": 1, "ci95_low": 1, "ci95_high": 1}),
         correlation_max=identification.CORRELATION_MAX,
         diagnostics=diagnostics, noise=noisemodel.noise_table(diagnostics).map(_significant),
-        noise_clock=noisemodel.clock_sentence(diagnostics, maneuvers[0].gm_clock_s_per_rad),
+        noise_clock=noisemodel.clock_sentence(diagnostics, maneuvers[0].gm_clock_s_per_rad, inputs.gm_clock),
         misfit_checks=pd.DataFrame(diagnostics["checks"]),
         ranking=pd.DataFrame(diagnostics["ranking"])[["name", "kind", "score", "chi2_drop", "df", "log10_p",
                                                       "description"]],

@@ -28,7 +28,7 @@ from scipy.special import expit, logit
 
 from gyrocal.inference.errormodel import Linearization
 from gyrocal.inference.noise import markov
-from gyrocal.io.campaign_yaml import GM_CLOCK_KEY
+from gyrocal.io.campaign_yaml import GM_CLOCK_AUTO, GM_CLOCK_KEY
 from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
 __all__ = [
@@ -216,7 +216,7 @@ def noise_knowledge(info: dict, defaults: dict) -> dict:
     out = {k: stated.get(k, defaults[k]) for k in keys}
     for key in (JITTER_SCALE.key, GM_CLOCK_KEY):  # only where stated: the default's knowledge stays the three scales
         value = stated.get(key, defaults.get(key))
-        if value is not None:
+        if value is not None and value != GM_CLOCK_AUTO:  # a clock to choose: the maneuvers carry the one chosen
             out[key] = value
     return out
 

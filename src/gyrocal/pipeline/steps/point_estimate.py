@@ -2,6 +2,7 @@
 
 import logging
 
+from gyrocal.inference import clock
 from gyrocal.inference.fit import classic
 from gyrocal.inference.fit.estimate import point_estimate
 from gyrocal.inference.noise.covariance import noise_knowledge, stated_scales
@@ -38,14 +39,14 @@ def run(maneuver_files, input_json, out_npz, model: str, settings: PointEstimate
     fx = effects.resolve(model, settings.effects, effects.load_plugins(settings.plugins or []))
     info = read_json(input_json)
     model_spec = ModelSpec.build(model, fx, maneuvers[0].channels).with_sensor_class(info["gyro"].get("sensor_class"))
-    stated = noise_knowledge(info, settings.noise)
+    stated = clock.with_clock(noise_knowledge(info, settings.noise), maneuvers)
     est = point_estimate(maneuvers, model_spec, stated, classic.classic_start(maneuvers, model_spec),
                          settings.noise["estimate_scales"], check=_informed)
     if model_spec.correlated_noise:
-        clock = maneuvers[0].gm_clock_s_per_rad
+        per_rad = maneuvers[0].gm_clock_s_per_rad
         log.info("star-tracker noise correlation time: %.2f s%s", est.correlation_time_s,
-                 f" of a clock that runs {clock:g} s a radian turned (a correlation angle of "
-                 f"{est.correlation_time_s / clock:.3g} rad)" if clock > 0 else "")
+                 f" of a clock that runs {per_rad:g} s a radian turned (a correlation angle of "
+                 f"{est.correlation_time_s / per_rad:.3g} rad)" if per_rad > 0 else "")
     log.info("WLS: %s (%d evaluations); noise %s", est.message, est.nfev,
              stated_scales(est.log_sigma))
     write_with(est.save, out_npz)

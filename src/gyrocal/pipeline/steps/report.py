@@ -14,7 +14,7 @@ from gyrocal.inference.fit.operating import operating_map
 from gyrocal.inference.sampling.priors import posterior_spec
 from gyrocal.io.outputs import write_json, write_text
 from gyrocal.model import effects
-from gyrocal.pipeline.paths import REFERENCE_INTERVAL, maneuver_files
+from gyrocal.pipeline.paths import GM_CLOCK, REFERENCE_INTERVAL, maneuver_files
 from gyrocal.pipeline.settings import ReportSettings
 from gyrocal.pipeline.steps.common import compared, load_maneuvers, read_json, refusals
 from gyrocal.report import review
@@ -77,6 +77,7 @@ def run(models, files, preprocessed, maneuver_ids, input_json, comparison_csv, o
         comparison=table, info=info, config=cfg, findings=findings, effect_table=effect,
         truth=read_json(truth_json)["parameters"] if truth_json else None, refused=refused,
         reference_interval=read_json(interval) if (interval := Path(preprocessed, REFERENCE_INTERVAL)).exists() else None,
+        gm_clock=read_json(chosen) if (chosen := Path(preprocessed, GM_CLOCK)).exists() else None,
         loop=loop, loop_steps=[step for _, step in steps], disagreement=disagreement,
         orthogonality=pd.read_csv(reviewed.orthogonality), flown=flown)
     write_text(review.render(review.build_context(inputs, processes)), out_html)
