@@ -41,3 +41,11 @@ def test_on_the_angle_clock_the_time_is_also_an_angle_turned(clock, degrees):
     said = clock_sentence(CORRELATED, clock)
     assert f"angle clock of {clock:g} s/rad" in said and "gm_clock_s_per_rad" in said
     assert "3.14e+03 s at rest" in said and degrees in said
+
+
+def test_a_clock_chosen_from_the_data_says_why_even_where_the_reviewed_noise_is_white():
+    chosen = {"reason": "3000 s a radian turned: on the pilot fit's residual ..."}
+    said = clock_sentence(CORRELATED, 3000.0, chosen)
+    assert said.endswith("The clock was chosen from the data (gm_clock_s_per_rad: auto): 3000 s a radian turned: "
+                         "on the pilot fit's residual ....")
+    assert clock_sentence(WHITE, 3000.0, chosen).startswith("The clock was chosen from the data")
