@@ -252,9 +252,10 @@ def test_where_every_variant_is_refused_the_loop_extends_the_first_whose_refusal
 
 
 def test_a_later_step_whose_base_was_refused_takes_the_advice_of_its_refusal(tmp_path):
-    """BROAD's slow trial at the default variants: the first step added st_jitter, whose point estimate was
-    refused advising st_correlated_noise; the second step adds it to that model instead of stopping. A
-    refusal without advice still stops the loop with its reason."""
+    """BROAD's slow trial at the default variants: the first step added st_jitter, whose fit was refused
+    advising st_correlated_noise; the second step extends the model the first one extended by that advice,
+    leaving out the effect whose fit was refused, instead of stopping. A refusal without advice still stops
+    the loop with its reason."""
     from types import SimpleNamespace
 
     from gyrocal.pipeline.steps import extend
@@ -266,8 +267,9 @@ def test_a_later_step_whose_base_was_refused_takes_the_advice_of_its_refusal(tmp
     (tmp_path / "diagnostics.json").write_text(json.dumps(refused))
     files = SimpleNamespace(diagnostics=[tmp_path / "diagnostics.json"])
     step = extend.decide("extended_2", ["extended"], files, settings)
-    assert (step.base, step.effect, step.effects) == ("extended", "st_correlated_noise", effects + ["st_correlated_noise"])
-    assert step.why.startswith("the loop's step extended was refused; model extended's refusal (point_estimate) advises")
+    assert (step.base, step.effect) == ("extended", "st_correlated_noise")
+    assert step.effects == ["scale_factor_symmetric", "misalignment", "bias", "st_correlated_noise"]  # no st_jitter
+    assert step.why.startswith("the loop's step extended (+ st_jitter) was refused (point_estimate), and its refusal")
     (tmp_path / "diagnostics.json").write_text(json.dumps({k: v for k, v in refused.items()
                                                            if k not in ("advice", "effects")}))
     step = extend.decide("extended_2", ["extended"], files, settings)

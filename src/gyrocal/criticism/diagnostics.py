@@ -235,10 +235,16 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
     ranking.sort(key=lambda r: (r["log10_p"], -r["chi2_drop"]))
     _encompass(ranking, groups, stats, n_model)
     deterministic = {e.name: e for _, e, _ in groups}
-    for noise_effect in noiseranking.SCORES_GIVEN:  # the spectral scores given each candidate need equal steps
-        if not (on_clock and noise_effect == noiseranking.NOISE_EFFECT):
-            noiseranking.demote_explained(ranking, maneuvers, estimate, deterministic, ENCOMPASS_TOP, noise_effect)
+    for noise_effect in noiseranking.SCORES_GIVEN:  # on the clock, correlated noise given each: the REML's ratio
+        given = _clock_score_given if on_clock and noise_effect == noiseranking.NOISE_EFFECT else None
+        noiseranking.demote_explained(ranking, maneuvers, estimate, deterministic, ENCOMPASS_TOP, noise_effect, given)
     return ranking, detail
+
+
+def _clock_score_given(maneuvers, estimate: PointEstimate, added) -> dict:
+    """`clock.likelihood_ratio` given ``added``'s columns, as `noiseranking.demote_explained` reads a score."""
+    fitted = clock.likelihood_ratio(maneuvers, estimate, added)
+    return {**fitted, "log10_p": chi2_log_sf(fitted["chi2"], correlation.GAUSS_MARKOV_DF) / np.log(10)}
 
 
 def linearized(maneuvers, estimate: PointEstimate):

@@ -87,12 +87,13 @@ SCORES_GIVEN = {NOISE_EFFECT: noise_score_given, RATE_EFFECT: rate_score_given}
 
 
 def demote_explained(ranking: list, maneuvers, estimate: PointEstimate, candidates: dict, top: int,
-                     noise_effect: str = NOISE_EFFECT) -> None:
+                     noise_effect: str = NOISE_EFFECT, score_given=None) -> None:
     """Set the noise-model effect ``noise_effect`` (correlated noise, or the timing jitter), where it leads a
     deterministic candidate within the ``top`` of ``ranking`` (name -> effect in ``candidates``), below the
     last such candidate that leaves it unexplained (`LEFTOVER_LOG10_P`), in place; its entry gets
-    ``leftover_log10_p``, the most significant of its scores given each (`SCORES_GIVEN`)."""
-    score_given = SCORES_GIVEN[noise_effect]
+    ``leftover_log10_p``, the most significant of its scores given each (``score_given``'s: by default
+    `SCORES_GIVEN`'s)."""
+    score_given = score_given or SCORES_GIVEN[noise_effect]
     at = next((i for i, r in enumerate(ranking[:top]) if r["name"] == noise_effect), None)
     if at is None or ranking[at]["log10_p"] >= LEFTOVER_LOG10_P:
         return

@@ -10,7 +10,7 @@ from gyrocal.pipeline.paths import STEP_FILES
 from gyrocal.pipeline.settings import DiagnosticsSettings, ExtendSettings, PointEstimateSettings, PosteriorSettings
 from gyrocal.pipeline.steps import common
 
-__all__ = ["advised", "decide", "run"]
+__all__ = ["advised", "decide", "instead", "run"]
 
 log = logging.getLogger("gyrocal")
 
@@ -32,8 +32,7 @@ def decide(name: str, bases, files, settings: ExtendSettings) -> Extension:
         base = bases[0]
         record = common.read_refusal(files.diagnostics[0])
         if record is not None:
-            step = advised([base], [record], f"the loop's step {base} was refused")
-            return step if step.fitted else Extension(base, "", [], f"the loop stopped at {base}: {record['reason']}")
+            return instead(base, record)
     doc = common.read_json(files.diagnostics[bases.index(base)])
     return next_effect(base, doc["effects"], doc, settings.diagnostics["diagnostics"]["structure_log10_p_min"])
 
@@ -41,14 +40,26 @@ def decide(name: str, bases, files, settings: ExtendSettings) -> Extension:
 def advised(bases, records, why: str = "every variant was refused") -> Extension:
     """Where every variant is refused, the first step of the loop extends the first whose refusal advises
     a library effect (``advice`` in its record: `refusals.EstimateError`) by that effect, as the reviewed
-    model's misfit would be extended by the effect that explains it; otherwise it stops with the reason.
-    A later step whose base (the step before) was refused takes its advice the same way (``why`` says which)."""
+    model's misfit would be extended by the effect that explains it; otherwise it stops with the reason."""
     for base, record in zip(bases, records):
         effect = record.get("advice", "")
         if effect in LIBRARY and effect not in record.get("effects", []):
             return Extension(base, effect, list(record["effects"]) + [effect],
                              f"{why}; model {base}'s refusal ({record['step']}) advises adding {effect}")
     return Extension(bases[0], "", [], f"{why}, and no refusal advises a library effect to add")
+
+
+def instead(name: str, record: dict) -> Extension:
+    """A later step whose base, the loop's step ``name``, was refused (its ``record``): where the refusal
+    advises a library effect, the model that step extended (its effects less the one it added, the last)
+    extended by the advice instead, so that no effect whose fit was refused is carried on; otherwise the
+    loop stops with the refusal's reason."""
+    effect, effects = record.get("advice", ""), list(record.get("effects", []))
+    if effect not in LIBRARY or not effects or effect in effects[:-1]:
+        return Extension(name, "", [], f"the loop stopped at {name}: {record['reason']}")
+    return Extension(name, effect, effects[:-1] + [effect],
+                     f"the loop's step {name} (+ {effects[-1]}) was refused ({record['step']}), and its refusal advises "
+                     f"{effect}: the model it extended, extended by {effect} instead")
 
 
 def run(name: str, bases, files, maneuver_files, input_json, out, refusal_json, settings: ExtendSettings) -> Extension:
