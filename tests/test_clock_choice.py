@@ -106,6 +106,7 @@ def test_the_preprocess_step_chooses_the_clock_records_why_and_every_maneuver_an
     assert np.isfinite(est.correlation_time_s) and est.correlation_time_s > 0
 
 
+@pytest.mark.full  # 2 s each; the fast tier keeps the clock's choice on one maneuver and the rule
 @pytest.mark.parametrize("gm, significant", [(GM_ANGLE, True), ({"gm_clock_s_per_rad": 3000.0}, False)],
                          ids=["angle-clock error", "white error"])
 def test_on_the_angle_clock_the_ranking_scores_correlated_noise_by_the_exact_likelihood_ratio(gm, significant):

@@ -13,6 +13,7 @@ import yaml
 from gyrocal import checks
 from gyrocal.checks import physics, saturation, sensing
 from gyrocal.criticism.bands import outside_by_group
+from gyrocal.inference import clock
 from gyrocal.io import importer
 from gyrocal.io.telemetry import TelemetryError, read_campaign
 from gyrocal.maneuvers import preprocess
@@ -177,12 +178,31 @@ def tstick_config(config, models, **settings):
 @pytest.fixture(scope="module")
 def xyz_run(tmp_path_factory, config):
     """The real-data quick start's run (docs/real-data.md), baseline model only: the x, y, z trials with the reference kept
-    every second, the default config updated by config/tstick.yaml as --configfile does."""
+    every second, the default config updated by config/tstick.yaml as --configfile does; on the time clock
+    (the import asks for the clock to be chosen, which `test_the_clock_is_chosen_on_the_real_trials` runs)."""
     cfg = tstick_config(config, ["baseline"])
     root = tmp_path_factory.mktemp("tstick_run")
     importer.import_files("repoimu", root / "campaign", [DATA / f"{t}.csv" for t in TRIALS], reference_interval_s=1.0)
+    meta = root / "campaign" / "campaign.yaml"
+    text = meta.read_text()
+    assert "gm_clock_s_per_rad: auto" in text
+    meta.write_text(text.replace("gm_clock_s_per_rad: auto", "gm_clock_s_per_rad: 0"))
     run_campaign(root / "campaign", root / "out", cfg)
     return root / "out"
+
+
+@pytest.mark.full  # 25 s: the pilot, the clocks' grid, and the diagnostics' ratio given each candidate
+def test_the_clock_is_chosen_on_the_real_trials(tmp_path, config):
+    """The quick start's import asks for the clock (``auto``): the run records the one chosen and why, and
+    reaches a verdict."""
+    root = tmp_path / "tstick"
+    importer.import_files("repoimu", root / "campaign", [DATA / f"{t}.csv" for t in TRIALS], reference_interval_s=1.0)
+    run_campaign(root / "campaign", root / "out", tstick_config(config, ["baseline"]))
+    record = json.loads((root / "out" / "preprocess" / "gm_clock.json").read_text())
+    assert record["requested"] == "auto" and record["clock_s_per_rad"] in clock.GRID_S_PER_RAD
+    assert record["reason"].startswith("the time clock" if record["clock_s_per_rad"] == 0 else
+                                       f"{record['clock_s_per_rad']:g} s a radian turned")
+    assert json.loads((root / "out" / "verdict.json").read_text())["verdict"] in ("GO", "NO-GO")
 
 
 def test_the_real_data_run_reaches_a_verdict_with_finite_intervals_for_every_parameter(xyz_run):
