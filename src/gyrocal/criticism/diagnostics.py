@@ -222,8 +222,8 @@ def rank(maneuvers, estimate: PointEstimate, extra_columns, plugin_effects=(), w
     on_clock = maneuvers[0].gm_clock_s_per_rad > 0
     if white is not None and not estimate.spec.correlated_noise:
         fitted = clock.likelihood_ratio(maneuvers, estimate) if on_clock else white["gauss_markov"]
-        said = (f" (on the campaign's clock of {fitted.get('clock_s_per_rad', 0.0):g} s a radian turned: the REML's "
-                f"likelihood ratio, share {fitted['share']:.2f}, tau {fitted.get('tau_s', 0.0):.3g} clock seconds)"
+        said = (f" (on the campaign's clock of {fitted['clock_s_per_rad']:g} s a radian turned: the REML's "
+                f"likelihood ratio, share {fitted['share']:.2f}, tau {fitted['tau_s']:.3g} clock seconds)"
                 if on_clock else correlation.caveat(fitted))
         for effect in (e for e in effects.LIBRARY.values() if e.noise and not e.rate_noise):
             ranking.append(_entry(effect.name, "effect", fitted["chi2"], correlation.GAUSS_MARKOV_DF,

@@ -84,6 +84,12 @@ class ClockChoice:
                 "gain_min": GAIN_MIN, "grid": self.grid}
 
 
+def _group_index(maneuvers):
+    """Each maneuver's noise group (`noise_groups`), or None where the campaign has one: as the REML takes them."""
+    names, index = noise_groups(maneuvers)
+    return index if len(names) > 1 else None
+
+
 def with_clock(stated_noise: dict, maneuvers) -> dict:
     """The noise knowledge with the clock the maneuvers carry (the one stated, or the one chosen where
     campaign.yaml asks for ``auto``), as the fits and the priors read it (`covariance.gm_tau_prior_s`)."""
@@ -153,8 +159,7 @@ def likelihood_ratio(maneuvers, estimate, added=()) -> dict:
     theta = np.concatenate([estimate.theta, np.zeros(len(spec) - len(estimate.spec))])
     lins = [errormodel.linearize(d, spec, theta, estimate.biases[m]) if added else estimate.linearize(maneuvers, m)
             for m, d in enumerate(maneuvers)]
-    names, index = noise_groups(maneuvers)
-    groups = index if len(names) > 1 else None
+    groups = _group_index(maneuvers)
     jitter = estimate.spec.jitter_noise
     start = covariance.log_sigma_of(estimate.stated_noise, jitter)
     white = [covariance.build(lin, estimate.boresight, 0.0, jitter) for lin in lins]
@@ -186,7 +191,6 @@ def choose(maneuvers, stated_noise: dict, sensor_class=None, grid=GRID_S_PER_RAD
         est, lins = pilot(maneuvers, stated_noise, sensor_class)
     except (np.linalg.LinAlgError, ValueError, FloatingPointError) as exc:
         return ClockChoice(0.0, [], failed=f"the pilot fit failed ({exc})")
-    names, index = noise_groups(maneuvers)
     rows = fitted_grid(lins, angle_steps(maneuvers, est), est.boresight, covariance.log_sigma_of(stated_noise), grid,
-                       index if len(names) > 1 else None)
+                       _group_index(maneuvers))
     return ClockChoice(chosen(rows), rows)

@@ -293,10 +293,6 @@ def _parse_star_tracker(path, raw, line_of=lambda keys: "?") -> dict:
     for key in ("sigma_cross_arcsec", "sigma_about_arcsec", "rate_hz", "st_jitter_ms"):
         if key in raw and not _positive_number(raw[key]):
             fail(path, f"star_tracker.{key}: must be a positive number")
-    if GM_CLOCK_KEY in raw and raw[GM_CLOCK_KEY] != GM_CLOCK_AUTO and not (
-            _is_number(raw[GM_CLOCK_KEY]) and raw[GM_CLOCK_KEY] >= 0):
-        fail(path, f"star_tracker.{GM_CLOCK_KEY}: must be a number >= 0 (seconds per radian turned; 0: time only) "
-                   f"or {GM_CLOCK_AUTO!r} (chosen from the data); got {excerpt(raw[GM_CLOCK_KEY])}")
     out = dict(raw)
     if "boresight_body" in raw:
         b = raw["boresight_body"]

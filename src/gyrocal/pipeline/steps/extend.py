@@ -37,16 +37,17 @@ def decide(name: str, bases, files, settings: ExtendSettings) -> Extension:
     return next_effect(base, doc["effects"], doc, settings.diagnostics["diagnostics"]["structure_log10_p_min"])
 
 
-def advised(bases, records, why: str = "every variant was refused") -> Extension:
+def advised(bases, records) -> Extension:
     """Where every variant is refused, the first step of the loop extends the first whose refusal advises
     a library effect (``advice`` in its record: `refusals.EstimateError`) by that effect, as the reviewed
     model's misfit would be extended by the effect that explains it; otherwise it stops with the reason."""
     for base, record in zip(bases, records):
         effect = record.get("advice", "")
-        if effect in LIBRARY and effect not in record.get("effects", []):
+        if effect in LIBRARY and effect not in record["effects"]:
             return Extension(base, effect, list(record["effects"]) + [effect],
-                             f"{why}; model {base}'s refusal ({record['step']}) advises adding {effect}")
-    return Extension(bases[0], "", [], f"{why}, and no refusal advises a library effect to add")
+                             f"every variant was refused; model {base}'s refusal ({record['step']}) advises adding "
+                             f"{effect}")
+    return Extension(bases[0], "", [], "every variant was refused, and no refusal advises a library effect to add")
 
 
 def instead(name: str, record: dict) -> Extension:
