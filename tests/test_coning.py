@@ -94,3 +94,16 @@ def test_a_wobble_within_a_sparse_references_interval_is_not_taken_for_a_unit_sl
     findings = Findings()
     limits = sensing.physical_limits(data.channels, "mems")
     assert physics.rotation_findings(campaign, sensed, limits, findings) and not findings.errors
+
+
+def test_intervals_spanning_less_than_a_block_are_summed_as_one_block():
+    """A reading under which the gyro turns too far to compare in most intervals can leave two short
+    ones, under one `CHECK_BLOCK_S` together: they are one block, not none (which ended RepoIMU's
+    Test05 Trial3 at 1 s in a numpy error rather than its clipping refusal)."""
+    dt = np.array([0.3, 0.4])
+    d = np.array([[1.0, 0.0, 0.0], [2.0, 1.0, 0.0]])
+    blocked_dt, blocked_d = sensing.blocked_sums(dt, d)
+    np.testing.assert_allclose(blocked_dt, [0.7])
+    np.testing.assert_allclose(blocked_d, [[3.0, 1.0, 0.0]])
+    assert not sensing.consistent(d, d, dt, 0, 0.02, 0.01)  # one block cannot determine a scale factor
+    np.testing.assert_allclose(sensing.blocked_sums(np.full(6, 0.5), np.arange(6.0))[1], [1.0, 5.0, 9.0])

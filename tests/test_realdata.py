@@ -80,7 +80,7 @@ def test_the_x_y_z_trials_with_the_reference_kept_every_second_pass_validation(t
 
 CLIPS = (r"maneuver TStick_Test05_Trial1: gyro channel gyro_x sits flat at its peak \+416.6 deg/s for 693 samples "
          r"\(within 1%; 25 runs of 8 or more\) and flat at its peak -421.6 deg/s for 770 samples \(within 1%; 23 runs "
-         r"of 8 or more\), changing by a median 0.0\d deg/s between samples where its noise is 0.\d\d deg/s: the gyro "
+         r"of 8 or more\), its noise there 0.0\d\d deg/s where the channel's is 0.\d\d deg/s: the gyro "
          r"clips at its range, so the body's rotation there is not measured. Leave the maneuver out, or cut it "
          r"before the first clipped sample, at 7.10 s")
 """The fast trial's refusal, at any reference interval: its x gyro sits at about 420 deg/s, where
@@ -110,8 +110,8 @@ def test_the_fast_trial_with_the_reference_every_second_is_too_sparse_for_its_mo
 
 def test_only_the_fast_trial_clips_and_only_its_x_gyro(tmp_path):
     """From the gyro alone, whatever the reference: the four trials that turn at up to 80 deg/s
-    have no flat top; the fast one's x gyro sits flat at +416.6 and -421.6 deg/s, flatter than
-    its noise by a factor of about 10, its y and z gyros (up to 42 deg/s) not at all."""
+    have no flat top; the fast one's x gyro sits flat at +416.6 and -421.6 deg/s, its noise there
+    under a twentieth of the channel's, its y and z gyros (up to 42 deg/s) not at all."""
     mapping = importer.read_mapping("repoimu")
     clipped = {}
     for trial in ["TStick_Test02_Trial1", "TStick_Test03_Trial1", "TStick_Test03_Trial2", "TStick_Test04_Trial1",
@@ -121,7 +121,7 @@ def test_only_the_fast_trial_clips_and_only_its_x_gyro(tmp_path):
         found = [p for i, c in enumerate(data.channels) for p in saturation.plateaus(c.name, rate[:, i])]
         if found:
             clipped[trial] = [(p.channel, p.sign, round(float(np.rad2deg(p.level_rad_s)), 1), p.samples) for p in found]
-            assert all(p.change_rad_s < 0.2 * p.noise_rad_s for p in found)
+            assert all(p.roughness_rad_s < 0.2 * p.noise_rad_s for p in found)
     assert clipped == {"TStick_Test05_Trial1": [("gyro_x", 1, 416.6, 693), ("gyro_x", -1, 421.6, 770)]}
 
 

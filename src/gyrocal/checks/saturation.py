@@ -6,10 +6,11 @@ reference at all:
 
 - the channel's rate sits within a small band of the largest rate it reports (or of the range
   a mapping declares) for several samples in a row, and
-- there it is flatter than the channel's own noise: a saturated converter outputs one value,
-  while a body that really turns at a steady rate (a spacecraft's coast at its slew rate)
-  still shows the sensor's noise at the top, and a smooth peak of a hand-held motion shows its
-  curvature and the noise.
+- there it is smoother than the channel's own noise, both measured by second differences: a
+  saturated converter outputs one value, or one that drifts slowly as its calibration mixes in
+  the other axes, while a body that really turns at a steady rate (a spacecraft's coast at its
+  slew rate) still shows the sensor's noise at the top, and a smooth peak of a hand-held motion
+  shows its changing curvature and the noise.
 
 A declared range needs no flatness: a rate that sits at the range for a few samples is at
 the range, and what the body did beyond it is not measured. A noise-free gyro (a simulation
@@ -47,11 +48,15 @@ DECLARED_MIN_RUN = 2
 """Consecutive samples at a declared range that make it clipped: two samples at the range are a
 flat top, whatever their noise."""
 FLAT_NOISE = 0.25
-"""The runs near a peak are flat when the median change of the rate between their samples is
-below this share of the channel's noise sd (`channel_noise`). White noise at a steady rate gives
-0.95 (1.17 for rates integrated by the trapezoid); the quantised simulated DTGs of
-tests/data/tiny.yaml and config/scenarios/mom.yaml 1.10 and 0.83; the RepoIMU trials that do not
-clip 1.05 to 2.0, a smooth peak adding its curvature. The clipped RepoIMU channel: 0.08 and 0.15."""
+"""The runs near a peak are flat when their own noise sd, measured as `channel_noise` measures the
+channel's (second differences, pooled over the runs), is below this share of the channel's. White
+noise at a steady rate gives 1 whatever filtered it (a trapezoid's average included), as both sides
+are the same statistic (the quantised simulated DTGs of tests/data/tiny.yaml and
+config/scenarios/mom.yaml: 1.0). On the trapezoid-integrated rates of every RepoIMU and BROAD recording the
+runs that do not clip give 0.47 to 2.8, and those at an Xsens's range (408-426 deg/s: Test05's three
+trials, Test06 Trials 1 and 2, Test07 Trials 2 and 3) 0.024 to 0.115: its output drifts smoothly
+along the plateau. (The median change between samples, the test before, gave 0.08 to 0.76 on the
+clipped runs and 0.78 on one that does not clip: it let four clipped trials through.)"""
 LEVEL_NOISE = 10.0
 """A peak is judged only where it stands this many noise sds clear of zero: on an axis that
 barely turns, the "peak" is noise."""
@@ -88,8 +93,8 @@ class Plateau:
     """Runs of at least `MIN_RUN` (`DECLARED_MIN_RUN` at a declared range) that sit flat there."""
     first: int
     """Index of the first sample within the band, in the maneuver's increments."""
-    change_rad_s: float
-    """Median change of the rate between samples in the flat runs."""
+    roughness_rad_s: float
+    """The runs' own noise sd, from their second differences as `channel_noise` (pooled over the runs)."""
     noise_rad_s: float
     """The channel's noise sd (`channel_noise`)."""
 
@@ -121,9 +126,8 @@ def plateaus(name: str, rate, range_rad_s=None) -> list:
     """The flat tops of one channel's rate (rad/s, one value per sample), one `Plateau` per sign
     that has one. At a declared ``range_rad_s``: `DECLARED_MIN_RUN` samples in a row within
     `FLAT_BAND` of it, flat or not. Otherwise, at the largest rate observed: the runs of at least
-    `MIN_RUN` samples within the band of it, whose rate changes between samples, pooled over the
-    runs (one test per sign, however many runs), by a median of less than `FLAT_NOISE` of the
-    channel's noise."""
+    `MIN_RUN` samples within the band of it whose own noise (`channel_noise` of the runs, pooled:
+    one test per sign, however many runs) is less than `FLAT_NOISE` of the channel's."""
     rate = np.asarray(rate, dtype=float)
     if len(rate) < MIN_RUN:
         return []
@@ -146,7 +150,7 @@ def plateaus(name: str, rate, range_rad_s=None) -> list:
         spans = [(a, b) for a, b in _runs(near) if b - a >= MIN_RUN]
         if spans:
             p = _plateau(name, sign, peak, False, x, spans, noise)
-            if p.change_rad_s < FLAT_NOISE * noise:
+            if p.roughness_rad_s < FLAT_NOISE * noise:
                 found.append(p)
     return found
 
@@ -154,10 +158,10 @@ def plateaus(name: str, rate, range_rad_s=None) -> list:
 def _plateau(name, sign, level, declared, x, spans, noise) -> Plateau:
     """The `Plateau` of the flat ``spans`` at ``level``; its samples are those within `FLAT_BAND`
     of the level (the runs may reach further down, into the noise's spread)."""
-    change = np.concatenate([np.abs(np.diff(x[a:b])) for a, b in spans])
+    d2 = np.concatenate([np.abs(np.diff(x[a:b], 2)) for a, b in spans])
     at = x >= (1 - FLAT_BAND) * level
     return Plateau(name, sign, level, declared, int(at.sum()), len(spans), int(np.argmax(at)),
-                   float(np.median(change)), noise)
+                   float(1.4826 * np.median(d2) / np.sqrt(6.0)), noise)
 
 
 def saturation_findings(sensed: Sensed, sf_bound, findings: Findings, range_rad_s=None) -> bool:
@@ -190,8 +194,8 @@ def _why(data, channel: str, found: list) -> str:
         parts.append(f"{what} {p.sign * np.rad2deg(p.level_rad_s):+.4g} deg/s for {p.samples} samples "
                      f"(within {FLAT_BAND:.0%}; {p.flat_runs} run{'s' if p.flat_runs > 1 else ''} of {runs} or more)")
     judged = [p for p in found if not p.declared]
-    flat = (f", changing by a median {np.rad2deg(judged[0].change_rad_s):.2g} deg/s between samples where its noise "
-            f"is {np.rad2deg(judged[0].noise_rad_s):.2g} deg/s" if judged else "")
+    flat = (f", its noise there {np.rad2deg(judged[0].roughness_rad_s):.2g} deg/s where the channel's is "
+            f"{np.rad2deg(judged[0].noise_rad_s):.2g} deg/s" if judged else "")
     t_first = float(data.gyro_time[min(p.first for p in found)])
     return (f"maneuver {data.id}: gyro channel {channel} sits {' and '.join(parts)}{flat}: the gyro "
             f"clips at its range, so the body's rotation there is not measured. Leave the maneuver out, or cut it "

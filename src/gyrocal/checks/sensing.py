@@ -136,12 +136,15 @@ def fit_rotation(d_gyro, d_st, dt, axis: int, bias=True) -> RotationFit:
     """Least squares of the gyro's interval rotations on the star tracker's about all three axes
     and (with ``bias``) a constant rate. The response to rotation about ``axis`` is 1 + scale
     error on that axis and the misalignments across; the other axes' columns take up any motion
-    about them (a hand-held trial turns about more than one axis)."""
+    about them (a hand-held trial turns about more than one axis). With no more intervals than
+    columns nothing is left to measure the noise by, and the response's sd is infinite."""
     excursion = np.ptp(np.cumsum(d_st, axis=0), axis=0)
     x = np.column_stack([d_st, dt] if bias else [d_st])
     coef, *_ = np.linalg.lstsq(x, d_gyro, rcond=None)
     resid = d_gyro - x @ coef
     sigma = 1.4826 * np.median(np.abs(resid - np.median(resid, axis=0)), axis=0) + 1e-15
+    if len(x) <= x.shape[1]:
+        sigma = np.full(3, np.inf)  # no residual to measure the noise by: the response is not determined
     info = np.linalg.pinv(x.T @ x)[axis, axis]
     return RotationFit(int(np.argmax(excursion)), float(d_st[:, axis].sum()), excursion, coef[axis],
                        sigma * np.sqrt(info))
@@ -173,8 +176,10 @@ def _kept(keep, *series):
 
 
 def blocked_sums(dt, *series):
-    """Sums of consecutive intervals over blocks of at least `CHECK_BLOCK_S` (the dt first)."""
-    size = max(1, round(CHECK_BLOCK_S / float(np.median(dt))))
+    """Sums of consecutive intervals over blocks of at least `CHECK_BLOCK_S` (the dt first); one block
+    of them all where they span less (a reading under which the gyro turns too far to compare in
+    most intervals can leave a few short ones)."""
+    size = max(1, min(round(CHECK_BLOCK_S / float(np.median(dt))), len(dt)))
     n = len(dt) // size * size
     return [x[:n].reshape(n // size, size, *x.shape[1:]).sum(axis=1) for x in (dt, *series)]
 
