@@ -40,7 +40,7 @@ def test_the_composed_gyro_rotation_between_reference_samples_is_the_references_
 
 
 def test_the_free_motion_check_accepts_the_tumble_its_summed_increments_put_off():
-    sensed = sensing.sense(coning_maneuver())
+    sensed = sensing.sense(coning_maneuver(intervals=80))  # 8 blocks: 4 would leave the fit no residual
     sf_bound, mis_bound, _ = sensing.physical_limits(sensed.data.channels, "dtg")
     assert sensing.consistent_any(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, mis_bound, 1e-6)
     assert not sensing.consistent_any(sensed.d_gyro, sensed.d_st, sensed.dt, sf_bound, mis_bound, 1e-6)
@@ -100,10 +100,20 @@ def test_intervals_spanning_less_than_a_block_are_summed_as_one_block():
     """A reading under which the gyro turns too far to compare in most intervals can leave two short
     ones, under one `CHECK_BLOCK_S` together: they are one block, not none (which ended RepoIMU's
     Test05 Trial3 at 1 s in a numpy error rather than its clipping refusal)."""
-    dt = np.array([0.3, 0.4])
-    d = np.array([[1.0, 0.0, 0.0], [2.0, 1.0, 0.0]])
-    blocked_dt, blocked_d = sensing.blocked_sums(dt, d)
+    blocked_dt, blocked_d = sensing.blocked_sums(np.array([0.3, 0.4]), np.array([[1.0, 0.0, 0.0], [2.0, 1.0, 0.0]]))
     np.testing.assert_allclose(blocked_dt, [0.7])
     np.testing.assert_allclose(blocked_d, [[3.0, 1.0, 0.0]])
-    assert not sensing.consistent(d, d, dt, 0, 0.02, 0.01)  # one block cannot determine a scale factor
     np.testing.assert_allclose(sensing.blocked_sums(np.full(6, 0.5), np.arange(6.0))[1], [1.0, 5.0, 9.0])
+
+
+def test_a_fit_with_no_residual_left_determines_nothing():
+    """Three blocks in which the gyros turn exactly as the reference: the fit of three axes and a rate
+    matches them exactly, with nothing left to measure the noise by, so it is not evidence either way
+    (it used to count as consistent, to a sd of 1e-15). With a fourth, fifth and sixth it is."""
+    rng = np.random.default_rng(2)
+    d = rng.normal(0, 0.1, (6, 3)) + [0.5, 0.0, 0.0]
+    d_gyro = d + rng.normal(0, 1e-6, d.shape)
+    dt = np.ones(6)
+    assert not sensing.consistent(d[:3], d[:3], dt[:3], 0, 0.02, 0.01)
+    assert sensing.response(d[:4], d[:4], dt[:4], 0.02).short
+    assert sensing.consistent(d_gyro, d, dt, 0, 0.02, 0.01)

@@ -121,7 +121,7 @@ def test_only_the_fast_trial_clips_and_only_its_x_gyro(tmp_path):
         found = [p for i, c in enumerate(data.channels) for p in saturation.plateaus(c.name, rate[:, i])]
         if found:
             clipped[trial] = [(p.channel, p.sign, round(float(np.rad2deg(p.level_rad_s)), 1), p.samples) for p in found]
-            assert all(p.roughness_rad_s < 0.2 * p.noise_rad_s for p in found)
+            assert all(p.roughness_rad_s < 0.05 * p.noise_rad_s for p in found)
     assert clipped == {"TStick_Test05_Trial1": [("gyro_x", 1, 416.6, 693), ("gyro_x", -1, 421.6, 770)]}
 
 

@@ -104,18 +104,38 @@ def test_a_clipped_channel_is_flat_to_a_tenth_of_its_noise():
 
 def test_a_clipped_plateau_that_drifts_along_its_top_is_flat():
     """A clipped Xsens's output is not one value: it drifts smoothly along the plateau (0.1 deg/s a
-    sample on RepoIMU's Test06), a third of its noise between samples, so a test on the change between
-    samples let it through. Its second differences are flat: both signs are found, at the clip."""
+    sample on RepoIMU's Test06, under 1 % of its 426 deg/s), a third of the channel's noise between
+    samples, so a test on the change between samples let it through. Here 20-sample plateaus at each
+    crest of a noisy swing climb 0.0018 rad/s a sample (0.3 of the noise) from 1.2 rad/s: their second
+    differences are flat, and both signs are found at the plateau's top, with its samples."""
     rng = np.random.default_rng(1)
     t = 0.01 * np.arange(6000)
-    rate = 1.4 * np.sin(2 * np.pi * 0.1 * t) + rng.normal(0, 0.006, t.size)
+    rate = np.sin(2 * np.pi * 0.1 * t) + rng.normal(0, 0.006, t.size)
+    drift = 1.2 + 0.0018 * np.arange(20)
     for sign in (1, -1):
-        top = sign * rate > 1.2
-        start = np.flatnonzero(np.diff(np.concatenate([[0], top.astype(int)])) == 1)
-        since = np.arange(t.size) - np.maximum.accumulate(np.where(np.isin(np.arange(t.size), start), np.arange(t.size), 0))
-        rate = np.where(top, sign * (1.2 + 0.002 * since), rate)
-    changes = [np.median(np.abs(np.diff(rate[sign * rate > 1.2]))) for sign in (1, -1)]
-    assert all(c > 0.25 * 0.006 for c in changes)  # the change between samples alone would not call it flat
+        for crest in np.flatnonzero(np.isclose(np.sin(2 * np.pi * 0.1 * t), sign)):
+            rate[crest - 10:crest + 10] = sign * drift
+    plateau = np.abs(rate) > 1.1
+    assert np.median(np.abs(np.diff(rate[plateau]))) > 0.25 * 0.006  # the change between samples: not flat
     found = saturation.plateaus("g", rate)
-    assert [p.sign for p in found] == [1, -1]
+    top = float(drift[-1])
+    assert [(p.sign, round(p.level_rad_s, 4)) for p in found] == [(1, round(top, 4)), (-1, round(top, 4))]
+    assert [p.samples for p in found] == [int((rate >= 0.99 * top).sum()), int((rate <= -0.99 * top).sum())]
     assert all(p.roughness_rad_s < 0.25 * p.noise_rad_s for p in found)
+
+
+def test_a_steady_peak_too_short_to_judge_is_not_called_flat():
+    """Steep noisy ramps (0.09 rad/s a sample, beyond the band of 8 noise sds) to a run of 12 samples at
+    each sign's peak: 10 second differences, fewer than `MIN_SECOND_DIFFERENCES` (white noise would
+    read flat by chance in 0.3 % of such peaks), so even a run all but noise-free is not judged from
+    the gyro alone. The same runs 18 samples long are."""
+    def swings(run):
+        rng = np.random.default_rng(5)
+        up, across, down = np.linspace(0, 0.85, 10), np.linspace(0.85, -0.85, 20), np.linspace(-0.85, 0, 10)
+        rate = np.concatenate([up, np.zeros(run), across, np.zeros(run), down])
+        rate = rate + rng.normal(0, 0.01, rate.size)
+        rate[10:10 + run] = 1.0 + 0.0001 * np.arange(run)
+        rate[30 + run:30 + 2 * run] = -1.0 - 0.0001 * np.arange(run)
+        return rate
+    assert saturation.plateaus("g", swings(12)) == []
+    assert [p.sign for p in saturation.plateaus("g", swings(18))] == [1, -1]

@@ -5,6 +5,7 @@ import numpy as np
 
 from gyrocal.checks.sensing import (
     CHECK_BLOCK_S,
+    FIT_COLUMNS,
     MAX_TURN_BETWEEN_REFERENCE_DEG,
     Sensed,
     blocked_sums,
@@ -25,7 +26,7 @@ from gyrocal.model.units import AXES, AXIS_INDEX, rad_to_arcsec
 
 __all__ = [
     "ALTERNATIVES", "GROSS_SCALE", "MAX_TURN_BETWEEN_REFERENCE_DEG", "path_ratio", "rotation_findings", "too_little",
-    "undersampled"
+    "too_short", "undersampled"
 ]
 
 ALTERNATIVES = (
@@ -70,6 +71,12 @@ def too_little(where: str, maneuver, turned_rad: float, min_angle_rad: float) ->
             "its prior: a hold, or a motion too small to calibrate on")
 
 
+def too_short(where: str) -> str:
+    """The warning for a maneuver too short to hold the gyros' rotation against the reference's."""
+    return (f"{where}: too short to hold the gyros' rotation against the reference's (at most {FIT_COLUMNS} "
+            f"blocks of {CHECK_BLOCK_S:g} s, as many as the fit's columns): not checked")
+
+
 def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Findings) -> bool:
     """Angle, axis, direction and units of one maneuver's rotation, gyro against star tracker;
     whether it is consistent. A free-motion maneuver (no axis label) is compared as a 3x3 response
@@ -88,6 +95,9 @@ def rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings: Find
     if fit.excursion_rad.max() < min_angle and gyro_excursion.max() < min_angle:
         findings.refuse("rotation", too_little(where, m, max(fit.excursion_rad.max(), gyro_excursion.max()), min_angle))
         return False
+    if len(blocked_dt) <= FIT_COLUMNS:
+        findings.warn("rotation", too_short(where))
+        return True
     if consistent(d_gyro, d_st, dt, a, sf_bound, mis_bound):
         n_errors = len(findings.errors)
         if fit.excursion_rad[a] < min_angle:
@@ -142,8 +152,7 @@ def free_rotation_findings(campaign: Campaign, sensed: Sensed, limits, findings:
     keep = comparable(sensed.d_gyro)
     first = response(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, noise_rad=noise, keep=keep)
     if first.short:
-        findings.warn("rotation", f"{where}: too short to hold the gyros' rotation against the reference's (fewer "
-                                  f"than three blocks of {CHECK_BLOCK_S:g} s): not checked")
+        findings.warn("rotation", too_short(where))
         return True
     accepted = consistent_any(sensed.d_gyro_turned, sensed.d_st, sensed.dt, sf_bound, mis_bound, noise, keep=keep)
     ratio = path_ratio(sensed)

@@ -13,10 +13,18 @@ reference at all:
   shows its changing curvature and the noise.
 
 A declared range needs no flatness: a rate that sits at the range for a few samples is at
-the range, and what the body did beyond it is not measured. A noise-free gyro (a simulation
-without noise) cannot be told flat from steady; there, and as a second test wherever the
-reference is dense enough, the reference's own rotation shows it: where the gyro sits near its
-peak the reference turns faster than the gyro says (`reference_evidence`).
+the range, and what the body did beyond it is not measured. A gyro too smooth to be judged alone
+(no noise at all), and as a second test wherever the reference is dense enough: the reference's
+own rotation shows it, as where the gyro sits near its peak the reference turns faster than the
+gyro says (`reference_evidence`).
+
+The channel's noise is measured over all of it, motion included (`channel_noise`): on hand-held
+recordings the changing acceleration makes up most of it (0.52 deg/s on RepoIMU's Test05, whose
+quiet stretches show 0.045), so "flat" means smoother than the rest of the channel. What that
+cannot tell from a clip: a gyro that coasts at a truly steady rate with a noise under a quarter of
+the rest of its motion's roughness, as a noise-free simulation with smooth slews elsewhere, or a
+quiet coast between violent shaking. Declare the range (``gyro.range_deg_s``), which replaces the
+judgement by a comparison, or give the simulation its sensor's noise.
 """
 
 from dataclasses import dataclass
@@ -29,8 +37,9 @@ from gyrocal.inference.fit.identification import DETECTION_SD
 from gyrocal.model.units import AXES
 
 __all__ = [
-    "BAND_NOISE", "DECLARED_MIN_RUN", "FLAT_BAND", "FLAT_NOISE", "LEVEL_NOISE", "MIN_RUN", "QUIET_SHARE",
-    "REFERENCE_BAND", "Plateau", "channel_noise", "gyro_range_rad_s", "plateaus", "reference_evidence", "saturation_findings",
+    "BAND_NOISE", "DECLARED_MIN_RUN", "FLAT_BAND", "FLAT_NOISE", "LEVEL_NOISE", "MIN_RUN", "MIN_SECOND_DIFFERENCES",
+    "QUIET_SHARE", "REFERENCE_BAND", "Plateau", "channel_noise", "gyro_range_rad_s", "plateaus", "reference_evidence",
+    "saturation_findings",
 ]
 
 FLAT_BAND = 0.01
@@ -44,6 +53,11 @@ upper tail, in short runs that are narrow by construction."""
 MIN_RUN = 8
 """Consecutive samples near the observed peak that make a run ("several in a row"); the runs are
 judged together, so a few lucky short runs of noise do not make a channel flat."""
+MIN_SECOND_DIFFERENCES = 14
+"""Without a declared range, the runs near a peak are judged only where they hold this many second
+differences together: white noise at a steady rate then reads flat (`FLAT_NOISE`) by chance in
+0.07 % of peaks (in 1.2 % with one run of 8 samples, 6 second differences; simulated). The shortest
+clipped stretch of the real recordings below holds 16 (RepoIMU Test06 Trial2, 18 samples at -408 deg/s)."""
 DECLARED_MIN_RUN = 2
 """Consecutive samples at a declared range that make it clipped: two samples at the range are a
 flat top, whatever their noise."""
@@ -105,9 +119,10 @@ def channel_noise(rate, skip=None) -> float:
     steady rate and a constant acceleration cancel, so holds, coasts and ramps all show the
     sensor's noise. A hand-held motion's changing acceleration adds to it (0.52 deg/s on the fast
     RepoIMU trial's x gyro, 0.13 on the slower trials, whose rates the trapezoid averages), which
-    makes the flatness test stricter, not looser. ``skip``: samples left out (the near-peak ones,
-    where a clipped gyro has no noise), unless too few would be left. Zero for a noise-free or
-    coarsely quantised gyro, which cannot be judged flat."""
+    makes the flatness test looser (the module's docstring says what that cannot tell). ``skip``:
+    samples left out (the near-peak ones, where a clipped gyro has no noise), unless too few would be
+    left. Zero for a noise-free or coarsely quantised gyro at rest or on constant accelerations, which
+    cannot be judged flat."""
     d2 = np.abs(np.diff(rate, 2))
     if skip is not None and (~skip[1:-1]).sum() >= 2 * MIN_RUN:
         d2 = d2[~skip[1:-1]]
@@ -126,8 +141,9 @@ def plateaus(name: str, rate, range_rad_s=None) -> list:
     """The flat tops of one channel's rate (rad/s, one value per sample), one `Plateau` per sign
     that has one. At a declared ``range_rad_s``: `DECLARED_MIN_RUN` samples in a row within
     `FLAT_BAND` of it, flat or not. Otherwise, at the largest rate observed: the runs of at least
-    `MIN_RUN` samples within the band of it whose own noise (`channel_noise` of the runs, pooled:
-    one test per sign, however many runs) is less than `FLAT_NOISE` of the channel's."""
+    `MIN_RUN` samples within the band of it, `MIN_SECOND_DIFFERENCES` second differences together,
+    whose own noise (`channel_noise` of the runs, pooled: one test per sign, however many runs) is less
+    than `FLAT_NOISE` of the channel's."""
     rate = np.asarray(rate, dtype=float)
     if len(rate) < MIN_RUN:
         return []
@@ -148,7 +164,7 @@ def plateaus(name: str, rate, range_rad_s=None) -> list:
             continue  # with a known range, only the range: a peak below it is no clipping
         near = x >= peak - max(FLAT_BAND * peak, BAND_NOISE * noise)
         spans = [(a, b) for a, b in _runs(near) if b - a >= MIN_RUN]
-        if spans:
+        if sum(b - a - 2 for a, b in spans) >= MIN_SECOND_DIFFERENCES:
             p = _plateau(name, sign, peak, False, x, spans, noise)
             if p.roughness_rad_s < FLAT_NOISE * noise:
                 found.append(p)

@@ -15,6 +15,7 @@ from gyrocal.model.spec import baseline
 
 __all__ = [
     "CHECK_BLOCK_S",
+    "FIT_COLUMNS",
     "OUTLIER_REACH",
     "SIGNAL_TO_NOISE_MIN",
     "Response",
@@ -150,6 +151,10 @@ def fit_rotation(d_gyro, d_st, dt, axis: int, bias=True) -> RotationFit:
                        sigma * np.sqrt(info))
 
 
+FIT_COLUMNS = 4
+"""The rotation fits' columns: the reference's rotation about three axes and a constant rate. With no
+more blocks than these, no residual is left to measure the noise by."""
+
 CHECK_BLOCK_S = 1.0
 """The rotation checks compare the sensors over blocks of samples at least this long: over a
 fast reference's single interval, its noise and any sub-sample timing would bias the slope."""
@@ -224,7 +229,8 @@ class Response:
     """Every interval was kept though some turn too far to compare, or too few blocks were left without
     them: only a determined direction counts as evidence then."""
     short: bool = False
-    """Fewer than three blocks: the motion says nothing, and no direction is judged."""
+    """No more blocks than the fit's columns (three directions, and the rate with a bias): nothing is
+    left to measure the noise by, and no direction is judged."""
 
     def within(self, sf_bound, mis_bound, need_determined=False) -> bool:
         """Along every determined direction u, and every direction the reference turns clearly along,
@@ -263,7 +269,7 @@ def response(d_gyro, d_st, dt, sf_bound, bias=True, noise_rad=0.0, keep=None) ->
     elif keep.any():
         sparse = False
     dt, d_gyro, d_st = blocked
-    if len(dt) < 3:  # the motion spans too few blocks to say anything: no direction judged
+    if len(dt) <= FIT_COLUMNS - (not bias):  # no residual left to measure the noise by: no direction judged
         none = np.zeros(3, dtype=bool)
         return Response(np.eye(3), np.eye(3), np.full((3, 3), np.inf), none, none, sparse, short=True)
     _, _, vt = np.linalg.svd(d_st, full_matrices=False)
