@@ -16,8 +16,8 @@ from gyrocal.inference.sampling.proposal import (
     fitted_noise_proposal,
 )
 
-__all__ = ["AUTOCORR_WINDOW_C", "DE_SHARE", "LOCAL_SCALE", "LOCAL_SHARE", "START_REDRAWS", "SamplerResult",
-           "run_ensembles"]
+__all__ = ["AUTOCORR_WINDOW_C", "DE_SHARE", "LOCAL_SCALE", "LOCAL_SHARE", "MAX_REFITS", "REFIT_MIN_STEPS",
+           "REFIT_TAU_STEPS", "START_REDRAWS", "SamplerResult", "run_ensembles"]
 
 
 @dataclass
@@ -83,6 +83,15 @@ def _sampler(logpost, walkers, dim, noise, seed):
 START_REDRAWS = 100
 """Start points with zero posterior density are redrawn at most this often, then sampling stops."""
 
+REFIT_TAU_STEPS = 20.0
+"""A production chain whose autocorrelation time exceeds this many steps (the default campaign's are
+2.4-2.9) mixes slowly because its noise proposal, fitted to a burn-in too short for it, misses part
+of the posterior: the proposal is refitted to the second half of the chain so far, and production
+starts again from where the walkers are, what came before counted as burn-in (`MAX_REFITS` times)."""
+MAX_REFITS = 2
+REFIT_MIN_STEPS = 250
+"""A refit waits for this many production steps, whose second half it is fitted to."""
+
 
 def run_ensembles(logpost, proposal_mean, proposal_cov, cfg: dict, seed: int) -> SamplerResult:
     """Independent emcee ensembles of the log posterior ``logpost`` (`posterior.LogPosterior`), run until
@@ -99,9 +108,10 @@ def run_ensembles(logpost, proposal_mean, proposal_cov, cfg: dict, seed: int) ->
     chunk, multiple, max_steps = int(cfg["chunk_steps"]), float(cfg["min_tau_multiple"]), int(cfg["max_steps"])
     laplace = StudentProposal(proposal_mean, proposal_cov)
     start = StudentProposal(proposal_mean, proposal_cov, dof=5.0, inflate=2.0)
-    samplers = []
+    samplers, seeds = [], []
     for e in range(n_ens):
         sampler_seed = (seed * 7919 + e) % 2**32
+        seeds.append(sampler_seed)
         rng = np.random.default_rng([seed, e])
         p0 = start.draw(rng.standard_normal((walkers, dim)), rng.chisquare(start.dof, walkers))
         bad = ~np.isfinite(logpost(p0))
@@ -124,7 +134,7 @@ def run_ensembles(logpost, proposal_mean, proposal_cov, cfg: dict, seed: int) ->
             state = warm.run_mcmc(state, burn // 2)
             noise = fitted_noise_proposal(warm.get_chain(discard=burn // 4, flat=True)[:, p:])
         samplers.append([_sampler(logpost, walkers, dim, noise, sampler_seed), state])
-    steps = 0
+    steps, refits = 0, 0
     while True:
         n_new = int(cfg["initial_steps"]) if steps == 0 else chunk
         for pair in samplers:
@@ -133,6 +143,13 @@ def run_ensembles(logpost, proposal_mean, proposal_cov, cfg: dict, seed: int) ->
         tau = np.array([_autocorr_times(s.get_chain()) for s, _ in samplers])
         if steps >= multiple * tau.max() or steps + chunk > max_steps:
             break
+        if refits < MAX_REFITS and steps >= REFIT_MIN_STEPS and np.nanmax(tau) > REFIT_TAU_STEPS:
+            refits += 1
+            for e, pair in enumerate(samplers):
+                noise = fitted_noise_proposal(pair[0].get_chain(discard=steps // 2, flat=True)[:, p:])
+                pair[0] = _sampler(logpost, walkers, dim, noise, (seeds[e] + refits * 104729) % 2**32)
+            burn, steps = burn + steps, 0
+            continue
         budget.check(steps, tau)
     chains = np.stack([s.get_chain() for s, _ in samplers])
     acceptance = np.array([s.acceptance_fraction.mean() for s, _ in samplers])
