@@ -35,7 +35,8 @@ def run(seed=3):
 
 def test_a_noise_proposal_a_short_burn_in_placed_badly_is_refitted_and_the_chain_converges():
     result = run()
-    assert result.converged_length and result.burn == CFG["burn_steps"] + ensemble.REFIT_MIN_STEPS
+    assert result.converged_length and result.refits == 1
+    assert result.burn == CFG["burn_steps"] + ensemble.REFIT_MIN_STEPS  # the production before the refit discarded
     noise = result.chains[..., 1:].reshape(-1, 2)
     np.testing.assert_allclose(noise.mean(axis=0), Gaussian.mean, atol=0.1)
     np.testing.assert_allclose(noise.std(axis=0), [1.0, 1.0], atol=0.1)

@@ -34,14 +34,15 @@ class SamplingBudget:
         self.max_seconds = cfg.get("max_seconds")
         self.started = time.monotonic()
 
-    def check(self, steps: int, tau: np.ndarray):
+    def check(self, steps: int, tau: np.ndarray, spent: int = 0):
         """Raise `SamplingStopped` when the budget is spent (`stop`)."""
-        if reason := self.stop(steps, tau):
+        if reason := self.stop(steps, tau, spent):
             raise SamplingStopped(reason, tau)
 
-    def stop(self, steps: int, tau: np.ndarray) -> str:
+    def stop(self, steps: int, tau: np.ndarray, spent: int = 0) -> str:
         """Why sampling must stop after ``steps`` steps with autocorrelation times ``tau`` (steps, one
-        per ensemble and parameter), or "" to go on."""
+        per ensemble and parameter), or "" to go on. ``spent``: production steps discarded before these
+        (`ensemble.REFIT_TAU_STEPS`), which count against ``max_steps`` too."""
         if not np.any(np.isfinite(tau)):
             return ""
         worst = float(np.nanmax(tau))
@@ -49,9 +50,10 @@ class SamplingBudget:
         elapsed = time.monotonic() - self.started
         log.info("posterior: %d steps in %.0f s, autocorrelation time %.1f steps (%.0f steps needed)",
                  steps, elapsed, worst, needed)
-        if needed > self.max_steps:
-            return (f"after {steps} steps the chains' autocorrelation time is already {worst:.0f} steps: converging "
-                    f"needs {self.multiple:g} times that, {needed:.0f} steps, beyond sampler.max_steps = "
+        if spent + needed > self.max_steps:
+            before = f" (and {spent} before the noise proposal was refitted)" if spent else ""
+            return (f"after {steps} steps{before} the chains' autocorrelation time is already {worst:.0f} steps: "
+                    f"converging needs {self.multiple:g} times that, {needed:.0f} steps, beyond sampler.max_steps = "
                     f"{self.max_steps}")
         if self.max_seconds and elapsed > self.max_seconds and steps < needed:
             return (f"after {elapsed:.0f} s (sampler.max_seconds = {self.max_seconds:g}) and {steps} steps the chains "

@@ -1,6 +1,7 @@
 """The ensemble sampler: independent emcee ensembles with the collapsed move, run until every chain is
 long against its autocorrelation time, or stopped with the reason once the budget cannot get there."""
 
+import logging
 from dataclasses import dataclass
 
 import arviz as az
@@ -16,8 +17,8 @@ from gyrocal.inference.sampling.proposal import (
     fitted_noise_proposal,
 )
 
-__all__ = ["AUTOCORR_WINDOW_C", "DE_SHARE", "LOCAL_SCALE", "LOCAL_SHARE", "MAX_REFITS", "REFIT_MIN_STEPS",
-           "REFIT_TAU_STEPS", "START_REDRAWS", "SamplerResult", "run_ensembles"]
+__all__ = ["AUTOCORR_WINDOW_C", "DE_SHARE", "LOCAL_SCALE", "LOCAL_SHARE", "MAX_REFITS", "REFIT_MAX_STEPS",
+           "REFIT_MIN_STEPS", "REFIT_TAU_STEPS", "START_REDRAWS", "SamplerResult", "run_ensembles"]
 
 
 @dataclass
@@ -31,6 +32,8 @@ class SamplerResult:
     acceptance: np.ndarray
     converged_length: bool
     walkers: int
+    refits: int = 0
+    """Times the noise proposal was refitted before the kept production (`REFIT_TAU_STEPS`)."""
 
 
 AUTOCORR_WINDOW_C = 5.0
@@ -87,10 +90,16 @@ REFIT_TAU_STEPS = 20.0
 """A production chain whose autocorrelation time exceeds this many steps (the default campaign's are
 2.4-2.9) mixes slowly because its noise proposal, fitted to a burn-in too short for it, misses part
 of the posterior: the proposal is refitted to the second half of the chain so far, and production
-starts again from where the walkers are, what came before counted as burn-in (`MAX_REFITS` times)."""
+starts again from where the walkers are, what came before counted as burn-in (`MAX_REFITS` times).
+The production kept is a chain of a fixed kernel; the steps discarded count against the budget."""
 MAX_REFITS = 2
 REFIT_MIN_STEPS = 250
-"""A refit waits for this many production steps, whose second half it is fitted to."""
+"""A refit waits for this many production steps, whose second half it is fitted to..."""
+REFIT_MAX_STEPS = 500
+"""...and comes no later than this: a chain slow after that is left to the budget, so refits discard
+at most ``MAX_REFITS * REFIT_MAX_STEPS`` steps."""
+
+log = logging.getLogger("gyrocal")
 
 
 def run_ensembles(logpost, proposal_mean, proposal_cov, cfg: dict, seed: int) -> SamplerResult:
@@ -134,23 +143,37 @@ def run_ensembles(logpost, proposal_mean, proposal_cov, cfg: dict, seed: int) ->
             state = warm.run_mcmc(state, burn // 2)
             noise = fitted_noise_proposal(warm.get_chain(discard=burn // 4, flat=True)[:, p:])
         samplers.append([_sampler(logpost, walkers, dim, noise, sampler_seed), state])
-    steps, refits = 0, 0
+    steps, refits, spent = 0, 0, 0
     while True:
         n_new = int(cfg["initial_steps"]) if steps == 0 else chunk
         for pair in samplers:
             pair[1] = pair[0].run_mcmc(pair[1], n_new)
         steps += n_new
         tau = np.array([_autocorr_times(s.get_chain()) for s, _ in samplers])
-        if steps >= multiple * tau.max() or steps + chunk > max_steps:
+        if steps >= multiple * tau.max() or spent + steps + chunk > max_steps:
             break
-        if refits < MAX_REFITS and steps >= REFIT_MIN_STEPS and np.nanmax(tau) > REFIT_TAU_STEPS:
-            refits += 1
-            for e, pair in enumerate(samplers):
-                noise = fitted_noise_proposal(pair[0].get_chain(discard=steps // 2, flat=True)[:, p:])
-                pair[0] = _sampler(logpost, walkers, dim, noise, (seeds[e] + refits * 104729) % 2**32)
-            burn, steps = burn + steps, 0
+        if (refits < MAX_REFITS and REFIT_MIN_STEPS <= steps <= REFIT_MAX_STEPS and np.nanmax(tau) > REFIT_TAU_STEPS
+                and (refitted := _refitted(samplers, logpost, walkers, dim, seeds, steps // 2))):
+            samplers, refits = refitted, refits + 1
+            log.info("posterior: autocorrelation time %.1f steps after %d: the noise proposal refitted to the "
+                     "chains' second half (refit %d of at most %d), production starts again", np.nanmax(tau), steps,
+                     refits, MAX_REFITS)
+            burn, spent, steps = burn + steps, spent + steps, 0
             continue
-        budget.check(steps, tau)
+        budget.check(steps, tau, spent)
     chains = np.stack([s.get_chain() for s, _ in samplers])
     acceptance = np.array([s.acceptance_fraction.mean() for s, _ in samplers])
-    return SamplerResult(chains, tau, steps, burn, acceptance, bool(steps >= multiple * tau.max()), walkers)
+    return SamplerResult(chains, tau, steps, burn, acceptance, bool(steps >= multiple * tau.max()), walkers, refits)
+
+
+def _refitted(samplers, logpost, walkers, dim, seeds, discard):
+    """Each ensemble's sampler with its noise proposal fitted to its chain after ``discard`` steps, at
+    the walkers' states; None where a chain's noise did not move there (the budget then says why).
+    The states carry each ensemble's random state on, so the streams stay the ensembles' own."""
+    p = logpost.n_params
+    try:
+        proposals = [fitted_noise_proposal(s.get_chain(discard=discard, flat=True)[:, p:]) for s, _ in samplers]
+    except SamplingError:
+        return None
+    return [[_sampler(logpost, walkers, dim, noise, seeds[e]), state]
+            for e, (noise, (_, state)) in enumerate(zip(proposals, samplers))]

@@ -169,7 +169,7 @@ def sampler_record(post, summary, sampler_cfg: dict, seed: int) -> dict:
     return {
         "converged": bool(summary["converged"].all() and res.converged_length),
         "chain_length_ok": res.converged_length,
-        "steps": res.steps, "burn_steps": res.burn, "walkers": res.walkers,
+        "steps": res.steps, "burn_steps": res.burn, "refits": res.refits, "walkers": res.walkers,
         "ensembles": int(res.chains.shape[0]), "seed": seed,
         "tau_max_steps": float(res.tau.max()), "steps_over_tau": float(res.steps / res.tau.max()),
         "acceptance": res.acceptance.tolist(),
