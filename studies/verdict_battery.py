@@ -204,8 +204,10 @@ def precision_only(failed: list) -> bool:
 def rate_line(name: str, given: pd.Series, verdicts: pd.Series, event: str, target: str) -> str:
     """One row of the rates' table: P(``event`` | ``given``) with its Clopper-Pearson interval."""
     k, n = int((verdicts[given] == event).sum()), int(given.sum())
-    lo, hi = binomial_interval(k, n) if n else (np.nan, np.nan)
-    return f"| {name} | {k} / {n} | {k / n if n else np.nan:.3f} | [{lo:.3f}, {hi:.3f}] | {target} |"
+    if not n:
+        return f"| {name} | 0 / 0 | none given | [0, 1] | {target} |"
+    lo, hi = binomial_interval(k, n)
+    return f"| {name} | {k} / {n} | {k / n:.3f} | [{lo:.3f}, {hi:.3f}] | {target} |"
 
 
 def rms_z(group: pd.DataFrame) -> str:
