@@ -126,9 +126,13 @@ def channel_noise(rate, skip=None) -> float:
     d2 = np.abs(np.diff(rate, 2))
     if skip is not None and (~skip[1:-1]).sum() >= 2 * MIN_RUN:
         d2 = d2[~skip[1:-1]]
-    if d2.size == 0:
-        return 0.0
-    return float(1.4826 * np.median(d2) / np.sqrt(6.0))
+    return _second_difference_sd(d2)
+
+
+def _second_difference_sd(d2) -> float:
+    """A white sequence's robust sd from its absolute second differences ``d2``: 1.4826 times their median
+    over sqrt(6), the sd of a white sequence's second difference (0 where there are none)."""
+    return float(1.4826 * np.median(d2) / np.sqrt(6.0)) if d2.size else 0.0
 
 
 def _runs(mask) -> list:
@@ -177,7 +181,7 @@ def _plateau(name, sign, level, declared, x, spans, noise) -> Plateau:
     d2 = np.concatenate([np.abs(np.diff(x[a:b], 2)) for a, b in spans])
     at = x >= (1 - FLAT_BAND) * level
     return Plateau(name, sign, level, declared, int(at.sum()), len(spans), int(np.argmax(at)),
-                   float(1.4826 * np.median(d2) / np.sqrt(6.0)), noise)
+                   _second_difference_sd(d2), noise)
 
 
 def saturation_findings(sensed: Sensed, sf_bound, findings: Findings, range_rad_s=None) -> bool:
