@@ -169,8 +169,20 @@ def one(args) -> dict:
     return record
 
 
-def run_battery(n: int, processes: int, out: Path, config_path: Path, kinds=None, loop_depth=None):
-    """Run campaigns ``0 .. n - 1`` not yet recorded in ``out``, those of ``kinds`` only where given (a
+def campaigns_of(text: str) -> list:
+    """The campaign indices a ``--campaigns`` text names: comma-separated indices and ranges, such as
+    ``147,150-199`` (a range includes both ends)."""
+    indices = []
+    for part in filter(None, (p.strip() for p in text.split(","))):
+        first, _, last = part.partition("-")
+        if not first.isdigit() or (last and not last.isdigit()) or (last and int(last) < int(first)):
+            raise ValueError(f"--campaigns: {part!r} is neither an index nor a range such as 150-199")
+        indices.extend(range(int(first), int(last or first) + 1))
+    return sorted(set(indices))
+
+
+def run_battery(indices, processes: int, out: Path, config_path: Path, kinds=None, loop_depth=None):
+    """Run the campaigns ``indices`` not yet recorded in ``out``, those of ``kinds`` only where given (a
     campaign keeps its index's truth and seed whichever are run); ``loop_depth`` in place of the config's."""
     cfg = yaml.safe_load(config_path.read_text())
     if loop_depth is not None:
@@ -178,7 +190,7 @@ def run_battery(n: int, processes: int, out: Path, config_path: Path, kinds=None
     validate(cfg, str(ROOT / "workflow" / "schemas" / "config.schema.yaml"))  # the schema's defaults, as a run's
     cfg["report"]["figures"] = False  # the battery reads verdicts and tables, which no figure changes
     out.mkdir(parents=True, exist_ok=True)
-    todo = [(i, cfg, out) for i in range(n) if not (out / f"{i:04d}.json").exists()
+    todo = [(i, cfg, out) for i in indices if not (out / f"{i:04d}.json").exists()
             and (kinds is None or kind_of(i) in kinds)]
     with Pool(processes) as pool:
         for record in pool.imap_unordered(one, todo):
@@ -283,7 +295,9 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
     go = sub.add_parser("run", help="simulate and run the campaigns not yet recorded in OUT")
-    go.add_argument("--n", type=int, default=200)
+    go.add_argument("--n", type=int, default=200, help="run campaigns 0 .. N - 1")
+    go.add_argument("--campaigns", type=str, default=None,
+                    help="run these campaigns in place of 0 .. N - 1: indices and ranges, such as 147,150-199")
     go.add_argument("--processes", type=int, default=2)
     go.add_argument("--out", type=Path, required=True)
     go.add_argument("--config", type=Path, default=ROOT / "config" / "config.yaml")
@@ -299,7 +313,11 @@ def main(argv=None):
         unknown = set(args.kinds or ()) - set(KINDS)
         if unknown:
             parser.error(f"--kinds: unknown {sorted(unknown)}; the kinds are {', '.join(sorted(KINDS))}")
-        run_battery(args.n, args.processes, args.out, args.config, args.kinds, args.loop_depth)
+        try:
+            indices = campaigns_of(args.campaigns) if args.campaigns is not None else range(args.n)
+        except ValueError as bad:
+            parser.error(str(bad))
+        run_battery(indices, args.processes, args.out, args.config, args.kinds, args.loop_depth)
     print(summary(args.out))
 
 
