@@ -117,9 +117,12 @@ def test_every_documented_setting_section_key_exists():
 
 
 def test_every_documented_script_and_config_file_exists():
+    """Every script and config file a page runs exists in the repository; a scratch file under /tmp is one
+    the page's own code writes first."""
     missing = []
     for page, s in SNIPPETS:
         paths = re.findall(r"(?:^|[\s`(])python (?:-m \S+ )?([\w./-]+\.py)", s)
         paths += re.findall(r"(?:--configfile|snakemake -s) ([\w./-]+)", s)
-        missing += [(str(page), p) for p in paths if p not in PLACEHOLDERS and not (ROOT / p).exists()]
+        missing += [(str(page), p) for p in paths
+                    if p not in PLACEHOLDERS and not p.startswith("/tmp/") and not (ROOT / p).exists()]
     assert not missing
