@@ -417,6 +417,9 @@ def test_the_broad_trials_import_the_gyro_at_its_full_rate_and_the_reference_eve
     walk = campaign.gyro.pop("arw_deg_sqrt_h")  # measured in the trial's own rests (rests.arw_at_rest)
     assert campaign.gyro == {"sensor_class": "mems", "rate_hz": pytest.approx(285.714285714)}
     assert 0.3 < walk < 0.7  # deg/sqrt(h): a MEMS gyro's, not the DTG default 0.003
+    still = campaign.star_tracker  # the reference's noise in the same rests (rests.reference_noise_at_rest)
+    assert 30 < still["sigma_cross_arcsec"] < 70 and 15 < still["sigma_about_arcsec"] < 40  # OptiTrack at rest, 0.1 s
+    assert still["boresight_body"] == [0.0, 0.0, 1.0]
     assert [(m.id, m.noise_group, m.axis) for m in campaign.maneuvers] == [(f.stem, f.stem, None) for f in files]
     first, last = counts["01_undisturbed_slow_rotation_A"]["rests_s"]
     assert first == pytest.approx((0.0, 33.5), abs=0.1) and last == pytest.approx((160.5, 199.29), abs=0.1)
@@ -603,3 +606,71 @@ def test_a_stretch_is_imported_only_with_as_many_valid_samples_after_its_start_a
     campaign, counts = importer.import_files("broad", tmp_path / "c", [tmp_path / "trial_A.mat"], reference_interval_s=0)
     assert [m.id for m in campaign.maneuvers] == ["trial_A_2"] and counts["trial_A"]["left_out"][0][0] == "trial_A_1"
     assert len(slice_maneuver(telemetry.read_campaign(tmp_path / "c"), "trial_A_2").st_time) > 1000
+
+
+def still_reference(n, cross_rad, about_rad, boresight=(0.0, 0.0, 1.0), seed=3, at=(0.4, -1.1, 2.0)):
+    """(n, 4) scalar-last quaternions of a body at rest at the attitude ``at`` (xyz Euler angles, rad), each
+    sample off it by
+    a body-frame white error of sd ``cross_rad`` about the two axes across ``boresight`` and ``about_rad``
+    about it."""
+    rng = np.random.default_rng(seed)
+    b = np.asarray(boresight, dtype=float) / np.linalg.norm(boresight)
+    u = np.cross(b, [1.0, 0.0, 0.0] if abs(b[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    v = np.cross(b, u)
+    error = (np.outer(rng.normal(0.0, cross_rad, n), u) + np.outer(rng.normal(0.0, cross_rad, n), v)
+             + np.outer(rng.normal(0.0, about_rad, n), b))
+    return (Rotation.from_euler("xyz", at) * Rotation.from_rotvec(error)).as_quat()
+
+
+def test_the_reference_noise_at_rest_is_read_across_and_about_the_boresight():
+    """A reference at rest with a white error of 40 arcsec across the boresight and 20 about it: the
+    rotations between consecutive kept samples in the rests give both back (to a few %, from 8000 pairs),
+    whichever axis is the boresight; the motion between the rests and the rows not kept do not enter."""
+    arcsec = np.pi / 180.0 / 3600.0
+    for boresight in ((0.0, 0.0, 1.0), (1.0, 1.0, 0.0)):
+        quat = still_reference(20000, 40 * arcsec, 20 * arcsec, boresight)
+        quat[9000:11000] = Rotation.from_rotvec(np.outer(np.linspace(0, 3, 2000), [0, 1, 0])).as_quat()  # turning
+        kept = np.zeros(20000, dtype=bool)
+        kept[::2] = True
+        cross, about, pairs = rests.reference_noise_at_rest(quat, kept, [(0, 9000), (11000, 20000)], boresight)
+        assert pairs == 8998
+        assert cross / arcsec == pytest.approx(40.0, rel=0.04) and about / arcsec == pytest.approx(20.0, rel=0.04)
+    quat = still_reference(20000, 40 * arcsec, 20 * arcsec)
+    across_x = rests.reference_noise_at_rest(quat, np.ones(20000, dtype=bool), [(0, 20000)], [1.0, 0.0, 0.0])
+    assert across_x[0] / arcsec == pytest.approx(np.sqrt((40**2 + 20**2) / 2), rel=0.04)
+    assert across_x[1] / arcsec == pytest.approx(40.0, rel=0.04)
+
+
+def test_rests_too_short_or_a_reference_that_repeats_itself_state_no_reference_noise():
+    quat = still_reference(100, 1e-4, 1e-4)
+    kept = np.ones(100, dtype=bool)
+    assert rests.reference_noise_at_rest(quat, kept, [(0, 30)], [0, 0, 1]) is None  # 29 pairs
+    assert rests.reference_noise_at_rest(quat, kept, [(0, 31)], [0, 0, 1])[2] == 30
+    assert rests.reference_noise_at_rest(still_reference(100, 0.0, 0.0), kept, [(0, 100)], [0, 0, 1]) is None
+
+
+def test_an_import_states_the_reference_noise_its_rests_show_unless_the_mapping_states_one(tmp_path):
+    """BROAD's layout with an optical reference that scatters 30 arcsec across the body's z axis and 15
+    about it at rest: campaign.yaml states that noise (the boresight it is split about beside it), as it
+    states the gyro's ARW from the same rests, and the report prints it; a mapping that states a noise
+    keeps its own."""
+    from scipy.io import savemat
+
+    arcsec = np.pi / 180.0 / 3600.0
+    arrays = broad_like(n=6000, missing=(), motions=((2500, 3000),))
+    turned = np.cumsum(np.r_[np.zeros(2500), np.ones(500), np.zeros(3000)]) / 100.0  # still at rest, not the gyro's walk
+    error = Rotation.from_quat(still_reference(6000, 30 * arcsec, 15 * arcsec, at=(0.0, 0.0, 0.0)))
+    arrays["opt_quat"] = (Rotation.from_rotvec(np.outer(turned, [1.0, 0.0, 0.0])) * error).as_quat()[:, [3, 0, 1, 2]]
+    savemat(tmp_path / "trial_A.mat", arrays)
+    out = tmp_path / "campaign"
+    campaign, counts = importer.import_files("broad", out, [tmp_path / "trial_A.mat"])
+    meta = yaml.safe_load((out / "campaign.yaml").read_text())["star_tracker"]
+    assert meta["sigma_cross_arcsec"] == pytest.approx(30.0, rel=0.1)
+    assert meta["sigma_about_arcsec"] == pytest.approx(15.0, rel=0.1)
+    assert meta["boresight_body"] == [0.0, 0.0, 1.0]
+    assert "reference at rest: " in importer.report(campaign, counts, out)
+    mapping = importer.read_mapping("broad")
+    mapping["star_tracker"] = {"sigma_cross_arcsec": 60.0, "sigma_about_arcsec": 60.0}
+    stated, _ = importer.build_campaign([tmp_path / "trial_A.mat"], mapping, "c")
+    assert stated.star_tracker == {"sigma_cross_arcsec": 60.0, "sigma_about_arcsec": 60.0}

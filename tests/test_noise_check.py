@@ -2,6 +2,7 @@
 only where its 95 % interval excludes the stated value and lies wholly outside the tolerated band."""
 
 import numpy as np
+import pytest
 
 from gyrocal.criticism.diagnostics import misfit_findings
 from gyrocal.inference.sampling.refusals import NOISE_PLAUSIBLE, noise_beyond
@@ -44,3 +45,66 @@ def test_without_an_interval_the_point_is_judged_against_the_band():
 def test_the_refusal_before_sampling_uses_the_same_rule_at_a_factor_of_a_thousand():
     ratios = np.array([1.0 / 2000, 0.5, 999.0, 1001.0])
     assert noise_beyond(ratios, ratios, NOISE_PLAUSIBLE).tolist() == [True, False, False, True]
+
+
+def _angle_clock_posterior(cross_total, about_total, share):
+    from gyrocal.inference.noise.covariance import split_parts
+
+    sampled = dict(STATED, sigma_cross_arcsec=cross_total, sigma_about_arcsec=about_total, st_gm_fraction=share)
+    return {**sampled, **{k: float(v) for k, v in split_parts(sampled).items()}}
+
+
+def test_on_the_angle_clock_the_stated_reference_noise_judges_the_white_part():
+    """A reference error of 1000 arcsec across and 4000 about that runs on the angle turned, 99.99 % of it
+    Gauss-Markov: its white parts are 10 and 40 arcsec, the noise a recording at rest shows and campaign.yaml
+    states, so the noise checks pass; on time's clock the same posterior's totals are 100 times the stated."""
+    posterior = _angle_clock_posterior(1000.0, 4000.0, 0.9999)
+    assert posterior["st_white_cross_arcsec"] == pytest.approx(10.0)
+    assert posterior["st_gm_cross_arcsec"] == pytest.approx(1000.0, rel=1e-4)
+    on_angle = misfit_findings(3.0, 3.0, WHITE, RANKING, posterior, dict(STATED, gm_clock_s_per_rad=1e4), CFG)
+    on_time = misfit_findings(3.0, 3.0, WHITE, RANKING, posterior, STATED, CFG)
+    judged = {f.check: f for f in on_angle}
+    assert judged["noise:sigma_cross_arcsec"].passed and judged["noise:sigma_about_arcsec"].passed
+    assert judged["noise:sigma_cross_arcsec"].why.startswith("the data ask for sigma_cross_arcsec's white part "
+                                                             "(st_white_cross_arcsec; ")
+    assert not any(f.passed for f in on_time if f.check in ("noise:sigma_cross_arcsec", "noise:sigma_about_arcsec"))
+
+
+def test_on_the_angle_clock_the_level_counts_the_error_the_motion_sets():
+    """What the noise predicts for the residual: the stated white part and the walk, plus, on the angle
+    clock, the Gauss-Markov part's stationary variance averaged over the axes ((2 x 300^2 + 600^2) / 3)."""
+    from types import SimpleNamespace
+
+    from gyrocal.criticism.diagnostics import motion_part_arcsec, noise_rms_arcsec
+
+    stated = dict(STATED, boresight_body=[0.0, 0.0, 1.0], arw_deg_sqrt_h=1e-9)
+    posterior = _angle_clock_posterior(300.0 / np.sqrt(0.99), 600.0 / np.sqrt(0.99), 0.99)
+    maneuvers = [SimpleNamespace(st_time=np.array([0.0, 100.0]), gyro_time=np.array([0.0, 100.0]))]
+    assert motion_part_arcsec(posterior, STATED) is None
+    motion = motion_part_arcsec(posterior, dict(stated, gm_clock_s_per_rad=1e4))
+    assert motion == pytest.approx([300.0, 600.0])
+    white_only = noise_rms_arcsec(maneuvers, stated)
+    assert white_only == pytest.approx(np.sqrt((2 * 10.0**2 + 40.0**2) / 3))
+    assert noise_rms_arcsec(maneuvers, stated, motion) == pytest.approx(
+        np.sqrt(white_only**2 + (2 * 300.0**2 + 600.0**2) / 3))
+
+
+def test_the_noise_prior_holds_the_white_part_on_the_angle_clock():
+    """The log-normal prior about the stated 10 arcsec: on the angle clock it peaks where the white part,
+    sigma sqrt(1 - share), is 10, whatever the share; on time's clock where the total is."""
+    from gyrocal.inference.noise.covariance import judged_log_sigma, log_sigma_of
+    from gyrocal.inference.sampling.priors import Priors
+
+    stated = dict(STATED, boresight_body=[0.0, 0.0, 1.0])
+    center = log_sigma_of(stated, correlated=True)
+    share = 0.96
+    total = np.log(np.array([10.0, 40.0]) * np.pi / 648000.0) - 0.5 * np.log(1.0 - share)
+    log_sigma = np.concatenate([total, center[2:3], [np.log(share / (1.0 - share))], center[4:]])
+    on_angle = dict(stated, gm_clock_s_per_rad=1e4)
+    assert judged_log_sigma(log_sigma, on_angle)[:2] == pytest.approx(center[:2])
+    assert judged_log_sigma(log_sigma, stated) == pytest.approx(log_sigma)
+    priors = {k: Priors(np.zeros(1), np.ones(1), np.ones(1), center, np.ones(5), None, s) for k, s in
+              (("angle", on_angle), ("time", stated))}
+    share_prior = -0.5 * ((log_sigma[3] - center[3]) / 1.0) ** 2
+    assert priors["angle"].noise_log_density(log_sigma[None])[0] == pytest.approx(share_prior)
+    assert priors["time"].noise_log_density(log_sigma[None])[0] == pytest.approx(share_prior - np.log(5.0) ** 2)

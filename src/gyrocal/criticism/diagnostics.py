@@ -26,11 +26,24 @@ from gyrocal.inference.sampling.predictive import WhitenedManeuver
 from gyrocal.inference.sampling.refusals import noise_beyond
 from gyrocal.maneuvers.preprocess import noise_groups
 from gyrocal.model import effects
-from gyrocal.model.units import AXES, rad_to_arcsec
+from gyrocal.model.units import ARCSEC_RAD, AXES, rad_to_arcsec
 
 __all__ = [
-    "COLLINEAR_FRACTION", "ENCOMPASS_TOP", "Signature", "chi2_log_sf", "conditional_drop", "diagnose", "linearized",
-    "misfit_checks", "misfit_findings", "noise_rms_arcsec", "rank", "signature_effects", "whiteness"
+    "COLLINEAR_FRACTION",
+    "ENCOMPASS_TOP",
+    "Signature",
+    "chi2_log_sf",
+    "conditional_drop",
+    "diagnose",
+    "judged_key",
+    "linearized",
+    "misfit_checks",
+    "misfit_findings",
+    "motion_part_arcsec",
+    "noise_rms_arcsec",
+    "rank",
+    "signature_effects",
+    "whiteness"
 ]
 
 
@@ -294,16 +307,36 @@ def whiteness(maneuvers, pairs, estimate: PointEstimate):
             "gauss_markov": correlation.score(spectra), "rate_growth": rategrowth.score(rated) if rated else None}
 
 
-def noise_rms_arcsec(maneuvers, stated_noise) -> float:
-    """What the stated noise alone predicts for the residual RMS per axis: the star
-    tracker's variance averaged over the axes, plus the walk left after the initial
-    attitude and bias are fitted (detrended Brownian motion: q T / 15)."""
-    b = np.asarray(stated_noise["boresight_body"], dtype=float)
-    b = b / np.linalg.norm(b)
+def noise_rms_arcsec(maneuvers, stated_noise, motion_arcsec=None) -> float:
+    """What the stated noise predicts for the residual RMS per axis: the star tracker's variance averaged
+    over the axes, plus the walk left after the initial attitude and bias are fitted (detrended Brownian
+    motion: q T / 15). ``motion_arcsec``: where the stated noise is the reference's white part alone
+    (`covariance.white_stated`), the fitted Gauss-Markov part's sds (cross, about), its stationary
+    variance added: the error the motion sets, which no recording at rest states."""
     cross, about, arw = covariance.stated_si(stated_noise)
     st_var = (2 * cross**2 + about**2) / 3
+    if motion_arcsec is not None:
+        gm_cross, gm_about = np.asarray(motion_arcsec, dtype=float) * ARCSEC_RAD
+        st_var += (2 * gm_cross**2 + gm_about**2) / 3
     durations = np.array([d.st_time[-1] - d.gyro_time[0] for d in maneuvers])
     return float(rad_to_arcsec(np.sqrt(st_var + arw**2 * np.mean(durations) / 15)))
+
+
+def judged_key(key: str, noise_posterior: dict, stated_noise: dict) -> str:
+    """The posterior's key that the stated ``key`` judges: the star tracker's white part
+    (`covariance.SPLIT_KEYS`) where the stated noise is that part alone (`covariance.white_stated`) and
+    the model sampled a Gauss-Markov part; else ``key`` itself."""
+    white = covariance.SPLIT_KEYS.get(key, (None,))[0]
+    return white if covariance.white_stated(stated_noise) and white in noise_posterior else key
+
+
+def motion_part_arcsec(noise_posterior: dict, stated_noise: dict):
+    """The fitted Gauss-Markov part's sds (cross, about; arcsec) where the stated noise is the white part
+    alone (`judged_key`), for `noise_rms_arcsec`; None otherwise."""
+    gm = [covariance.SPLIT_KEYS[k][1] for k in ("sigma_cross_arcsec", "sigma_about_arcsec")]
+    if not covariance.white_stated(stated_noise) or not all(k in noise_posterior for k in gm):
+        return None
+    return [noise_posterior[k] for k in gm]
 
 
 def _nearest_to_band(low, high) -> float:
@@ -325,17 +358,22 @@ def misfit_findings(residual_rms, noise_rms, white, ranking, noise_posterior, st
     findings.append(Finding.judged(
         "level", bool(ratio <= cfg["rms_ratio_max"]),
         f"residual RMS {residual_rms:.2f} arcsec is {ratio:.2f} times what the stated noise "
-        f"predicts ({noise_rms:.2f}); limit {cfg['rms_ratio_max']}",
+        + ("and the reference's error in motion (the Gauss-Markov part on the angle turned, fitted) predict"
+           if motion_part_arcsec(noise_posterior, stated_noise) is not None else "predicts")
+        + f" ({noise_rms:.2f}); limit {cfg['rms_ratio_max']}",
         figure=float(ratio), threshold=float(cfg["rms_ratio_max"]), unit="x predicted"))
     band = cfg["noise_ratio_max"]
     for name in (s.key for s in NOISE_SCALES):
-        fitted, stated = noise_posterior[name], stated_noise[name]
+        judged = judged_key(name, noise_posterior, stated_noise)
+        fitted, stated = noise_posterior[judged], stated_noise[name]
         r = fitted / stated
-        low, high = (np.asarray((noise_interval or {}).get(name, (fitted, fitted)), dtype=float) / stated)
+        low, high = (np.asarray((noise_interval or {}).get(judged, (fitted, fitted)), dtype=float) / stated)
         off = bool(noise_beyond(low, high, band))
+        part = "" if judged == name else (f"'s white part ({judged}; the Gauss-Markov part runs on the angle turned, "
+                                          "so it stands still at rest, where the stated value is measured)")
         findings.append(Finding.judged(
             f"noise:{name}", not off,
-            f"the data ask for {name} = {fitted:.4g}, {r:.2f} times the stated {stated:.4g} "
+            f"the data ask for {name}{part} = {fitted:.4g}, {r:.2f} times the stated {stated:.4g} "
             f"(95 % interval {low:.2f} to {high:.2f}); off only where the interval lies outside "
             f"{1 / band:.2f} to {band:.2f}",
             figure=float(_nearest_to_band(low, high)), threshold=float(band), unit="x stated, either way"))
@@ -372,16 +410,16 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
     """
     residuals = fit[[f"residual_{a}" for a in AXES]].to_numpy()
     residual_rms = float(np.sqrt(np.mean(residuals**2)))
-    noise_rms = noise_rms_arcsec(maneuvers, estimate.stated_noise)
     measured = []
     walks = smoothness.fitted_walk_variances(maneuvers, estimate)
     white = whiteness(maneuvers, _measuring(walks, linearized(maneuvers, estimate), measured), estimate)
     ranking, detail = rank(maneuvers, estimate, list(maneuvers[0].extras), plugin_effects, white)
     keys = [s.key for s in NOISE_SCALES]
-    sampled = noise_scales(True, True)
-    noise_post = {s.key: float(summary.loc[f"noise.{s.key}", "mean"]) for s in sampled if f"noise.{s.key}" in summary.index}
-    noise_ci = {s.key: [float(summary.loc[f"noise.{s.key}", c]) for c in ("ci95_low", "ci95_high")]
-                for s in sampled if f"noise.{s.key}" in summary.index and "ci95_low" in summary.columns}
+    sampled = [s.key for s in noise_scales(True, True)] + [k for parts in covariance.SPLIT_KEYS.values() for k in parts]
+    noise_post = {k: float(summary.loc[f"noise.{k}", "mean"]) for k in sampled if f"noise.{k}" in summary.index}
+    noise_ci = {k: [float(summary.loc[f"noise.{k}", c]) for c in ("ci95_low", "ci95_high")]
+                for k in sampled if f"noise.{k}" in summary.index and "ci95_low" in summary.columns}
+    noise_rms = noise_rms_arcsec(maneuvers, estimate.stated_noise, motion_part_arcsec(noise_post, estimate.stated_noise))
     checks = misfit_checks(residual_rms, noise_rms, white, ranking, noise_post, estimate.stated_noise, thresholds,
                            noise_ci)
     groups = {d.id: d.noise_group for d in maneuvers}
@@ -402,7 +440,7 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
         "whiteness": white,
         "noise_posterior": noise_post,
         "noise_posterior_ci95": noise_ci,
-        "noise_stated": {k: estimate.stated_noise[k] for k in keys},
+        "noise_stated": {judged_key(k, noise_post, estimate.stated_noise): estimate.stated_noise[k] for k in keys},
         "st_correlation_time_s": estimate.correlation_time_s,
         "residual_rms_per_maneuver_arcsec": per_maneuver,
         "signature_detail_chi2": detail,

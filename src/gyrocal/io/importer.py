@@ -48,6 +48,7 @@ from gyrocal.io.telemetry import (
     write_campaign,
 )
 from gyrocal.model.channels import Channel
+from gyrocal.model.units import rad_to_arcsec
 
 __all__ = [
     "ANGLE_UNITS", "MOST_REFUSED", "ORDERS", "PRECISION_MARGIN", "RANGE_BAND", "RATE_AGREE", "RATE_UNITS", "Imported",
@@ -125,7 +126,8 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
     interval = mapping["reference"].get("sample_interval_s") if reference_interval_s is None else reference_interval_s
     check_interval(interval, "the reference sample interval")
     range_rad_s = declared_range_rad_s(mapping)
-    parts, maneuvers, counts, rates, walks = [], [], {}, [], []
+    boresight = (mapping.get("star_tracker") or {}).get("boresight_body", REST_BORESIGHT_BODY)
+    parts, maneuvers, counts, rates, walks, still = [], [], {}, [], [], []
     offset = 0.0
     for f in files:
         imp = read_file(f, mapping)
@@ -161,12 +163,16 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
         rates.append(imp.rate_hz)
         if found is not None and found.arw_rad_sqrt_s is not None:
             walks.append(found.arw_rad_sqrt_s)
+        at_rest = None if found is None else rests.reference_noise_at_rest(imp.quat, keep & imp.valid, found.runs, boresight)
+        if at_rest is not None:
+            still.append(at_rest)
         counts[imp.stem] = {"rows": len(time), "maneuvers": ids, "trimmed": trimmed, "left_out": left_out,
                             "reference_dropouts": int((~imp.valid[keep] & ~imp.refused[keep] & ~imp.missing[keep]).sum()),
                             "reference_missing": int((keep & imp.missing).sum()),
                             "reference_kept": int(keep.sum()), "reference_interval_s": float(interval or 0.0),
                             "time_shift_s": float(shift), "rate_hz": imp.rate_hz or 1.0 / step,
-                            **_rest_counts(found, spans, time), **_norm_counts(imp, keep, mapping["reference"]["columns"]),
+                            **_rest_counts(found, spans, time, at_rest),
+                            **_norm_counts(imp, keep, mapping["reference"]["columns"]),
                             **_range_counts(imp, names, range_rad_s)}
         offset = time[-1] + (step if gap is None else float(gap))
     time = np.concatenate([t for t, _, _ in parts])
@@ -177,7 +183,7 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
     columns = {n: increments[:, i] for i, n in enumerate(names)}
     for key in parts[0][1].extras:
         columns[key] = np.concatenate([imp.extras[key] for _, imp, _ in parts])
-    campaign = Campaign(name=name, channels=channels, star_tracker=dict(mapping.get("star_tracker") or {}),
+    campaign = Campaign(name=name, channels=channels, star_tracker=_reference_knowledge(mapping, still, boresight),
                         gyro=_gyro_knowledge(mapping, range_rad_s, rates, walks), maneuvers=tuple(maneuvers), st_time=st_time,
                         st_quat=quat, st_valid=valid, gyro_time=time, gyro_columns=columns)
     return campaign, counts
@@ -205,11 +211,32 @@ def _gyro_knowledge(mapping, range_rad_s, rates, walks=()) -> dict:
     return known
 
 
-def _rest_counts(found, spans, time) -> dict:
-    """The rests a file was cut at, for the report (none unless the mapping splits at rests)."""
+REST_BORESIGHT_BODY = (0.0, 0.0, 1.0)
+"""The axis the reference's noise at rest is split about (across it and about it) where the mapping states
+no ``star_tracker: boresight_body``; campaign.yaml states it beside the noise, so the split is the one
+the fit reads."""
+
+
+def _reference_knowledge(mapping, still, boresight) -> dict:
+    """``campaign.yaml``'s ``star_tracker:`` from the mapping; where it states no noise, the largest the
+    files' rests show (`rests.reference_noise_at_rest`: ``still``, per file (cross, about, pairs), rad) and
+    the boresight it is split about, as `_gyro_knowledge` takes the gyro's ARW from them."""
+    known = dict(mapping.get("star_tracker") or {})
+    if still and "sigma_cross_arcsec" not in known and "sigma_about_arcsec" not in known:
+        known["sigma_cross_arcsec"] = float(rad_to_arcsec(max(s[0] for s in still)))
+        known["sigma_about_arcsec"] = float(rad_to_arcsec(max(s[1] for s in still)))
+        known["boresight_body"] = [float(v) for v in boresight]
+    return known
+
+
+def _rest_counts(found, spans, time, at_rest=None) -> dict:
+    """The rests a file was cut at and the reference's noise in them (``at_rest``: cross, about, pairs;
+    None where too few), for the report (none unless the mapping splits at rests)."""
     if found is None:
         return {}
-    return {"rests_s": [(float(time[a]), float(time[b - 1])) for a, b in found.runs],
+    noise = {} if at_rest is None else {"reference_rest_sigma_arcsec": [float(rad_to_arcsec(v)) for v in at_rest[:2]],
+                                        "reference_rest_pairs": int(at_rest[2])}
+    return {**noise, "rests_s": [(float(time[a]), float(time[b - 1])) for a, b in found.runs],
             "rest_threshold_rad_s": found.threshold, "rest_sigma_rad_s": found.sigma.tolist(),
             "rest_bias_rad_s": found.bias.tolist(), "rest_smooth": found.smooth,
             "maneuver_spans_s": [(float(time[a]), float(time[b - 1])) for a, b in spans]}
@@ -285,6 +312,11 @@ def report(campaign, counts, outdir) -> str:
                          f"value over {c['rest_smooth']} samples: {rests.REST_SIGMAS:g} sd of its noise at rest, "
                          f"{', '.join(f'{np.rad2deg(v):.2g}' for v in c['rest_sigma_rad_s'])} deg/s a sample): {found}; "
                          "cut in the middle of each inner one")
+            if "reference_rest_sigma_arcsec" in c:
+                cross, about = c["reference_rest_sigma_arcsec"]
+                lines.append(f"    reference at rest: {cross:.3g} arcsec about each axis across the boresight, {about:.3g} "
+                             f"about it, from {c['reference_rest_pairs']} pairs of consecutive kept samples in the rests "
+                             "(campaign.yaml states the largest file's, unless the mapping states a noise)")
         lines.append("    " + _norm_report(c))
         if "at_range" in c:
             at = ", ".join(f"{n} {k}" for n, k in c["at_range"].items() if k) or "none"

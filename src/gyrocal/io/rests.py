@@ -18,10 +18,11 @@ import itertools
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 __all__ = [
-    "ARW_AVERAGE_S", "MIN_REST_S", "QUIETEST_SHARE", "REST_BLOCK_S", "REST_SIGMAS", "SMOOTH_S",
-    "Rests", "arw_at_rest", "find_rests", "pieces",
+    "ARW_AVERAGE_S", "MIN_REFERENCE_PAIRS", "MIN_REST_S", "QUIETEST_SHARE", "REFERENCE_NOISE_FLOOR_RAD", "REST_BLOCK_S",
+    "REST_SIGMAS", "SMOOTH_S", "Rests", "arw_at_rest", "find_rests", "pieces", "reference_noise_at_rest",
 ]
 
 REST_BLOCK_S = 0.5
@@ -140,3 +141,38 @@ def arw_at_rest(rate: np.ndarray, step_s: float, runs) -> float | None:
         return None
     allan = np.sqrt(0.5 * np.mean(np.concatenate(steps) ** 2, axis=0))
     return float(np.max(allan) * np.sqrt(k * step_s))
+
+
+MIN_REFERENCE_PAIRS = 30
+"""The fewest pairs of consecutive reference samples within the rests that state the reference's noise
+at rest (`reference_noise_at_rest`): the sd of 30 is known to about 13 %."""
+
+REFERENCE_NOISE_FLOOR_RAD = 1e-8
+"""Below this sd (0.002 arcsec) a reference at rest repeats its value to rounding: it states no noise."""
+
+
+def reference_noise_at_rest(quat, kept, runs, boresight_body) -> tuple | None:
+    """The reference's white noise at rest (rad) and the pairs it rests on: its sd about each of the two axes across
+    ``boresight_body`` and about it, from the body-frame rotations between consecutive kept samples
+    (``kept``: the rows the campaign keeps, valid) within the rests ``runs`` (`Rests.runs`), where the
+    body does not turn, so each rotation is the difference of two samples' errors: its variance twice
+    theirs. Mean squares, as the noise model's variance takes them (a sample's rare large error counts as
+    the likelihood counts it). ``quat`` (N, 4) scalar last. None where the rests hold fewer than
+    `MIN_REFERENCE_PAIRS` pairs, or where either sd is below `REFERENCE_NOISE_FLOOR_RAD` (a reference that
+    repeats its value at rest, quantised or synthetic, states no noise). What an at-rest recording states for the reference, as
+    `arw_at_rest` does for the gyro."""
+    b = np.asarray(boresight_body, dtype=float)
+    b = b / np.linalg.norm(b)
+    steps = []
+    for a, z in runs:
+        rows = a + np.flatnonzero(kept[a:z])
+        if len(rows) > 1:
+            r = Rotation.from_quat(quat[rows])
+            steps.append((r[:-1].inv() * r[1:]).as_rotvec())
+    if sum(len(d) for d in steps) < MIN_REFERENCE_PAIRS:
+        return None
+    d = np.concatenate(steps)
+    about_sq = (d @ b) ** 2
+    cross_sq = np.sum(d**2, axis=1) - about_sq
+    cross, about = float(np.sqrt(np.mean(cross_sq) / 4.0)), float(np.sqrt(np.mean(about_sq) / 2.0))
+    return (cross, about, len(d)) if min(cross, about) >= REFERENCE_NOISE_FLOOR_RAD else None

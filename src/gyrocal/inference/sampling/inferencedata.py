@@ -20,10 +20,12 @@ import xarray as xr
 
 from gyrocal import __version__
 from gyrocal.inference.noise.covariance import (
+    SPLIT_KEYS,
     build,
     correlation_time_of,
     noise_scales,
     scales_in_units,
+    split_parts,
     stated_scales,
 )
 from gyrocal.inference.sampling import predictive
@@ -74,13 +76,15 @@ def posterior_dataset(draws, theta_hat, spec, noise_groups=()) -> az.InferenceDa
     """(chains, draws, P + k) sampled offsets and the k log noise scales of the model
     (`covariance.noise_scales`), in the parameters' units; with ``noise_groups`` (more than one), each
     group's level (its ``sigma_cross`` over the campaign's) and their log sd follow, as
-    ``noise_group_level`` and ``noise_group_sd``."""
+    ``noise_group_level`` and ``noise_group_sd``. With correlated noise, the star tracker's white and
+    Gauss-Markov parts too (`covariance.split_parts`), draw by draw."""
     p = len(spec)
     scales = noise_scales(spec.correlated_noise, spec.jitter_noise)
     k = len(scales)
     values = spec.to_unit(theta_hat + draws[..., :p])
     noise = scales_in_units(draws[..., p:p + k])
-    posterior = {"channel_param": values, **{s.key: noise[..., i] for i, s in enumerate(scales)}}
+    sampled = {s.key: noise[..., i] for i, s in enumerate(scales)}
+    posterior = {"channel_param": values, **sampled, **split_parts(sampled)}
     coords, dims = {"parameter": spec.labels}, {"channel_param": ["parameter"]}
     if len(noise_groups) > 1:
         posterior["noise_group_level"] = np.exp(draws[..., p + k:-1] - draws[..., p:p + 1])
@@ -106,7 +110,8 @@ def summarize(idata, per_walker, labels, convergence: dict) -> pd.DataFrame:
     tail = (1 - CI_PROB) / 2
     low, high = (draws.quantile(q, dim=("chain", "draw")) for q in (tail, 1 - tail))
     rows = []
-    noise_labels = [f"noise.{s.key}" for s in noise_scales(True, True) if s.key in draws]
+    keys = [s.key for s in noise_scales(True, True)] + [key for parts in SPLIT_KEYS.values() for key in parts]
+    noise_labels = [f"noise.{key}" for key in keys if key in draws]
     group_labels = {}
     if "noise_group_level" in draws:
         group_labels = {f"noise.level.{g}": ("noise_group_level", {"noise_group": g})

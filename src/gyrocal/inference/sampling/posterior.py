@@ -119,7 +119,7 @@ class LogPosterior:
                         - 0.5 * ((log_sd - np.log(GROUP_SD_PRIOR_MEDIAN)) / GROUP_SD_PRIOR_LOG_SD) ** 2)
         theta = self.theta_hat + d
         logprior = logprior + pr.log_density(theta)
-        logprior += -0.5 * np.sum(((log_sigma - pr.log_sigma_center) / pr.log_sigma_sd) ** 2, axis=1)
+        logprior += pr.noise_log_density(log_sigma)
         ok = inside & np.all(np.abs(theta) <= pr.bound, axis=1)
         value = loglik + logprior
         return np.where(ok & np.isfinite(value), value, -np.inf)

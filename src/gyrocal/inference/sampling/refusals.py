@@ -78,15 +78,16 @@ def noise_beyond(low, high, band: float):
 
 
 def check_noise(maneuvers, est: PointEstimate):
-    """Stop before sampling when REML puts a noise scale `NOISE_PLAUSIBLE` times off the stated one
-    (`noise_beyond`, its interval the point: REML gives none before sampling, and a factor of a
-    thousand is beyond any interval's width); the message gives each maneuver's residual RMS about
-    roll, pitch and yaw."""
-    ratio = np.exp(est.log_sigma[:3] - covariance.log_sigma_of(est.stated_noise))
+    """Stop before sampling when REML puts a noise scale `NOISE_PLAUSIBLE` times off the stated one, taken
+    as the stated noise states it (`covariance.judged_log_sigma`; `noise_beyond`, its interval the point:
+    REML gives none before sampling, and a factor of a thousand is beyond any interval's width); the
+    message gives each maneuver's residual RMS about roll, pitch and yaw."""
+    judged = covariance.judged_log_sigma(est.log_sigma, est.stated_noise)[:3]
+    ratio = np.exp(judged - covariance.log_sigma_of(est.stated_noise))
     off = noise_beyond(ratio, ratio, NOISE_PLAUSIBLE)
     if off.any():
         _check_resolution(maneuvers, est, off)
-        fitted = covariance.stated_scales(est.log_sigma[:3])
+        fitted = covariance.stated_scales(judged)
         stated = covariance.stated_scales(covariance.log_sigma_of(est.stated_noise))
         listed = "; ".join(f"{k} {fitted[k]:.3g} (stated {stated[k]:.3g})" for k, bad in zip(fitted, off) if bad)
         lins, _ = linearize_all(maneuvers, est)
