@@ -311,3 +311,17 @@ def test_the_reference_clock_may_be_left_to_the_data_and_another_word_is_refused
     bad = meta_text.replace("star_tracker:\n", "star_tracker:\n  gm_clock_s_per_rad: automatic\n", 1)
     said = refusal(campaign_dir(tmp_path, bad, name="bad"))
     assert "star_tracker.gm_clock_s_per_rad" in said and "or auto" in said and "'automatic' (line" in said
+
+
+def test_what_the_stated_reference_noise_is_may_be_said_and_needs_both_sigmas(tmp_path, meta_text):
+    """``star_tracker: sigma_is: white`` (what ``gyrocal import`` writes for a noise measured at rest) is read
+    beside both sigmas; another word is refused naming the key and what it takes, and ``sigma_is`` without
+    the sigmas it speaks of is refused (the config's defaults are a star tracker's total)."""
+    assert "sigma_cross_arcsec" in meta_text and "sigma_about_arcsec" in meta_text  # the tiny campaign states both
+    text = meta_text.replace("star_tracker:\n", "star_tracker:\n  sigma_is: white\n", 1)
+    assert read_meta(campaign_dir(tmp_path, text))["star_tracker"]["sigma_is"] == "white"
+    bad = meta_text.replace("star_tracker:\n", "star_tracker:\n  sigma_is: rest\n", 1)
+    said = refusal(campaign_dir(tmp_path, bad, name="bad"))
+    assert "star_tracker.sigma_is" in said and "total" in said and "white" in said
+    kept = [line for line in text.splitlines() if "sigma_about_arcsec" not in line]
+    assert "needs both beside it" in refusal(campaign_dir(tmp_path, "\n".join(kept) + "\n", name="alone"))

@@ -419,7 +419,7 @@ def test_the_broad_trials_import_the_gyro_at_its_full_rate_and_the_reference_eve
     assert 0.3 < walk < 0.7  # deg/sqrt(h): a MEMS gyro's, not the DTG default 0.003
     still = campaign.star_tracker  # the reference's noise in the same rests (rests.reference_noise_at_rest)
     assert 30 < still["sigma_cross_arcsec"] < 70 and 15 < still["sigma_about_arcsec"] < 40  # OptiTrack at rest, 0.1 s
-    assert still["boresight_body"] == [0.0, 0.0, 1.0]
+    assert still["boresight_body"] == [0.0, 0.0, 1.0] and still["sigma_is"] == "white"
     assert [(m.id, m.noise_group, m.axis) for m in campaign.maneuvers] == [(f.stem, f.stem, None) for f in files]
     first, last = counts["01_undisturbed_slow_rotation_A"]["rests_s"]
     assert first == pytest.approx((0.0, 33.5), abs=0.1) and last == pytest.approx((160.5, 199.29), abs=0.1)
@@ -626,28 +626,62 @@ def still_reference(n, cross_rad, about_rad, boresight=(0.0, 0.0, 1.0), seed=3, 
 def test_the_reference_noise_at_rest_is_read_across_and_about_the_boresight():
     """A reference at rest with a white error of 40 arcsec across the boresight and 20 about it: the
     rotations between consecutive kept samples in the rests give both back (to a few %, from 8000 pairs),
-    whichever axis is the boresight; the motion between the rests and the rows not kept do not enter."""
+    whichever axis is the boresight, with the differences' lag-1 correlation of white samples (-0.5); the
+    motion between the rests and the rows not kept do not enter."""
     arcsec = np.pi / 180.0 / 3600.0
     for boresight in ((0.0, 0.0, 1.0), (1.0, 1.0, 0.0)):
         quat = still_reference(20000, 40 * arcsec, 20 * arcsec, boresight)
         quat[9000:11000] = Rotation.from_rotvec(np.outer(np.linspace(0, 3, 2000), [0, 1, 0])).as_quat()  # turning
         kept = np.zeros(20000, dtype=bool)
         kept[::2] = True
-        cross, about, pairs = rests.reference_noise_at_rest(quat, kept, [(0, 9000), (11000, 20000)], boresight)
-        assert pairs == 8998
-        assert cross / arcsec == pytest.approx(40.0, rel=0.04) and about / arcsec == pytest.approx(20.0, rel=0.04)
+        found = rests.reference_noise_at_rest(quat, kept, [(0, 9000), (11000, 20000)], boresight)
+        assert found.pairs == 8998 and found.white and found.lag1 == pytest.approx(-0.5, abs=0.03)
+        assert found.cross_rad / arcsec == pytest.approx(40.0, rel=0.04)
+        assert found.about_rad / arcsec == pytest.approx(20.0, rel=0.04)
     quat = still_reference(20000, 40 * arcsec, 20 * arcsec)
     across_x = rests.reference_noise_at_rest(quat, np.ones(20000, dtype=bool), [(0, 20000)], [1.0, 0.0, 0.0])
-    assert across_x[0] / arcsec == pytest.approx(np.sqrt((40**2 + 20**2) / 2), rel=0.04)
-    assert across_x[1] / arcsec == pytest.approx(40.0, rel=0.04)
+    assert across_x.cross_rad / arcsec == pytest.approx(np.sqrt((40**2 + 20**2) / 2), rel=0.04)
+    assert across_x.about_rad / arcsec == pytest.approx(40.0, rel=0.04)
+
+
+def test_a_reference_correlated_over_the_interval_kept_states_no_noise_at_rest():
+    """The same white error averaged over 5 samples (a reference resampled above its cameras' rate) and kept
+    at every sample: each difference is (w[k + 5] - w[k]) / 5, so it does not correlate with the next (white
+    samples' do, -0.5) and understates the noise sqrt(5) times: not white, reported, not stated. Kept every
+    5th sample it is white again."""
+    arcsec = np.pi / 180.0 / 3600.0
+    white = Rotation.from_quat(still_reference(20005, 40 * arcsec, 20 * arcsec, at=(0.0, 0.0, 0.0))).as_rotvec()
+    smooth = np.mean([white[k:k + 20000] for k in range(5)], axis=0)  # sd 40 / sqrt(5) across
+    quat = Rotation.from_rotvec(smooth).as_quat()
+    every = rests.reference_noise_at_rest(quat, np.ones(20000, dtype=bool), [(0, 20000)], [0, 0, 1])
+    assert every.lag1 == pytest.approx(0.0, abs=0.03) and not every.white
+    assert every.cross_rad / arcsec == pytest.approx(40 / 5, rel=0.05)
+    assert rests.pooled_reference_noise([every]) is None
+    fifth = np.zeros(20000, dtype=bool)
+    fifth[::5] = True
+    apart = rests.reference_noise_at_rest(quat, fifth, [(0, 20000)], [0, 0, 1])
+    assert apart.white and apart.cross_rad / arcsec == pytest.approx(40 / np.sqrt(5), rel=0.05)
 
 
 def test_rests_too_short_or_a_reference_that_repeats_itself_state_no_reference_noise():
-    quat = still_reference(100, 1e-4, 1e-4)
-    kept = np.ones(100, dtype=bool)
-    assert rests.reference_noise_at_rest(quat, kept, [(0, 30)], [0, 0, 1]) is None  # 29 pairs
-    assert rests.reference_noise_at_rest(quat, kept, [(0, 31)], [0, 0, 1])[2] == 30
-    assert rests.reference_noise_at_rest(still_reference(100, 0.0, 0.0), kept, [(0, 100)], [0, 0, 1]) is None
+    quat = still_reference(400, 1e-4, 1e-4)
+    kept = np.ones(400, dtype=bool)
+    assert rests.reference_noise_at_rest(quat, kept, [(0, 200)], [0, 0, 1]) is None  # 199 pairs
+    assert rests.reference_noise_at_rest(quat, kept, [(0, 201)], [0, 0, 1]).pairs == 200
+    assert not rests.reference_noise_at_rest(still_reference(400, 0.0, 0.0), kept, [(0, 400)], [0, 0, 1]).white
+
+
+def test_several_recordings_state_their_rests_noise_pooled_by_pairs():
+    """Two recordings' rests at 30 and 60 arcsec, 300 and 100 pairs: one level, the mean squares weighted by
+    the pairs (sqrt((300 x 30^2 + 100 x 60^2) / 400) = 39.7), and a recording whose differences are not
+    white left out."""
+    arcsec = np.pi / 180.0 / 3600.0
+    found = [rests.ReferenceAtRest(30 * arcsec, 15 * arcsec, 300, -0.5),
+             rests.ReferenceAtRest(60 * arcsec, 30 * arcsec, 100, -0.5),
+             rests.ReferenceAtRest(500 * arcsec, 500 * arcsec, 900, 0.4), None]
+    cross, about = rests.pooled_reference_noise(found)
+    assert cross / arcsec == pytest.approx(np.sqrt((300 * 30**2 + 100 * 60**2) / 400))
+    assert about / arcsec == pytest.approx(np.sqrt((300 * 15**2 + 100 * 30**2) / 400))
 
 
 def test_an_import_states_the_reference_noise_its_rests_show_unless_the_mapping_states_one(tmp_path):
@@ -668,7 +702,7 @@ def test_an_import_states_the_reference_noise_its_rests_show_unless_the_mapping_
     meta = yaml.safe_load((out / "campaign.yaml").read_text())["star_tracker"]
     assert meta["sigma_cross_arcsec"] == pytest.approx(30.0, rel=0.1)
     assert meta["sigma_about_arcsec"] == pytest.approx(15.0, rel=0.1)
-    assert meta["boresight_body"] == [0.0, 0.0, 1.0]
+    assert meta["boresight_body"] == [0.0, 0.0, 1.0] and meta["sigma_is"] == "white"
     assert "reference at rest: " in importer.report(campaign, counts, out)
     mapping = importer.read_mapping("broad")
     mapping["star_tracker"] = {"sigma_cross_arcsec": 60.0, "sigma_about_arcsec": 60.0}

@@ -54,15 +54,15 @@ def _angle_clock_posterior(cross_total, about_total, share):
     return {**sampled, **{k: float(v) for k, v in split_parts(sampled).items()}}
 
 
-def test_on_the_angle_clock_the_stated_reference_noise_judges_the_white_part():
-    """A reference error of 1000 arcsec across and 4000 about that runs on the angle turned, 99.99 % of it
-    Gauss-Markov: its white parts are 10 and 40 arcsec, the noise a recording at rest shows and campaign.yaml
-    states, so the noise checks pass; on time's clock the same posterior's totals are 100 times the stated."""
+def test_a_noise_stated_at_rest_judges_the_white_part():
+    """A reference error of 1000 arcsec across and 4000 about, 99.99 % of it Gauss-Markov: its white parts
+    are 10 and 40 arcsec, the noise a recording at rest shows and campaign.yaml states (sigma_is: white), so
+    the noise checks pass; stated as the total, as a data sheet states it, the totals are 100 times it."""
     posterior = _angle_clock_posterior(1000.0, 4000.0, 0.9999)
     assert posterior["st_white_cross_arcsec"] == pytest.approx(10.0)
     assert posterior["st_gm_cross_arcsec"] == pytest.approx(1000.0, rel=1e-4)
-    on_angle = misfit_findings(3.0, 3.0, WHITE, RANKING, posterior, dict(STATED, gm_clock_s_per_rad=1e4), CFG)
-    on_time = misfit_findings(3.0, 3.0, WHITE, RANKING, posterior, STATED, CFG)
+    on_angle = misfit_findings(3.0, 3.0, WHITE, RANKING, posterior, dict(STATED, sigma_is="white"), CFG)
+    on_time = misfit_findings(3.0, 3.0, WHITE, RANKING, posterior, dict(STATED, sigma_is="total"), CFG)
     judged = {f.check: f for f in on_angle}
     assert judged["noise:sigma_cross_arcsec"].passed and judged["noise:sigma_about_arcsec"].passed
     assert judged["noise:sigma_cross_arcsec"].why.startswith("the data ask for sigma_cross_arcsec's white part "
@@ -70,9 +70,10 @@ def test_on_the_angle_clock_the_stated_reference_noise_judges_the_white_part():
     assert not any(f.passed for f in on_time if f.check in ("noise:sigma_cross_arcsec", "noise:sigma_about_arcsec"))
 
 
-def test_on_the_angle_clock_the_level_counts_the_error_the_motion_sets():
-    """What the noise predicts for the residual: the stated white part and the walk, plus, on the angle
-    clock, the Gauss-Markov part's stationary variance averaged over the axes ((2 x 300^2 + 600^2) / 3)."""
+def test_with_a_noise_stated_at_rest_the_level_counts_the_fitted_gauss_markov_part():
+    """What the noise predicts for the residual: the stated white part and the walk, plus, where the stated
+    noise is the white part, the Gauss-Markov part's stationary variance averaged over the axes
+    ((2 x 300^2 + 600^2) / 3)."""
     from types import SimpleNamespace
 
     from gyrocal.criticism.diagnostics import motion_part_arcsec, noise_rms_arcsec
@@ -81,7 +82,7 @@ def test_on_the_angle_clock_the_level_counts_the_error_the_motion_sets():
     posterior = _angle_clock_posterior(300.0 / np.sqrt(0.99), 600.0 / np.sqrt(0.99), 0.99)
     maneuvers = [SimpleNamespace(st_time=np.array([0.0, 100.0]), gyro_time=np.array([0.0, 100.0]))]
     assert motion_part_arcsec(posterior, STATED) is None
-    motion = motion_part_arcsec(posterior, dict(stated, gm_clock_s_per_rad=1e4))
+    motion = motion_part_arcsec(posterior, dict(stated, sigma_is="white"))
     assert motion == pytest.approx([300.0, 600.0])
     white_only = noise_rms_arcsec(maneuvers, stated)
     assert white_only == pytest.approx(np.sqrt((2 * 10.0**2 + 40.0**2) / 3))
@@ -89,9 +90,9 @@ def test_on_the_angle_clock_the_level_counts_the_error_the_motion_sets():
         np.sqrt(white_only**2 + (2 * 300.0**2 + 600.0**2) / 3))
 
 
-def test_the_noise_prior_holds_the_white_part_on_the_angle_clock():
-    """The log-normal prior about the stated 10 arcsec: on the angle clock it peaks where the white part,
-    sigma sqrt(1 - share), is 10, whatever the share; on time's clock where the total is."""
+def test_the_noise_prior_holds_the_part_the_noise_is_stated_for():
+    """The log-normal prior about the stated 10 arcsec: stated at rest (sigma_is: white) it peaks where the
+    white part, sigma sqrt(1 - share), is 10, whatever the share; stated as the total, where the total is."""
     from gyrocal.inference.noise.covariance import judged_log_sigma, log_sigma_of
     from gyrocal.inference.sampling.priors import Priors
 
@@ -100,7 +101,7 @@ def test_the_noise_prior_holds_the_white_part_on_the_angle_clock():
     share = 0.96
     total = np.log(np.array([10.0, 40.0]) * np.pi / 648000.0) - 0.5 * np.log(1.0 - share)
     log_sigma = np.concatenate([total, center[2:3], [np.log(share / (1.0 - share))], center[4:]])
-    on_angle = dict(stated, gm_clock_s_per_rad=1e4)
+    on_angle = dict(stated, sigma_is="white")
     assert judged_log_sigma(log_sigma, on_angle)[:2] == pytest.approx(center[:2])
     assert judged_log_sigma(log_sigma, stated) == pytest.approx(log_sigma)
     priors = {k: Priors(np.zeros(1), np.ones(1), np.ones(1), center, np.ones(5), None, s) for k, s in
@@ -108,3 +109,39 @@ def test_the_noise_prior_holds_the_white_part_on_the_angle_clock():
     share_prior = -0.5 * ((log_sigma[3] - center[3]) / 1.0) ** 2
     assert priors["angle"].noise_log_density(log_sigma[None])[0] == pytest.approx(share_prior)
     assert priors["time"].noise_log_density(log_sigma[None])[0] == pytest.approx(share_prior - np.log(5.0) ** 2)
+
+
+def test_the_white_and_gauss_markov_parts_are_summarised_draw_by_draw():
+    """The parts' mean and 95 % interval are those of sigma sqrt(1 - share) and sigma sqrt(share) over the
+    draws, not products of the scales' summaries: their correlation is kept."""
+    import arviz as az
+
+    from gyrocal.inference.sampling.inferencedata import noise_split_summary
+
+    rng = np.random.default_rng(5)
+    sigma = rng.lognormal(np.log(100.0), 0.1, (4, 500))
+    share = rng.uniform(0.8, 0.99, (4, 500))
+    idata = az.from_dict(posterior={"sigma_cross_arcsec": sigma, "sigma_about_arcsec": 2 * sigma, "st_gm_fraction": share})
+    table = noise_split_summary(idata, idata, {"r_hat_max": 1.01, "ess_bulk_min": 100}).set_index("label")
+    parts = {"st_white_cross_arcsec": sigma * np.sqrt(1 - share), "st_gm_about_arcsec": 2 * sigma * np.sqrt(share)}
+    for label, draws in parts.items():
+        row = table.loc[f"noise.{label}"]
+        assert row["mean"] == pytest.approx(draws.mean())
+        assert (row["ci95_low"], row["ci95_high"]) == pytest.approx(tuple(np.quantile(draws, [0.025, 0.975])))
+    no_share = az.from_dict(posterior={"sigma_cross_arcsec": sigma, "sigma_about_arcsec": sigma})
+    assert noise_split_summary(no_share, no_share, {"r_hat_max": 1.01, "ess_bulk_min": 100}) is None
+
+
+def test_a_walk_that_reml_gives_to_the_correlated_part_is_left_to_the_prior():
+    """REML may put a gyro walk 1e-5 of the stated where a slow Gauss-Markov part takes its variance (BROAD's
+    fast trial): no misfit, so sampling goes on. The same collapse in a white model (correlated residuals),
+    every scale below (a campaign stated far noisier than its data) or one far above still stop."""
+    from gyrocal.inference.sampling.refusals import taken_by_correlated_part
+
+    ratio = np.array([0.9, 1.1, 1e-5])
+    off = noise_beyond(ratio, ratio, NOISE_PLAUSIBLE)
+    assert taken_by_correlated_part(True, ratio, off)
+    assert not taken_by_correlated_part(False, ratio, off)
+    assert not taken_by_correlated_part(True, np.array([1e-4, 1e-4, 1e-5]), np.array([True, True, True]))
+    assert not taken_by_correlated_part(True, np.array([2000.0, 1.0, 1e-5]), np.array([True, False, True]))
+    assert not taken_by_correlated_part(True, np.array([0.9, 1.1, 0.5]), np.array([False, False, False]))

@@ -49,3 +49,14 @@ def test_a_clock_chosen_from_the_data_says_why_even_where_the_reviewed_noise_is_
     assert said.endswith("The clock was chosen from the data (gm_clock_s_per_rad: auto): 3000 s a radian turned: "
                          "on the pilot fit's residual ....")
     assert clock_sentence(WHITE, 3000.0, chosen).startswith("The clock was chosen from the data")
+
+
+def test_a_noise_stated_at_rest_stands_beside_the_white_part_it_judges():
+    """Where campaign.yaml states the white part (``noise_judged``), the review's table puts the stated 48
+    arcsec beside ``st_white_cross_arcsec`` (0.82 of it), not beside the total of 1152."""
+    diagnostics = {"noise_stated": {"sigma_cross_arcsec": 48.0}, "noise_judged": {"sigma_cross_arcsec": "st_white_cross_arcsec"},
+                   "noise_posterior": {"sigma_cross_arcsec": 1152.0, "st_white_cross_arcsec": 39.36},
+                   "noise_posterior_ci95": {"sigma_cross_arcsec": [1070.0, 1225.0], "st_white_cross_arcsec": [37.9, 41.0]}}
+    table = noise_table(diagnostics).set_index("scale")
+    assert np.isnan(table.loc["sigma_cross_arcsec", "stated"])
+    assert table.loc["st_white_cross_arcsec", "mean / stated"] == pytest.approx(0.82)

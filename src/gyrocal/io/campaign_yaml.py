@@ -29,6 +29,8 @@ __all__ = [
     "NORM_REFUSE_TOL",
     "PERIODIC_TAIL",
     "RESERVED_NAMES",
+    "SIGMA_IS",
+    "SIGMA_IS_KEY",
     "Labelled",
     "Maneuver",
     "TelemetryError",
@@ -277,6 +279,13 @@ the body turns, beside time (`gyrocal.inference.errormodel.gm_clock_steps`); abs
 GM_CLOCK_AUTO = "auto"
 """Its value that asks for the clock to be chosen from the data (`gyrocal.inference.clock`)."""
 
+SIGMA_IS_KEY = "sigma_is"
+"""``star_tracker``'s key: what ``sigma_cross_arcsec`` and ``sigma_about_arcsec`` state, one of
+`SIGMA_IS`: the reference's ``total`` sd (a data sheet's, the default), or its ``white`` part alone (what a
+recording at rest shows, as `gyrocal import` measures it: `gyrocal.io.rests.reference_noise_at_rest`)."""
+
+SIGMA_IS = ("total", "white")
+
 
 def stated_clock_s_per_rad(star_tracker: dict) -> float | None:
     """The clock ``star_tracker`` states (s a radian turned; 0 where it states none), or None where it asks
@@ -287,9 +296,14 @@ def stated_clock_s_per_rad(star_tracker: dict) -> float | None:
 
 def _parse_star_tracker(path, raw, line_of=lambda keys: "?") -> dict:
     allowed = {"sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "mounting", "rate_hz", "st_jitter_ms",
-               GM_CLOCK_KEY}
+               GM_CLOCK_KEY, SIGMA_IS_KEY}
     if set(raw) - allowed:
         fail(path, f"star_tracker: unknown key(s) {sorted(set(raw) - allowed)}")
+    if SIGMA_IS_KEY in raw and raw[SIGMA_IS_KEY] not in SIGMA_IS:
+        fail(path, f"star_tracker.{SIGMA_IS_KEY}: one of {', '.join(SIGMA_IS)}; got {excerpt(raw[SIGMA_IS_KEY])}")
+    if SIGMA_IS_KEY in raw and not {"sigma_cross_arcsec", "sigma_about_arcsec"} <= set(raw):
+        fail(path, f"star_tracker.{SIGMA_IS_KEY}: says what sigma_cross_arcsec and sigma_about_arcsec state, so it "
+                   "needs both beside it (the config's defaults are a star tracker's total)")
     for key in ("sigma_cross_arcsec", "sigma_about_arcsec", "rate_hz", "st_jitter_ms"):
         if key in raw and not _positive_number(raw[key]):
             fail(path, f"star_tracker.{key}: must be a positive number")

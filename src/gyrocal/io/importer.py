@@ -26,6 +26,7 @@ for increments): the report counts the samples within `RANGE_BAND` of it, where 
 import numpy as np
 
 from gyrocal.io import rests
+from gyrocal.io.campaign_yaml import SIGMA_IS_KEY
 from gyrocal.io.mapping import (
     ANGLE_UNITS,
     ORDERS,
@@ -164,8 +165,7 @@ def build_campaign(files, mapping, name: str, reference_interval_s=None) -> tupl
         if found is not None and found.arw_rad_sqrt_s is not None:
             walks.append(found.arw_rad_sqrt_s)
         at_rest = None if found is None else rests.reference_noise_at_rest(imp.quat, keep & imp.valid, found.runs, boresight)
-        if at_rest is not None:
-            still.append(at_rest)
+        still.append(at_rest)
         counts[imp.stem] = {"rows": len(time), "maneuvers": ids, "trimmed": trimmed, "left_out": left_out,
                             "reference_dropouts": int((~imp.valid[keep] & ~imp.refused[keep] & ~imp.missing[keep]).sum()),
                             "reference_missing": int((keep & imp.missing).sum()),
@@ -218,24 +218,27 @@ the fit reads."""
 
 
 def _reference_knowledge(mapping, still, boresight) -> dict:
-    """``campaign.yaml``'s ``star_tracker:`` from the mapping; where it states no noise, the largest the
-    files' rests show (`rests.reference_noise_at_rest`: ``still``, per file (cross, about, pairs), rad) and
-    the boresight it is split about, as `_gyro_knowledge` takes the gyro's ARW from them."""
+    """``campaign.yaml``'s ``star_tracker:`` from the mapping; where it states no noise, the one the files'
+    rests show together (`rests.pooled_reference_noise` of ``still``, per file a `rests.ReferenceAtRest`),
+    with the boresight it is split about and ``sigma_is: white`` (what a recording at rest shows), as
+    `_gyro_knowledge` takes the gyro's ARW from the same rests."""
     known = dict(mapping.get("star_tracker") or {})
-    if still and "sigma_cross_arcsec" not in known and "sigma_about_arcsec" not in known:
-        known["sigma_cross_arcsec"] = float(rad_to_arcsec(max(s[0] for s in still)))
-        known["sigma_about_arcsec"] = float(rad_to_arcsec(max(s[1] for s in still)))
+    pooled = rests.pooled_reference_noise(still)
+    if pooled is not None and "sigma_cross_arcsec" not in known and "sigma_about_arcsec" not in known:
+        known["sigma_cross_arcsec"], known["sigma_about_arcsec"] = (float(rad_to_arcsec(v)) for v in pooled)
         known["boresight_body"] = [float(v) for v in boresight]
+        known[SIGMA_IS_KEY] = "white"
     return known
 
 
 def _rest_counts(found, spans, time, at_rest=None) -> dict:
-    """The rests a file was cut at and the reference's noise in them (``at_rest``: cross, about, pairs;
-    None where too few), for the report (none unless the mapping splits at rests)."""
+    """The rests a file was cut at and the reference's noise in them (``at_rest``, a `rests.ReferenceAtRest`;
+    None where too few pairs), for the report (none unless the mapping splits at rests)."""
     if found is None:
         return {}
-    noise = {} if at_rest is None else {"reference_rest_sigma_arcsec": [float(rad_to_arcsec(v)) for v in at_rest[:2]],
-                                        "reference_rest_pairs": int(at_rest[2])}
+    noise = {} if at_rest is None else {
+        "reference_rest_sigma_arcsec": [float(rad_to_arcsec(v)) for v in (at_rest.cross_rad, at_rest.about_rad)],
+        "reference_rest_pairs": at_rest.pairs, "reference_rest_lag1": at_rest.lag1, "reference_rest_white": at_rest.white}
     return {**noise, "rests_s": [(float(time[a]), float(time[b - 1])) for a, b in found.runs],
             "rest_threshold_rad_s": found.threshold, "rest_sigma_rad_s": found.sigma.tolist(),
             "rest_bias_rad_s": found.bias.tolist(), "rest_smooth": found.smooth,
@@ -314,9 +317,13 @@ def report(campaign, counts, outdir) -> str:
                          "cut in the middle of each inner one")
             if "reference_rest_sigma_arcsec" in c:
                 cross, about = c["reference_rest_sigma_arcsec"]
-                lines.append(f"    reference at rest: {cross:.3g} arcsec about each axis across the boresight, {about:.3g} "
-                             f"about it, from {c['reference_rest_pairs']} pairs of consecutive kept samples in the rests "
-                             "(campaign.yaml states the largest file's, unless the mapping states a noise)")
+                shown = (f"{cross:.3g} arcsec about each axis across the boresight, {about:.3g} about it, from "
+                         f"{c['reference_rest_pairs']} pairs of consecutive kept samples in the rests")
+                lines.append(f"    reference at rest: {shown} (campaign.yaml states the files' together as sigma_is: white, "
+                             "unless the mapping states a noise)" if c["reference_rest_white"] else
+                             f"    reference at rest: {shown}, but its differences correlate {c['reference_rest_lag1']:+.2f} "
+                             f"with the next (white samples give -0.5): its error is correlated over the interval kept, "
+                             "so they state no noise (keep the reference less often: --reference-interval)")
         lines.append("    " + _norm_report(c))
         if "at_range" in c:
             at = ", ".join(f"{n} {k}" for n, k in c["at_range"].items() if k) or "none"

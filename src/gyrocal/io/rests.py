@@ -22,7 +22,8 @@ from scipy.spatial.transform import Rotation
 
 __all__ = [
     "ARW_AVERAGE_S", "MIN_REFERENCE_PAIRS", "MIN_REST_S", "QUIETEST_SHARE", "REFERENCE_NOISE_FLOOR_RAD", "REST_BLOCK_S",
-    "REST_SIGMAS", "SMOOTH_S", "Rests", "arw_at_rest", "find_rests", "pieces", "reference_noise_at_rest",
+    "REST_SIGMAS", "SMOOTH_S", "WHITE_DIFFERENCE_LAG1_MAX", "ReferenceAtRest", "Rests", "arw_at_rest", "find_rests",
+    "pieces", "pooled_reference_noise", "reference_noise_at_rest",
 ]
 
 REST_BLOCK_S = 0.5
@@ -143,24 +144,51 @@ def arw_at_rest(rate: np.ndarray, step_s: float, runs) -> float | None:
     return float(np.max(allan) * np.sqrt(k * step_s))
 
 
-MIN_REFERENCE_PAIRS = 30
+MIN_REFERENCE_PAIRS = 200
 """The fewest pairs of consecutive reference samples within the rests that state the reference's noise
-at rest (`reference_noise_at_rest`): the sd of 30 is known to about 13 %."""
+at rest (`reference_noise_at_rest`): the sd of 200 is known to 5 %, within the noise check's band."""
 
 REFERENCE_NOISE_FLOOR_RAD = 1e-8
 """Below this sd (0.002 arcsec) a reference at rest repeats its value to rounding: it states no noise."""
 
+WHITE_DIFFERENCE_LAG1_MAX = -0.35
+"""The differences of white samples correlate -0.5 with their neighbours (each shares one sample, with
+the opposite sign); where they correlate more than this (pooled, 200 pairs: -0.5 within about 0.05), the
+reference's error is correlated over the interval kept (a motion-capture system resampled above its
+cameras' rate), its differences understate its noise, and the rests state none."""
 
-def reference_noise_at_rest(quat, kept, runs, boresight_body) -> tuple | None:
-    """The reference's white noise at rest (rad) and the pairs it rests on: its sd about each of the two axes across
-    ``boresight_body`` and about it, from the body-frame rotations between consecutive kept samples
-    (``kept``: the rows the campaign keeps, valid) within the rests ``runs`` (`Rests.runs`), where the
-    body does not turn, so each rotation is the difference of two samples' errors: its variance twice
-    theirs. Mean squares, as the noise model's variance takes them (a sample's rare large error counts as
-    the likelihood counts it). ``quat`` (N, 4) scalar last. None where the rests hold fewer than
-    `MIN_REFERENCE_PAIRS` pairs, or where either sd is below `REFERENCE_NOISE_FLOOR_RAD` (a reference that
-    repeats its value at rest, quantised or synthetic, states no noise). What an at-rest recording states for the reference, as
-    `arw_at_rest` does for the gyro."""
+
+@dataclass
+class ReferenceAtRest:
+    """The reference's noise in one recording's rests (`reference_noise_at_rest`)."""
+
+    cross_rad: float
+    """Its sd about each of the two axes across the boresight."""
+    about_rad: float
+    """Its sd about the boresight."""
+    pairs: int
+    """The pairs of consecutive kept samples it rests on."""
+    lag1: float
+    """The correlation of each difference with the next (-0.5 for white samples)."""
+
+    @property
+    def white(self) -> bool:
+        """Whether it states the reference's white noise: differences as white samples give
+        (`WHITE_DIFFERENCE_LAG1_MAX`) and above `REFERENCE_NOISE_FLOOR_RAD`."""
+        return self.lag1 <= WHITE_DIFFERENCE_LAG1_MAX and min(self.cross_rad, self.about_rad) >= REFERENCE_NOISE_FLOOR_RAD
+
+
+def reference_noise_at_rest(quat, kept, runs, boresight_body) -> ReferenceAtRest | None:
+    """The reference's noise at rest: its sd about each of the two axes across ``boresight_body`` and
+    about it, from the rotations between consecutive kept samples (``kept``: the rows the campaign keeps,
+    valid) within the rests ``runs`` (`Rests.runs`), where the body does not turn, so each rotation is the
+    difference of two samples' errors: its variance twice theirs. In the reference's own axes, the body's
+    where its mounting is estimated (a declared mounting turns the split). Mean squares, as the noise
+    model's variance takes them (a sample's rare large error counts as the likelihood counts it).
+    ``quat`` (N, 4) scalar last. None where the rests hold fewer than `MIN_REFERENCE_PAIRS` pairs; where
+    the differences are not those of white samples (`ReferenceAtRest.white`), what they show is kept for
+    the report, not stated. What an at-rest recording states for the reference, as `arw_at_rest` does
+    for the gyro."""
     b = np.asarray(boresight_body, dtype=float)
     b = b / np.linalg.norm(b)
     steps = []
@@ -174,5 +202,20 @@ def reference_noise_at_rest(quat, kept, runs, boresight_body) -> tuple | None:
     d = np.concatenate(steps)
     about_sq = (d @ b) ** 2
     cross_sq = np.sum(d**2, axis=1) - about_sq
-    cross, about = float(np.sqrt(np.mean(cross_sq) / 4.0)), float(np.sqrt(np.mean(about_sq) / 2.0))
-    return (cross, about, len(d)) if min(cross, about) >= REFERENCE_NOISE_FLOOR_RAD else None
+    next_product = sum(float(np.sum(x[:-1] * x[1:])) for x in steps)
+    lag1 = next_product / float(np.sum(d**2)) if np.sum(d**2) > 0 else 0.0
+    return ReferenceAtRest(float(np.sqrt(np.mean(cross_sq) / 4.0)), float(np.sqrt(np.mean(about_sq) / 2.0)),
+                           len(d), lag1)
+
+
+def pooled_reference_noise(found) -> tuple:
+    """The reference noise (cross, about; rad) several recordings' rests state together: their mean
+    squares weighted by their pairs, the likelihood's estimate of one level, over those whose
+    differences are white (`ReferenceAtRest.white`); None where none is."""
+    usable = [f for f in found if f is not None and f.white]
+    if not usable:
+        return None
+    pairs = np.array([f.pairs for f in usable], dtype=float)
+    cross = np.sqrt(np.sum(pairs * np.array([f.cross_rad for f in usable]) ** 2) / pairs.sum())
+    about = np.sqrt(np.sum(pairs * np.array([f.about_rad for f in usable]) ** 2) / pairs.sum())
+    return float(cross), float(about)

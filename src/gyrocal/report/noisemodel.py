@@ -14,9 +14,11 @@ TAU_KEY, SHARE_KEY = GM_TAU_SCALE.key, GM_FRACTION_SCALE.key
 
 
 def noise_table(diagnostics: dict) -> pd.DataFrame:
-    """One row per noise scale the model sampled: the stated value (empty where nothing states it, the
-    prior's median then being the library's), the posterior mean and 95 % interval, and mean over stated."""
-    stated = diagnostics.get("noise_stated", {})
+    """One row per noise scale the model sampled (and, where the stated noise is the white part, the parts):
+    the stated value beside what it judges (empty where nothing states it, the prior's median then being
+    the library's), the posterior mean and 95 % interval, and mean over stated."""
+    judged = diagnostics.get("noise_judged", {})  # the stated white part sits beside the part it judges
+    stated = {judged.get(k, k): v for k, v in diagnostics.get("noise_stated", {}).items()}
     ci95 = diagnostics.get("noise_posterior_ci95", {})
     rows = []
     for key, mean in diagnostics.get("noise_posterior", {}).items():

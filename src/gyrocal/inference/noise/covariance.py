@@ -28,7 +28,7 @@ from scipy.special import expit, logit
 
 from gyrocal.inference.errormodel import Linearization
 from gyrocal.inference.noise import markov
-from gyrocal.io.campaign_yaml import GM_CLOCK_AUTO, GM_CLOCK_KEY
+from gyrocal.io.campaign_yaml import GM_CLOCK_AUTO, GM_CLOCK_KEY, SIGMA_IS_KEY
 from gyrocal.model.units import ARCSEC_RAD, DEG_SQRT_H_RAD_SQRT_S
 
 __all__ = [
@@ -175,19 +175,21 @@ def gm_tau_prior_s(stated: dict) -> float:
 
 
 def white_stated(stated: dict) -> bool:
-    """Whether the stated star-tracker noise (``sigma_cross``, ``sigma_about``) is its white part alone: with
-    the Gauss-Markov part on a clock of the angle turned (`GM_CLOCK_KEY`), that part does not move while
-    the body rests, so a recording at rest (`gyrocal.io.rests.reference_noise_at_rest`) shows the white
-    part only, and the correlated part's level is the motion's, sampled. On time's clock the stated sd is
-    the total, as a data sheet gives it (`GM_FRACTION_SCALE`)."""
-    return float(stated.get(GM_CLOCK_KEY, 0.0)) > 0.0
+    """Whether the stated star-tracker noise (``sigma_cross``, ``sigma_about``) is its white part alone:
+    campaign.yaml's ``star_tracker: sigma_is: white`` (`SIGMA_IS_KEY`), as `gyrocal import` writes it for
+    a noise measured in a recording's rests, where the consecutive samples' differences show the white
+    part (a Gauss-Markov part that forgets over seconds or a radian turned hardly moves between them).
+    Then that part is judged, and the Gauss-Markov part's level is the model's to fit; by default the
+    stated sd is the total, as a data sheet gives it (`GM_FRACTION_SCALE`)."""
+    return stated.get(SIGMA_IS_KEY) == "white"
 
 
 def judged_log_sigma(log_sigma, stated: dict) -> np.ndarray:
-    """``log_sigma`` (last axis) as the stated noise states it: where `white_stated` and the model has a
+    """``log_sigma`` (last axis) as the stated noise states them: where `white_stated` and the model has a
     Gauss-Markov share, the star tracker's two scales as their white parts, ``sigma sqrt(1 - share)``;
     else as they are. Against the sampled coordinates the map is triangular with unit diagonal, so a prior
-    put on these needs no Jacobian."""
+    put on these needs no Jacobian. The prior it leaves the Gauss-Markov part, ``log sigma_white +
+    logit(share) / 2``, has its median at the white part and a log sd of ``hypot(noise_log_sd, 1)``."""
     log_sigma = np.asarray(log_sigma, dtype=float)
     share = position(log_sigma, GM_FRACTION_SCALE)
     if share is None or not white_stated(stated):
@@ -261,7 +263,7 @@ def noise_knowledge(info: dict, defaults: dict) -> dict:
     keys = ("sigma_cross_arcsec", "sigma_about_arcsec", "boresight_body", "arw_deg_sqrt_h")
     stated = {**info["star_tracker"], **info["gyro"]}
     out = {k: stated.get(k, defaults[k]) for k in keys}
-    for key in (JITTER_SCALE.key, GM_CLOCK_KEY):  # only where stated: the default's knowledge stays the three scales
+    for key in (JITTER_SCALE.key, GM_CLOCK_KEY, SIGMA_IS_KEY):  # only where stated: by default the three scales
         value = stated.get(key, defaults.get(key))
         if value is not None and value != GM_CLOCK_AUTO:  # a clock to choose: the maneuvers carry the one chosen
             out[key] = value

@@ -20,6 +20,7 @@ import xarray as xr
 
 from gyrocal import __version__
 from gyrocal.inference.noise.covariance import (
+    GM_FRACTION_SCALE,
     SPLIT_KEYS,
     build,
     correlation_time_of,
@@ -27,6 +28,7 @@ from gyrocal.inference.noise.covariance import (
     scales_in_units,
     split_parts,
     stated_scales,
+    white_stated,
 )
 from gyrocal.inference.sampling import predictive
 from gyrocal.inference.sampling.posterior import leave_one_maneuver_out
@@ -38,7 +40,8 @@ from gyrocal.model.correction import flown_sets
 from gyrocal.model.units import AXES, rad_to_arcsec
 
 __all__ = ["CI_PROB", "ORTHOGONALITY_COLUMNS", "Outputs", "assemble", "combination_summary", "loo", "loo_blocks",
-           "orthogonality_summary", "orthogonality_table", "posterior_dataset", "sampler_record", "summarize"]
+           "noise_split_summary", "orthogonality_summary", "orthogonality_table", "posterior_dataset", "sampler_record",
+           "summarize"]
 
 log = logging.getLogger("gyrocal")
 
@@ -76,15 +79,13 @@ def posterior_dataset(draws, theta_hat, spec, noise_groups=()) -> az.InferenceDa
     """(chains, draws, P + k) sampled offsets and the k log noise scales of the model
     (`covariance.noise_scales`), in the parameters' units; with ``noise_groups`` (more than one), each
     group's level (its ``sigma_cross`` over the campaign's) and their log sd follow, as
-    ``noise_group_level`` and ``noise_group_sd``. With correlated noise, the star tracker's white and
-    Gauss-Markov parts too (`covariance.split_parts`), draw by draw."""
+    ``noise_group_level`` and ``noise_group_sd``."""
     p = len(spec)
     scales = noise_scales(spec.correlated_noise, spec.jitter_noise)
     k = len(scales)
     values = spec.to_unit(theta_hat + draws[..., :p])
     noise = scales_in_units(draws[..., p:p + k])
-    sampled = {s.key: noise[..., i] for i, s in enumerate(scales)}
-    posterior = {"channel_param": values, **sampled, **split_parts(sampled)}
+    posterior = {"channel_param": values, **{s.key: noise[..., i] for i, s in enumerate(scales)}}
     coords, dims = {"parameter": spec.labels}, {"channel_param": ["parameter"]}
     if len(noise_groups) > 1:
         posterior["noise_group_level"] = np.exp(draws[..., p + k:-1] - draws[..., p:p + 1])
@@ -157,6 +158,23 @@ def combination_summary(full, per_walker, spec, convergence: dict) -> pd.DataFra
         return None
     return _derived_summary(full, per_walker, [c.label for c in combos],
                             lambda values: combinations.combination_draws(values, combos), convergence)
+
+
+def noise_split_summary(full, per_walker, convergence: dict) -> pd.DataFrame | None:
+    """`summarize` of the star tracker's white and Gauss-Markov parts (`covariance.split_parts`), draw by
+    draw, so their intervals are the posterior's; None for a model with no Gauss-Markov share."""
+
+    def split(idata):
+        draws = idata.posterior
+        parts = split_parts({k: draws[k].to_numpy() for k in (*SPLIT_KEYS, GM_FRACTION_SCALE.key) if k in draws})
+        return az.from_dict(posterior=parts) if parts else None
+
+    whole = split(full)
+    if whole is None:
+        return None
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="More chains", category=UserWarning)
+        return summarize(whole, split(per_walker), [], convergence)
 
 
 def orthogonality_summary(full, per_walker, spec, pairs, convergence: dict) -> pd.DataFrame | None:
@@ -304,9 +322,10 @@ def assemble(post, maneuvers, priors, sampler_cfg: dict, convergence: dict, seed
         per_walker = posterior_dataset(post.walker_draws(), theta_hat, spec, groups)
     summary = summarize(full, per_walker, spec.labels, convergence)
     record = sampler_record(post, summary, sampler_cfg, seed)
-    derived = combination_summary(full, per_walker, spec, convergence)
-    if derived is not None:
-        summary = pd.concat([summary, derived], ignore_index=True)
+    derived = [combination_summary(full, per_walker, spec, convergence)]
+    if white_stated(priors.stated_noise or {}):  # the part the stated noise judges, and the motion's
+        derived.append(noise_split_summary(full, per_walker, convergence))
+    summary = pd.concat([summary, *(d for d in derived if d is not None)], ignore_index=True)
     if not record["converged"]:
         log.warning("THE SAMPLER DID NOT CONVERGE: %s; numbers are not reliable",
                     record["failed_parameters"] or "chains shorter than the autocorrelation limit")

@@ -9,6 +9,8 @@ without them.
 They are the sampler's preconditions, so they live beside it: the posterior step calls them before
 `posterior.prepare` and between it and `posterior.run`, and nothing here calls back up."""
 
+import logging
+
 import numpy as np
 
 from gyrocal.errors import InputError
@@ -23,7 +25,10 @@ from gyrocal.model.kinematics import increment_quantum_rad
 
 __all__ = ["NOISE_PLAUSIBLE", "NOISE_RATIOS", "SHARE_BOUND_MARGIN", "EstimateError", "VariantSkipped",
            "check_blocks", "check_identified", "check_noise", "check_physical", "check_representable",
-           "check_variant_informed", "noise_beyond", "sampling_failed", "sampling_stopped", "share_at_bound"]
+           "check_variant_informed", "noise_beyond", "sampling_failed", "sampling_stopped", "share_at_bound",
+           "taken_by_correlated_part"]
+
+log = logging.getLogger("gyrocal")
 
 
 class EstimateError(InputError):
@@ -85,6 +90,12 @@ def check_noise(maneuvers, est: PointEstimate):
     judged = covariance.judged_log_sigma(est.log_sigma, est.stated_noise)[:3]
     ratio = np.exp(judged - covariance.log_sigma_of(est.stated_noise))
     off = noise_beyond(ratio, ratio, NOISE_PLAUSIBLE)
+    if taken_by_correlated_part(est.spec.correlated_noise, ratio, off):
+        log.info("point estimate of model %s: REML puts %s far below the stated (ratio %s): beside a Gauss-Markov "
+                 "part, whose variance the data do not tell from it, that is no misfit; its prior holds it in the "
+                 "posterior", est.spec.model, ", ".join(k for k, bad in zip(covariance.stated_scales(judged), off) if bad),
+                 ", ".join(f"{r:.2g}" for r in ratio[off]))
+        return
     if off.any():
         _check_resolution(maneuvers, est, off)
         fitted = covariance.stated_scales(judged)
@@ -107,6 +118,17 @@ def check_noise(maneuvers, est: PointEstimate):
             f"pitch, yaw, arcsec: {residuals}){advice}; validate the campaign (gyrocal "
             "validate) and read its warnings, or add the effect they point to", advice=effect,
             effects=est.spec.effect_names)
+
+
+def taken_by_correlated_part(correlated: bool, ratio, off) -> bool:
+    """Whether the noise scales REML puts `NOISE_PLAUSIBLE` times off the stated (``off``, their ``ratio``s
+    to it) are only some, all below it, in a model with a Gauss-Markov part: a gyro walk beside a
+    reference error that forgets slowly, over a radian turned, is one variance the data need not tell
+    apart, and REML can give it all to the correlated part. No misfit then, and no sensor that cannot
+    be: the scale's prior holds it in the posterior. A white model's collapse (correlated residuals) and
+    every scale below (a campaign stated far noisier than its data) still stop."""
+    ratio, off = np.asarray(ratio, dtype=float), np.asarray(off, dtype=bool)
+    return bool(correlated and off.any() and (ratio[off] < 1.0).all() and not (ratio < 1.0).all())
 
 
 def _check_resolution(maneuvers, est: PointEstimate, off):
