@@ -277,3 +277,24 @@ def test_the_ratio_grid_leaves_out_the_correlation_times_the_filter_cannot_hold(
     np.testing.assert_allclose(A[0], exact.A, rtol=1e-10)
     np.testing.assert_allclose([*b[0], c[0]], [*exact.b, exact.c], rtol=1e-10)
     assert shapes.profile(grid.start + grid.step * np.append(left_out, 4)) == np.inf
+
+
+def test_the_gauss_markov_replicates_are_the_process_on_its_clock():
+    """Drawn as the process (`predictive.gauss_markov_draws`): stationary from the first sample, each
+    axis across the boresight with variance 4 and about it 9, consecutive samples correlated exp(-dt/tau)
+    where the clock steps 1 s at tau 5 s, and held where the clock barely moves (steps of 1e-6 of tau,
+    an angle clock at rest: 400 steps move it by about 0.085, its sd being 3), where the filter's inverse lost its precision."""
+    from gyrocal.inference.sampling.predictive import gauss_markov_draws
+
+    rng = np.random.default_rng(11)
+    b = np.array([0.0, -0.5, np.sqrt(0.75)])
+    draws = gauss_markov_draws(np.ones(400), 5.0, b, np.full(2000, 4.0), np.full(2000, 9.0), 2, rng)
+    assert draws.shape == (2000, 400, 2, 3) and np.array_equal(draws[:, :, 0], draws[:, :, 1])
+    g = draws[:, :, 0]
+    about = g @ b
+    across = g - about[..., None] * b
+    assert np.var(about[:, [0, 399]]) == pytest.approx(9.0, rel=0.05)
+    assert np.mean(np.sum(across[:, [0, 399]] ** 2, axis=-1)) / 2 == pytest.approx(4.0, rel=0.05)
+    assert np.mean(about[:, 1:] * about[:, :-1]) / 9.0 == pytest.approx(np.exp(-1 / 5.0), abs=0.02)
+    held = gauss_markov_draws(np.full(400, 1e-6), 1.0, b, np.full(50, 4.0), np.full(50, 9.0), 1, rng)[:, :, 0]
+    assert np.max(np.abs(held - held[:, :1])) < 0.5 and np.var(held[:, -1] @ b) == pytest.approx(9.0, rel=0.5)

@@ -17,14 +17,18 @@ import arviz as az
 import numpy as np
 import pandas as pd
 import xarray as xr
+from scipy.special import expit
 
 from gyrocal import __version__
 from gyrocal.inference.noise.covariance import (
     GM_FRACTION_SCALE,
+    GM_TAU_SCALE,
     SPLIT_KEYS,
     build,
     correlation_time_of,
     noise_scales,
+    position,
+    ratios_of,
     scales_in_units,
     split_parts,
     stated_scales,
@@ -204,6 +208,24 @@ def sampler_record(post, summary, sampler_cfg: dict, seed: int) -> dict:
     }
 
 
+def _correlated_replicates(post, lin, log_sigma, ratios, level, rng) -> np.ndarray:
+    """(D, M, S, 3) noise replicates of a model with a Gauss-Markov part, per draw's ``log_sigma`` (D, k)
+    and noise-group ``level`` (D,): the white part, walk and jitter through the white model's
+    differences (`covariance.build` at tau 0, whitened at the draws' mean ratios), and the Gauss-Markov
+    part drawn as its process (`predictive.gauss_markov_draws`, at the draws' mean tau, as the filter
+    is built), each at every draw's own variances."""
+    share = expit(log_sigma[:, position(log_sigma, GM_FRACTION_SCALE)])
+    white = np.delete(log_sigma, [position(log_sigma, GM_FRACTION_SCALE), position(log_sigma, GM_TAU_SCALE)], axis=1)
+    white[:, :2] += 0.5 * np.log1p(-share)[:, None]
+    est = post.estimate
+    nz_white = build(lin, est.boresight, 0.0, est.spec.jitter_noise)
+    wm_white = predictive.WhitenedManeuver(nz_white, np.mean(ratios_of(white), axis=0))
+    series = predictive.undifference_body(lin, wm_white.noise_draws(np.exp(2 * white[:, 0]) * level, rng), nz_white)
+    gm_cross, gm_about = (np.exp(2 * log_sigma[:, i]) * share * level for i in (0, 1))
+    return series + predictive.gauss_markov_draws(lin.gm_steps, correlation_time_of(ratios), est.boresight,
+                                                  gm_cross, gm_about, lin.z.shape[1], rng)
+
+
 def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
     """Pointwise leave-one-block-out log-likelihood, the fit table and predictive draws, maneuver by
     maneuver; each maneuver's linearisation and noise are taken out of ``post`` on the way
@@ -229,7 +251,11 @@ def _fit_and_predictive(post, maneuvers, kept, sampler_cfg, seed):
         loglik.append(predictive.leave_block_out_loglik(lin, wm, dtheta, scale2 * level, blocks))
         block_names += [f"{data.id}:{b}" for b in range(blocks.max() + 1)]
         resid = predictive.residuals_body(lin, dtheta[pred_rows], wm.nuisance(dtheta[pred_rows]))
-        noise_rep = predictive.undifference_body(lin, wm.noise_draws((scale2 * level)[pred_rows], rng), nz)
+        if nz.filter is None:
+            noise_rep = predictive.undifference_body(lin, wm.noise_draws((scale2 * level)[pred_rows], rng), nz)
+        else:
+            noise_rep = _correlated_replicates(post, lin, flat[pred_rows, p:p + k], ratios,
+                                               (level * np.ones(len(flat)))[pred_rows], rng)
         for s, channel_set in enumerate(lin.sets):
             observed = preprocess.error_angles(data, channel_set, zeros)
             mean_pred = observed[None] - resid[:, :, s]

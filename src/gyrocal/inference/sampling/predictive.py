@@ -17,7 +17,8 @@ from gyrocal.inference.noise.selectedinverse import inverse_windows, recursion_b
 
 __all__ = [
     "MIN_REST_SAMPLES", "PARETO_K_MAX", "BlockConditional", "WhitenedManeuver", "block_conditionals", "block_index",
-    "leave_block_out_loglik", "maneuver_block_s", "residuals_body", "sample_blocks", "split_draws", "undifference_body"
+    "gauss_markov_draws", "leave_block_out_loglik", "maneuver_block_s", "residuals_body", "sample_blocks", "split_draws",
+    "undifference_body",
 ]
 
 PARETO_K_MAX = 0.7
@@ -50,6 +51,32 @@ class WhitenedManeuver:
         for k in range(self.chol.shape[0]):
             out[:, k:] += self.chol[k, :n - k] * xi[:, :n - k]
         return out * np.sqrt(scale)[:, None]
+
+
+def gauss_markov_draws(steps_s, tau_s: float, boresight_body, var_cross, var_about, n_sets: int, rng) -> np.ndarray:
+    """(D, M, S, 3) replicates of the reference error's Gauss-Markov part in the tracker's axes, as
+    `undifference_body` gives a series (shared by the S channel sets), drawn as the process itself:
+    ``g_j = phi_j g_(j-1) + sqrt(1 - phi_j^2) nu_j``, stationary from the first sample, on its clock's
+    ``steps_s``, with per-draw variances ``var_cross`` about each axis across ``boresight_body`` and
+    ``var_about`` about it (D,). The filter's inverse, which the likelihood never needs, loses its
+    precision where tau is far beyond the steps (`markov`: an angle clock at rest), so the predictive
+    band is drawn from the process, not back through the filter. A loop over the samples (a recursion),
+    every draw at once."""
+    b = np.asarray(boresight_body, dtype=float)
+    b = b / np.linalg.norm(b)
+    u = np.cross(b, [1.0, 0.0, 0.0] if abs(b[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    basis = np.stack([u, np.cross(b, u), b])  # rows: the two axes across the boresight, then it
+    sd = np.sqrt(np.stack([var_cross, var_cross, var_about], axis=-1))  # (D, 3)
+    phi = np.exp(-np.asarray(steps_s, dtype=float) / tau_s)
+    phi[0] = 0.0
+    innovation = np.sqrt(1.0 - phi**2)
+    xi = rng.standard_normal((len(sd), len(phi), 3)) * sd[:, None, :]
+    g = np.empty_like(xi)
+    g[:, 0] = xi[:, 0]
+    for j in range(1, len(phi)):
+        g[:, j] = phi[j] * g[:, j - 1] + innovation[j] * xi[:, j]
+    return np.repeat((g @ basis)[:, :, None, :], n_sets, axis=2)
 
 
 def residuals_body(lin: Linearization, dtheta: np.ndarray, beta: np.ndarray) -> np.ndarray:
