@@ -135,7 +135,8 @@ def test_the_white_and_gauss_markov_parts_are_summarised_draw_by_draw():
 def test_a_walk_that_reml_gives_to_the_correlated_part_is_left_to_the_prior():
     """REML may put a gyro walk 1e-5 of the stated where a slow Gauss-Markov part takes its variance (BROAD's
     fast trial): no misfit, so sampling goes on. The same collapse in a white model (correlated residuals),
-    every scale below (a campaign stated far noisier than its data) or one far above still stop."""
+    every scale below (a campaign stated far noisier than its data), one far above, or a reference scale far
+    below still stop."""
     from gyrocal.inference.sampling.refusals import taken_by_correlated_part
 
     ratio = np.array([0.9, 1.1, 1e-5])
@@ -145,3 +146,4 @@ def test_a_walk_that_reml_gives_to_the_correlated_part_is_left_to_the_prior():
     assert not taken_by_correlated_part(True, np.array([1e-4, 1e-4, 1e-5]), np.array([True, True, True]))
     assert not taken_by_correlated_part(True, np.array([2000.0, 1.0, 1e-5]), np.array([True, False, True]))
     assert not taken_by_correlated_part(True, np.array([0.9, 1.1, 0.5]), np.array([False, False, False]))
+    assert not taken_by_correlated_part(True, np.array([1e-5, 1.1, 0.9]), np.array([True, False, False]))  # not the walk

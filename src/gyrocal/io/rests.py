@@ -196,7 +196,8 @@ def reference_noise_at_rest(quat, kept, runs, boresight_body) -> ReferenceAtRest
         rows = a + np.flatnonzero(kept[a:z])
         if len(rows) > 1:
             r = Rotation.from_quat(quat[rows])
-            steps.append((r[:-1].inv() * r[1:]).as_rotvec())
+            turned = (r[:-1].inv() * r[1:]).as_rotvec()
+            steps.append(turned - turned.mean(axis=0))  # a rest that creeps (a body settling) is not noise
     if sum(len(d) for d in steps) < MIN_REFERENCE_PAIRS:
         return None
     d = np.concatenate(steps)

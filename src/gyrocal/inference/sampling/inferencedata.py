@@ -213,10 +213,15 @@ def _correlated_replicates(post, lin, log_sigma, ratios, level, rng) -> np.ndarr
     and noise-group ``level`` (D,): the white part, walk and jitter through the white model's
     differences (`covariance.build` at tau 0, whitened at the draws' mean ratios), and the Gauss-Markov
     part drawn as its process (`predictive.gauss_markov_draws`, at the draws' mean tau, as the filter
-    is built), each at every draw's own variances."""
-    share = expit(log_sigma[:, position(log_sigma, GM_FRACTION_SCALE)])
+    is built), each draw's white part at its own scale. The walk and jitter take the draws' mean ratios to
+    the white part (one whitening), so where the white share varies across draws a draw's walk is off by
+    that ratio's spread (a few % on BROAD). The band is the noise's unconditional spread: the fitted
+    attitude offset and bias take part of a slow error, which the data's residual has lost, so it holds
+    more than 95 % of a fitting model's samples, and the band check, one-sided, can only flag too few."""
+    logit_share = log_sigma[:, position(log_sigma, GM_FRACTION_SCALE)]
+    share = expit(logit_share)
     white = np.delete(log_sigma, [position(log_sigma, GM_FRACTION_SCALE), position(log_sigma, GM_TAU_SCALE)], axis=1)
-    white[:, :2] += 0.5 * np.log1p(-share)[:, None]
+    white[:, :2] -= 0.5 * np.logaddexp(0.0, logit_share)[:, None]  # log sqrt(1 - share), finite at any share
     est = post.estimate
     nz_white = build(lin, est.boresight, 0.0, est.spec.jitter_noise)
     wm_white = predictive.WhitenedManeuver(nz_white, np.mean(ratios_of(white), axis=0))

@@ -68,15 +68,17 @@ def gauss_markov_draws(steps_s, tau_s: float, boresight_body, var_cross, var_abo
     u /= np.linalg.norm(u)
     basis = np.stack([u, np.cross(b, u), b])  # rows: the two axes across the boresight, then it
     sd = np.sqrt(np.stack([var_cross, var_cross, var_about], axis=-1))  # (D, 3)
-    phi = np.exp(-np.asarray(steps_s, dtype=float) / tau_s)
+    steps = np.asarray(steps_s, dtype=float)
+    phi = np.exp(-steps / tau_s)
     phi[0] = 0.0
-    innovation = np.sqrt(1.0 - phi**2)
+    innovation = np.sqrt(-np.expm1(-2.0 * steps / tau_s))
+    innovation[0] = 1.0
     xi = rng.standard_normal((len(sd), len(phi), 3)) * sd[:, None, :]
     g = np.empty_like(xi)
     g[:, 0] = xi[:, 0]
     for j in range(1, len(phi)):
         g[:, j] = phi[j] * g[:, j - 1] + innovation[j] * xi[:, j]
-    return np.repeat((g @ basis)[:, :, None, :], n_sets, axis=2)
+    return np.broadcast_to((g @ basis)[:, :, None, :], (len(sd), len(phi), n_sets, 3))
 
 
 def residuals_body(lin: Linearization, dtheta: np.ndarray, beta: np.ndarray) -> np.ndarray:

@@ -121,14 +121,15 @@ def check_noise(maneuvers, est: PointEstimate):
 
 
 def taken_by_correlated_part(correlated: bool, ratio, off) -> bool:
-    """Whether the noise scales REML puts `NOISE_PLAUSIBLE` times off the stated (``off``, their ``ratio``s
-    to it) are only some, all below it, in a model with a Gauss-Markov part: a gyro walk beside a
-    reference error that forgets slowly, over a radian turned, is one variance the data need not tell
-    apart, and REML can give it all to the correlated part. No misfit then, and no sensor that cannot
-    be: the scale's prior holds it in the posterior. A white model's collapse (correlated residuals) and
-    every scale below (a campaign stated far noisier than its data) still stop."""
+    """Whether the one noise scale REML puts `NOISE_PLAUSIBLE` times off the stated (``off``, the scales'
+    ``ratio``s to it: cross, about, walk) is the gyro's walk, below it, in a model with a Gauss-Markov
+    part: a walk beside a reference error that forgets slowly, over a radian turned, is one variance the
+    data need not tell apart, and REML can give it all to the correlated part. No misfit then, and no
+    sensor that cannot be: the walk's prior holds it in the posterior. Any other scale off, a white
+    model's collapse (correlated residuals) and every scale below (a campaign stated far noisier than
+    its data) still stop."""
     ratio, off = np.asarray(ratio, dtype=float), np.asarray(off, dtype=bool)
-    return bool(correlated and off.any() and (ratio[off] < 1.0).all() and not (ratio < 1.0).all())
+    return bool(correlated and off.tolist() == [False, False, True] and ratio[2] < 1.0)
 
 
 def _check_resolution(maneuvers, est: PointEstimate, off):
