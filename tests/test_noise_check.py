@@ -48,7 +48,7 @@ def test_the_refusal_before_sampling_uses_the_same_rule_at_a_factor_of_a_thousan
 
 
 def _angle_clock_posterior(cross_total, about_total, share):
-    from gyrocal.inference.noise.covariance import split_parts
+    from gyrocal.inference.noise.parts import split_parts
 
     sampled = dict(STATED, sigma_cross_arcsec=cross_total, sigma_about_arcsec=about_total, st_gm_fraction=share)
     return {**sampled, **{k: float(v) for k, v in split_parts(sampled).items()}}
@@ -93,7 +93,8 @@ def test_with_a_noise_stated_at_rest_the_level_counts_the_fitted_gauss_markov_pa
 def test_the_noise_prior_holds_the_part_the_noise_is_stated_for():
     """The log-normal prior about the stated 10 arcsec: stated at rest (sigma_is: white) it peaks where the
     white part, sigma sqrt(1 - share), is 10, whatever the share; stated as the total, where the total is."""
-    from gyrocal.inference.noise.covariance import judged_log_sigma, log_sigma_of
+    from gyrocal.inference.noise.covariance import log_sigma_of
+    from gyrocal.inference.noise.parts import judged_log_sigma
     from gyrocal.inference.sampling.priors import Priors
 
     stated = dict(STATED, boresight_body=[0.0, 0.0, 1.0])

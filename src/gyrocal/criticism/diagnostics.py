@@ -20,7 +20,7 @@ from gyrocal.finding import Finding
 from gyrocal.inference import clock, errormodel
 from gyrocal.inference.fit.estimate import PointEstimate
 from gyrocal.inference.fit.likelihood import campaign_stats, maneuver_stats, total
-from gyrocal.inference.noise import covariance, smoothness
+from gyrocal.inference.noise import covariance, parts, smoothness
 from gyrocal.inference.noise.covariance import NOISE_SCALES, noise_scales, ratios_of, variances
 from gyrocal.inference.sampling.predictive import WhitenedManeuver
 from gyrocal.inference.sampling.refusals import noise_beyond
@@ -311,7 +311,7 @@ def noise_rms_arcsec(maneuvers, stated_noise, motion_arcsec=None) -> float:
     """What the stated noise predicts for the residual RMS per axis: the star tracker's variance averaged
     over the axes, plus the walk left after the initial attitude and bias are fitted (detrended Brownian
     motion: q T / 15). ``motion_arcsec``: where the stated noise is the reference's white part alone
-    (`covariance.white_stated`), the fitted Gauss-Markov part's sds (cross, about), its stationary
+    (`parts.white_stated`), the fitted Gauss-Markov part's sds (cross, about), its stationary
     variance added: the error that the recording's rests do not show (on a clock of the angle turned, the
     error the motion sets). The check cannot then fail on that part's level: the white part judged
     against the rests, the innovations' whiteness and the ranking judge it."""
@@ -326,17 +326,17 @@ def noise_rms_arcsec(maneuvers, stated_noise, motion_arcsec=None) -> float:
 
 def judged_key(key: str, noise_posterior: dict, stated_noise: dict) -> str:
     """The posterior's key that the stated ``key`` judges: the star tracker's white part
-    (`covariance.SPLIT_KEYS`) where the stated noise is that part alone (`covariance.white_stated`) and
+    (`parts.SPLIT_KEYS`) where the stated noise is that part alone (`parts.white_stated`) and
     the model sampled a Gauss-Markov part; else ``key`` itself."""
-    white = covariance.SPLIT_KEYS.get(key, (None,))[0]
-    return white if covariance.white_stated(stated_noise) and white in noise_posterior else key
+    white = parts.SPLIT_KEYS.get(key, (None,))[0]
+    return white if parts.white_stated(stated_noise) and white in noise_posterior else key
 
 
 def motion_part_arcsec(noise_posterior: dict, stated_noise: dict):
     """The fitted Gauss-Markov part's sds (cross, about; arcsec) where the stated noise is the white part
     alone (`judged_key`), for `noise_rms_arcsec`; None otherwise."""
-    gm = [covariance.SPLIT_KEYS[k][1] for k in ("sigma_cross_arcsec", "sigma_about_arcsec")]
-    if not covariance.white_stated(stated_noise) or not all(k in noise_posterior for k in gm):
+    gm = [parts.SPLIT_KEYS[k][1] for k in ("sigma_cross_arcsec", "sigma_about_arcsec")]
+    if not parts.white_stated(stated_noise) or not all(k in noise_posterior for k in gm):
         return None
     return [noise_posterior[k] for k in gm]
 
@@ -417,7 +417,7 @@ def diagnose(maneuvers, estimate: PointEstimate, fit: pd.DataFrame, summary: pd.
     white = whiteness(maneuvers, _measuring(walks, linearized(maneuvers, estimate), measured), estimate)
     ranking, detail = rank(maneuvers, estimate, list(maneuvers[0].extras), plugin_effects, white)
     keys = [s.key for s in NOISE_SCALES]
-    sampled = [s.key for s in noise_scales(True, True)] + [k for parts in covariance.SPLIT_KEYS.values() for k in parts]
+    sampled = [s.key for s in noise_scales(True, True)] + [k for parts in parts.SPLIT_KEYS.values() for k in parts]
     noise_post = {k: float(summary.loc[f"noise.{k}", "mean"]) for k in sampled if f"noise.{k}" in summary.index}
     noise_ci = {k: [float(summary.loc[f"noise.{k}", c]) for c in ("ci95_low", "ci95_high")]
                 for k in sampled if f"noise.{k}" in summary.index and "ci95_low" in summary.columns}

@@ -41,7 +41,6 @@ __all__ = [
     "JITTER_SCALE",
     "NOISE_LABELS",
     "NOISE_SCALES",
-    "SPLIT_KEYS",
     "ManeuverNoise",
     "NoiseScale",
     "absolute_of",
@@ -52,7 +51,6 @@ __all__ = [
     "gm_tau_prior_s",
     "jitter_shapes",
     "jitter_stated_ms",
-    "judged_log_sigma",
     "log_sigma_of",
     "noise_knowledge",
     "noise_labels",
@@ -63,14 +61,12 @@ __all__ = [
     "ratios_of",
     "scales_in_units",
     "scales_of",
-    "split_parts",
     "stated_scales",
     "stated_si",
     "transformed",
     "unit_variances",
     "untransformed",
     "variances",
-    "white_stated",
     "whiten"
 ]
 
@@ -172,51 +168,6 @@ def gm_tau_prior_s(stated: dict) -> float:
     """Tau's prior median (s of the part's clock): `GM_TAU_SCALE`'s, plus with a clock on the angle turned
     (campaign.yaml's ``star_tracker``: `GM_CLOCK_KEY`) that clock's seconds over `GM_PRIOR_ANGLE_RAD`."""
     return GM_TAU_SCALE.prior_center + float(stated.get(GM_CLOCK_KEY, 0.0)) * GM_PRIOR_ANGLE_RAD
-
-
-def white_stated(stated: dict) -> bool:
-    """Whether the stated star-tracker noise (``sigma_cross``, ``sigma_about``) is its white part alone:
-    campaign.yaml's ``star_tracker: sigma_is: white`` (`SIGMA_IS_KEY`), as `gyrocal import` writes it for
-    a noise measured in a recording's rests, where the consecutive samples' differences show the white
-    part (a Gauss-Markov part that forgets over seconds or a radian turned hardly moves between them).
-    Then that part is judged, and the Gauss-Markov part's level is the model's to fit; by default the
-    stated sd is the total, as a data sheet gives it (`GM_FRACTION_SCALE`)."""
-    return stated.get(SIGMA_IS_KEY) == "white"
-
-
-def judged_log_sigma(log_sigma, stated: dict) -> np.ndarray:
-    """``log_sigma`` (last axis) as the stated noise states them: where `white_stated` and the model has a
-    Gauss-Markov share, the star tracker's two scales as their white parts, ``sigma sqrt(1 - share)``;
-    else as they are. Against the sampled coordinates the map is triangular with unit diagonal, so a prior
-    put on these needs no Jacobian. The prior it leaves the Gauss-Markov part, ``log sigma_white +
-    logit(share) / 2``, has its median at the white part and a log sd of ``hypot(noise_log_sd, 1)``."""
-    log_sigma = np.asarray(log_sigma, dtype=float)
-    share = position(log_sigma, GM_FRACTION_SCALE)
-    if share is None or not white_stated(stated):
-        return log_sigma
-    out = log_sigma.copy()
-    out[..., :2] = log_sigma[..., :2] - 0.5 * np.logaddexp(0.0, log_sigma[..., share:share + 1])
-    return out
-
-
-SPLIT_KEYS = {"sigma_cross_arcsec": ("st_white_cross_arcsec", "st_gm_cross_arcsec"),
-              "sigma_about_arcsec": ("st_white_about_arcsec", "st_gm_about_arcsec")}
-"""With correlated star-tracker noise, each total sd's white and Gauss-Markov parts (`split_parts`), as
-``posterior_summary.csv`` and ``diagnostics.json`` report them beside the sampled scales."""
-
-
-def split_parts(scales: dict) -> dict:
-    """The star tracker's sds split into their white and Gauss-Markov parts (`SPLIT_KEYS`), draw by draw:
-    ``scales`` maps the sampled keys to values (or arrays of draws) in the contract's units, with the
-    Gauss-Markov share; empty where there is none."""
-    if GM_FRACTION_SCALE.key not in scales:
-        return {}
-    share = np.asarray(scales[GM_FRACTION_SCALE.key], dtype=float)
-    out = {}
-    for total, (white, gm) in SPLIT_KEYS.items():
-        out[white] = np.asarray(scales[total], dtype=float) * np.sqrt(1.0 - share)
-        out[gm] = np.asarray(scales[total], dtype=float) * np.sqrt(share)
-    return out
 
 
 def _prior_center(scale: NoiseScale, stated: dict) -> float:

@@ -23,17 +23,15 @@ from gyrocal import __version__
 from gyrocal.inference.noise.covariance import (
     GM_FRACTION_SCALE,
     GM_TAU_SCALE,
-    SPLIT_KEYS,
     build,
     correlation_time_of,
     noise_scales,
     position,
     ratios_of,
     scales_in_units,
-    split_parts,
     stated_scales,
-    white_stated,
 )
+from gyrocal.inference.noise.parts import SPLIT_KEYS, split_parts, white_log_sigma, white_stated
 from gyrocal.inference.sampling import predictive
 from gyrocal.inference.sampling.posterior import leave_one_maneuver_out
 from gyrocal.inference.sampling.predictive import PARETO_K_MAX
@@ -165,7 +163,7 @@ def combination_summary(full, per_walker, spec, convergence: dict) -> pd.DataFra
 
 
 def noise_split_summary(full, per_walker, convergence: dict) -> pd.DataFrame | None:
-    """`summarize` of the star tracker's white and Gauss-Markov parts (`covariance.split_parts`), draw by
+    """`summarize` of the star tracker's white and Gauss-Markov parts (`parts.split_parts`), draw by
     draw, so their intervals are the posterior's; None for a model with no Gauss-Markov share."""
 
     def split(idata):
@@ -218,10 +216,9 @@ def _correlated_replicates(post, lin, log_sigma, ratios, level, rng) -> np.ndarr
     that ratio's spread (a few % on BROAD). The band is the noise's unconditional spread: the fitted
     attitude offset and bias take part of a slow error, which the data's residual has lost, so it holds
     more than 95 % of a fitting model's samples, and the band check, one-sided, can only flag too few."""
-    logit_share = log_sigma[:, position(log_sigma, GM_FRACTION_SCALE)]
-    share = expit(logit_share)
-    white = np.delete(log_sigma, [position(log_sigma, GM_FRACTION_SCALE), position(log_sigma, GM_TAU_SCALE)], axis=1)
-    white[:, :2] -= 0.5 * np.logaddexp(0.0, logit_share)[:, None]  # log sqrt(1 - share), finite at any share
+    share = expit(log_sigma[:, position(log_sigma, GM_FRACTION_SCALE)])
+    white = np.delete(white_log_sigma(log_sigma),
+                      [position(log_sigma, GM_FRACTION_SCALE), position(log_sigma, GM_TAU_SCALE)], axis=1)
     est = post.estimate
     nz_white = build(lin, est.boresight, 0.0, est.spec.jitter_noise)
     wm_white = predictive.WhitenedManeuver(nz_white, np.mean(ratios_of(white), axis=0))

@@ -7,7 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from gyrocal.inference.noise.covariance import judged_log_sigma, log_sigma_of, noise_scales
+from gyrocal.inference.noise.covariance import log_sigma_of, noise_scales
+from gyrocal.inference.noise.parts import judged_log_sigma
 from gyrocal.io.calibration import parameter_rows
 from gyrocal.model import priorfamily
 
@@ -28,11 +29,11 @@ class Priors:
     """Each parameter's prior degrees of freedom; None or ``inf``: normal."""
     stated_noise: dict | None = None
     """The noise knowledge the noise priors are centred on: where it states the star tracker's white part
-    alone (`covariance.white_stated`), their log-normal holds that part (`noise_log_density`)."""
+    alone (`parts.white_stated`), their log-normal holds that part (`noise_log_density`)."""
 
     def noise_log_density(self, log_sigma) -> np.ndarray:
         """The noise scales' log prior (W,) at ``log_sigma`` (W, k), up to a constant: log-normal about the
-        stated noise, on the scales as it states them (`covariance.judged_log_sigma`)."""
+        stated noise, on the scales as it states them (`parts.judged_log_sigma`)."""
         judged = judged_log_sigma(log_sigma, self.stated_noise or {})
         return -0.5 * np.sum(((judged - self.log_sigma_center) / self.log_sigma_sd) ** 2, axis=1)
 
@@ -64,8 +65,8 @@ class Priors:
         logit-normal about one half and its correlation time log-normal about 30 s (plus a radian's
         seconds where campaign.yaml runs its clock on the angle turned: `covariance.gm_tau_prior_s`), as
         `covariance.GM_FRACTION_SCALE` and `covariance.GM_TAU_SCALE` declare them (no campaign states
-        either); the timing jitter log-normal (`covariance.JITTER_SCALE`). On a clock of the angle turned the
-        star tracker's stated noise is its white part (`covariance.white_stated`), and its prior holds that."""
+        either); the timing jitter log-normal (`covariance.JITTER_SCALE`). Where campaign.yaml states the star
+        tracker's white part (`parts.white_stated`), its prior holds that part."""
         scales = noise_scales(spec.correlated_noise, spec.jitter_noise)
         center = log_sigma_of(stated_noise, spec.jitter_noise, spec.correlated_noise)
         sd = np.array([float(noise_log_sd) if s.prior_log_sd is None else s.prior_log_sd for s in scales])

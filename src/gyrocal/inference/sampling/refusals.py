@@ -17,7 +17,7 @@ from gyrocal.errors import InputError
 from gyrocal.inference.fit import identification, noisefit
 from gyrocal.inference.fit.estimate import PointEstimate, linearize_all
 from gyrocal.inference.fit.likelihood import maneuver_stats
-from gyrocal.inference.noise import covariance, smoothness
+from gyrocal.inference.noise import covariance, parts, smoothness
 from gyrocal.inference.noise.covariance import variances
 from gyrocal.inference.sampling import predictive
 from gyrocal.model import units
@@ -84,10 +84,10 @@ def noise_beyond(low, high, band: float):
 
 def check_noise(maneuvers, est: PointEstimate):
     """Stop before sampling when REML puts a noise scale `NOISE_PLAUSIBLE` times off the stated one, taken
-    as the stated noise states it (`covariance.judged_log_sigma`; `noise_beyond`, its interval the point:
+    as the stated noise states it (`parts.judged_log_sigma`; `noise_beyond`, its interval the point:
     REML gives none before sampling, and a factor of a thousand is beyond any interval's width); the
     message gives each maneuver's residual RMS about roll, pitch and yaw."""
-    judged = covariance.judged_log_sigma(est.log_sigma, est.stated_noise)[:3]
+    judged = parts.judged_log_sigma(est.log_sigma, est.stated_noise)[:3]
     ratio = np.exp(judged - covariance.log_sigma_of(est.stated_noise))
     off = noise_beyond(ratio, ratio, NOISE_PLAUSIBLE)
     if taken_by_correlated_part(est.spec.correlated_noise, ratio, off):
