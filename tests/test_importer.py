@@ -668,7 +668,19 @@ def test_rests_too_short_or_a_reference_that_repeats_itself_state_no_reference_n
     kept = np.ones(400, dtype=bool)
     assert rests.reference_noise_at_rest(quat, kept, [(0, 200)], [0, 0, 1]) is None  # 199 pairs
     assert rests.reference_noise_at_rest(quat, kept, [(0, 201)], [0, 0, 1]).pairs == 200
-    assert not rests.reference_noise_at_rest(still_reference(400, 0.0, 0.0), kept, [(0, 400)], [0, 0, 1]).white
+    assert rests.reference_noise_at_rest(still_reference(400, 0.0, 0.0), kept, [(0, 400)], [0, 0, 1]) is None  # all held
+
+
+def test_a_reference_held_at_its_last_pose_through_a_rest_is_no_quiet_reference():
+    """A motion-capture system that holds its last pose (the same quaternion repeated) through the first of
+    two rests: the held samples are no measurement, so the second rest alone states the 40 and 20 arcsec,
+    where counting the repeats as differences of zero would halve them."""
+    arcsec = np.pi / 180.0 / 3600.0
+    quat = still_reference(4000, 40 * arcsec, 20 * arcsec)
+    quat[:2000] = quat[0]
+    found = rests.reference_noise_at_rest(quat, np.ones(4000, dtype=bool), [(0, 2000), (2000, 4000)], [0, 0, 1])
+    assert found.pairs == 1999  # the live rest's; the held one has a single distinct sample
+    assert found.cross_rad / arcsec == pytest.approx(40.0, rel=0.06) and found.about_rad / arcsec == pytest.approx(20.0, rel=0.06)
 
 
 def test_several_recordings_state_their_rests_noise_pooled_by_pairs():

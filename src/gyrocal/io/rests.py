@@ -185,7 +185,10 @@ def reference_noise_at_rest(quat, kept, runs, boresight_body) -> ReferenceAtRest
     difference of two samples' errors: its variance twice theirs. In the reference's own axes, the body's
     where its mounting is estimated (a declared mounting turns the split). Mean squares, as the noise
     model's variance takes them (a sample's rare large error counts as the likelihood counts it).
-    ``quat`` (N, 4) scalar last. None where the rests hold fewer than `MIN_REFERENCE_PAIRS` pairs; where
+    ``quat`` (N, 4) scalar last. A sample that repeats the one before to the bit is a held frame (a
+    motion-capture system that lost its markers and holds its last pose), no measurement: it is left out,
+    so that a frozen stretch does not read as a quiet reference. None where the rests hold fewer than
+    `MIN_REFERENCE_PAIRS` pairs; where
     the differences are not those of white samples (`ReferenceAtRest.white`), what they show is kept for
     the report, not stated. What an at-rest recording states for the reference, as `arw_at_rest` does
     for the gyro."""
@@ -194,6 +197,7 @@ def reference_noise_at_rest(quat, kept, runs, boresight_body) -> ReferenceAtRest
     steps = []
     for a, z in runs:
         rows = a + np.flatnonzero(kept[a:z])
+        rows = rows[np.r_[True, np.any(np.diff(quat[rows], axis=0) != 0.0, axis=1)]] if len(rows) else rows
         if len(rows) > 1:
             r = Rotation.from_quat(quat[rows])
             turned = (r[:-1].inv() * r[1:]).as_rotvec()
